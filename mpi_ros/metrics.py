@@ -1,0 +1,94 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Error measures: nonlinearity error (37), control error (38), relative RMS error.
+
+All return fractions (0.026 means 2.6 %).
+"""
+
+import numpy as np
+import numpy.typing as npt
+
+from .errors import DataError
+
+__all__ = ['nonlinearity_error', 'control_error', 'relative_rms_error']
+
+
+def _pair(a: npt.ArrayLike, b: npt.ArrayLike, names: tuple[str, str]) -> tuple[
+        npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    x = np.asarray(a, dtype=np.float64).reshape(-1)
+    y = np.asarray(b, dtype=np.float64).reshape(-1)
+    if x.shape != y.shape:
+        msg = f'{names[0]} and {names[1]} must have the same length; found {x.size} and {y.size}'
+        raise DataError(msg)
+    if x.size == 0:
+        msg = f'{names[0]} and {names[1]} must not be empty'
+        raise DataError(msg)
+    return x, y
+
+
+def nonlinearity_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> float:
+    """
+    Nonlinearity error (37): ``max|Gamma[x] - s| / max|Gamma[x]|``.
+
+    Parameters
+    ----------
+    model_output : array_like of float, shape (N,)
+        Simulated output ``Gamma[x]`` [m].
+    measured : array_like of float, shape (N,)
+        Measured output ``s`` [m].
+
+    Returns
+    -------
+    float
+        The error as a fraction.
+
+    Examples
+    --------
+    >>> round(nonlinearity_error([1.0, 2.0], [1.1, 2.0]), 12)
+    0.05
+
+    """
+    g, s = _pair(model_output, measured, ('model_output', 'measured'))
+    return float(np.max(np.abs(g - s)) / np.max(np.abs(g)))
+
+
+def control_error(desired: npt.ArrayLike, measured: npt.ArrayLike) -> float:
+    """
+    Control error (38): ``max|s_c - s| / max|s_c|``.
+
+    Parameters
+    ----------
+    desired : array_like of float, shape (N,)
+        Desired displacement ``s_c`` [m].
+    measured : array_like of float, shape (N,)
+        Measured displacement ``s`` [m].
+
+    Returns
+    -------
+    float
+        The error as a fraction.
+
+    """
+    c, s = _pair(desired, measured, ('desired', 'measured'))
+    return float(np.max(np.abs(c - s)) / np.max(np.abs(c)))
+
+
+def relative_rms_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> float:
+    """
+    Relative RMS error: ``rms(Gamma[x] - s) / rms(s)``.
+
+    Parameters
+    ----------
+    model_output : array_like of float, shape (N,)
+        Simulated output [m].
+    measured : array_like of float, shape (N,)
+        Measured output [m].
+
+    Returns
+    -------
+    float
+        The error as a fraction.
+
+    """
+    g, s = _pair(model_output, measured, ('model_output', 'measured'))
+    return float(np.sqrt(np.mean((g - s) ** 2)) / np.sqrt(np.mean(s ** 2)))
