@@ -1,0 +1,158 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""Identification (28)-(36): recovery, robustness, scale invariance, order selection."""
+
+import numpy as np
+import pytest
+
+from mpi_ros import identify, IdentificationError, MPIModel
+from mpi_ros.errors import DataError
+from mpi_ros.hysteresis import PIHysteresisOperator
+from mpi_ros.identification import (hysteresis_thresholds, inverse_superposition_thresholds,
+                                    select_order)
+from mpi_ros.inverse import invert_superposition
+from mpi_ros.params import check_model_parameters
+from mpi_ros.superposition import PISuperpositionOperator
+
+from .core_models import random_walk
+
+
+def _excitation(size=20001, duration=10.0):
+    t = np.linspace(0.0, duration, size)
+    return (1.5 * np.sin(2 * np.pi * 0.5 * t) * (1 - 0.08 * t)
+            + 0.3 * np.sin(2 * np.pi * 2.3 * t))
+
+
+def _mpi_truth_on_paper_thresholds(x, n, l, rng):  # noqa: E741
+    """Return an MPI model whose thresholds are exactly (28)-(31) for its own output on x."""
+    x_max = float(np.max(np.abs(x)))
+    r_h = hysteresis_thresholds(x_max, n)
+    w_h = np.concatenate([[1.0], rng.uniform(0.0, 0.5, n)])
+    w_h /= np.dot(x_max - r_h, w_h) / x_max                                    # (36)
+    h = PIHysteresisOperator(r_h, w_h)
+    h_out, _ = h.apply(x)
+    w_s_inv = np.concatenate([rng.uniform(0.05, 0.15, l), [1.0], rng.uniform(-0.1, 0.3, l)])
+    y_max, y_min = 1.0, -1.0
+    for _ in range(100):          # fixed point: thresholds (30)-(31) scale with the output range
+        s_inv = PISuperpositionOperator(inverse_superposition_thresholds(y_max, y_min, l),
+                                        w_s_inv)
+        y = invert_superposition(s_inv).apply(h_out)
+        y_max, y_min = float(y.max()), float(y.min())
+    return MPIModel(h, invert_superposition(s_inv))
+
+
+@pytest.mark.parametrize('n, l', [(4, 2), (14, 7)])
+def test_recovers_noise_free_mpi_model(n, l):  # noqa: E741
+    rng = np.random.default_rng(n)
+    x = _excitation()
+    truth = _mpi_truth_on_paper_thresholds(x, n, l, rng)
+    y = truth.simulate(x)
+    result = identify(x, y, n=n, l=l)
+    assert result.nonlinearity_error <= 1e-6
+    np.testing.assert_allclose(result.model.hysteresis.weights, truth.hysteresis.weights,
+                               atol=1e-5)
+    x_new = random_walk(rng, 2000, 0.05)
+    np.testing.assert_allclose(result.model.simulate(x_new), truth.simulate(x_new),
+                               atol=1e-5 * np.max(np.abs(y)))
+
+
+@pytest.mark.parametrize('factor', [1e-6, 1e-3, 1.0, 1e3])
+def test_scale_invariance(factor):
+    rng = np.random.default_rng(0)
+    x = _excitation(4001, 8.0)
+    y = 3e-5 * (x + 0.2 * np.abs(x) + 0.1 * np.sin(3 * x)) + rng.normal(0.0, 2e-8, x.size)
+    ref = identify(x, y, n=8, l=4)
+    for scaled_x, scaled_y in [(x * factor, y), (x, y * factor)]:
+        res = identify(scaled_x, scaled_y, n=8, l=4)
+        assert abs(res.nonlinearity_error - ref.nonlinearity_error) < 1e-6
+        assert abs(res.rms_error - ref.rms_error) < 1e-6
+
+
+@pytest.mark.parametrize('seed', range(8))
+def test_result_always_satisfies_invertibility_constraints(seed):
+    # Arbitrary noisy, even non-hysteretic data: the QP still returns an invertible model.
+    rng = np.random.default_rng(seed)
+    x = 1.0 + 0.8 * np.sin(np.cumsum(rng.uniform(0.0, 0.2, 3000)))
+    y = rng.normal(0.0, 1.0, x.size) * 1e-6 + 1e-5 * np.sin(5 * x) ** 2
+    result = identify(x, y, n=int(rng.integers(0, 15)), l=int(rng.integers(0, 8)))
+    params = result.model.to_params()
+    check_model_parameters(params)                       # (8), (19), ordering, finiteness
+    assert result.model.hysteresis.satisfies_constraints()
+    assert result.model.superposition.satisfies_constraints()
+    s = result.model.simulate(x)
+    np.testing.assert_allclose(result.model.inverse().simulate(s), x, atol=1e-9)
+
+
+def test_biased_current_and_positive_displacement_si_units():
+    # The paper's operating point: 1 A +- 0.8 A, displacement tens of micrometres.
+    t = np.linspace(0.0, 20.0, 8001)
+    x = np.concatenate([np.linspace(0.0, 1.0, 400), 1.0 + 0.8 * np.sin(t) * np.exp(-t / 30)])
+    h = PIHysteresisOperator([0.0, 0.3, 0.6], [1.0, 0.4, 0.2])
+    y = 2e-5 * h.apply(x)[0] ** 1.3
+    result = identify(x, y, n=6, l=3)
+    assert result.model.superposition.thresholds[0] == 0.0   # output never negative: no branch
+    assert result.nonlinearity_error < 0.05
+
+
+def test_error_table_falls_and_saturates_on_non_mpi_truth():
+    actuator = pytest.importorskip('mpi_ros.actuator')
+    excitation = pytest.importorskip('mpi_ros.excitation')
+    t, x = excitation.identification_excitation(60.0, sample_rate=200.0, seed=1, holds=False,
+                                                bursts=False)
+    s = actuator.MagnetostrictiveActuator(actuator.ActuatorConfig(), seed=1).simulate(t, x)
+    s = s + np.random.default_rng(2).normal(0.0, 0.002 * np.ptp(s), s.size)   # 0.2 % noise
+    errors = [identify(x, s, n=n, l=l).nonlinearity_error
+              for n, l in [(0, 0), (4, 2), (8, 4), (14, 7), (20, 10)]]
+    assert errors[0] > 0.2                               # the linear model is poor
+    assert errors[3] < 0.04                              # n=14, l=7 reaches a few percent
+    drops = -np.diff(errors)
+    assert np.all(drops[1:] > 0.0)                       # falls from (4,2) on ...
+    assert drops[1] > drops[2] > drops[3]                # ... and saturates
+
+
+def test_auto_order_returns_table_and_stops():
+    rng = np.random.default_rng(1)
+    x = _excitation(6001, 12.0)
+    truth = _mpi_truth_on_paper_thresholds(x, 4, 2, rng)
+    y = truth.simulate(x) * (1 + rng.normal(0, 1e-3, x.size))
+    result = identify(x, y, order='auto')
+    table = result.order_table
+    assert [(r['n'], r['l']) for r in table][:3] == [(0, 0), (2, 1), (4, 2)]
+    assert len(table) < 11                               # saturation stopped the search
+    assert result.order in [(r['n'], r['l']) for r in table]
+    best = min(r['nonlinearity_error'] for r in table)
+    chosen = next(r for r in table if (r['n'], r['l']) == result.order)
+    assert chosen['nonlinearity_error'] <= 1.05 * best
+    order, table2 = select_order(x, y)
+    assert order == result.order and table2 == table
+
+
+@pytest.mark.parametrize('x, y, exc, match', [
+    (np.ones(100), np.ones(100), IdentificationError, 'current is constant'),
+    (np.zeros(100), np.ones(100), IdentificationError, 'current is zero everywhere'),
+    (np.sin(np.arange(100.0)), np.zeros(100), IdentificationError, 'displacement is zero'),
+    (np.sin(np.arange(10.0)), np.sin(np.arange(10.0)), IdentificationError, 'too few samples'),
+    (np.sin(np.arange(100.0)), np.ones(99), DataError, 'same length'),
+    (np.r_[np.nan, np.sin(np.arange(99.0))], np.ones(100), DataError, 'non-finite.*sample 0'),
+])
+def test_bad_data_raises_clear_errors(x, y, exc, match):
+    with pytest.raises(exc, match=match):
+        identify(x, y, n=4, l=2)
+
+
+@pytest.mark.parametrize('kwargs, match', [
+    ({'order': 'best'}, "order must be 'auto' or a pair"),
+    ({'n': -1}, 'orders must be >= 0'),
+])
+def test_bad_options(kwargs, match):
+    x = _excitation(2001)
+    with pytest.raises(DataError, match=match):
+        identify(x, x, **kwargs)
+
+
+def test_summary_is_json_ready():
+    import json
+    x = _excitation(2001)
+    summary = identify(x, x + 0.1 * x ** 2, n=2, l=1).summary()
+    data = json.loads(json.dumps(summary))
+    assert data['order'] == [2, 1] and data['samples'] == 2001
+    assert {'nonlinearity_error', 'rms_error'} <= set(data)
