@@ -49,7 +49,7 @@ from .superposition import PISuperpositionOperator
 __all__ = [
     'IdentificationResult', 'identify', 'select_order', 'hysteresis_thresholds',
     'inverse_superposition_thresholds', 'fit_generalized_error', 'generalized_error_gram',
-    'DEFAULT_ORDERS',
+    'DEFAULT_ORDERS', 'ScaledDesign', 'scaled_design',
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -344,11 +344,79 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     return w_h, w_s, w_x, res.info
 
 
-def _fit(x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
-         epsilon: float) -> tuple[MPIModel, Any]:
+@dataclass(frozen=True)
+class ScaledDesign:
+    """
+    Scaled thresholds of the QP (34)-(36) for one record and order (see :func:`scaled_design`).
+
+    Attributes
+    ----------
+    x_scale : float
+        ``||x||_inf`` [A]; the QP sees ``x / x_scale``.
+    y_scale : float
+        ``||y||_inf`` [m]; the QP sees ``y / y_scale``.
+    hysteresis_thresholds : ndarray of float, shape (n+1,)
+        ``r_H`` (28) in scaled units.
+    inverse_superposition_thresholds : ndarray of float, shape (m,)
+        ``r'_S`` (29)-(31) in scaled units.
+    center : int
+        Index of the zero threshold in ``inverse_superposition_thresholds``.
+
+    """
+
+    x_scale: float
+    y_scale: float
+    hysteresis_thresholds: FloatArray
+    inverse_superposition_thresholds: FloatArray
+    center: int
+
+    def model(self, w_h: FloatArray, w_s_inv: FloatArray) -> MPIModel:
+        """
+        Return the forward model (SI units) for QP weights found on the scaled data.
+
+        Parameters
+        ----------
+        w_h : ndarray of float, shape (n+1,)
+            Weights of H (dimensionless, unchanged by the scaling).
+        w_s_inv : ndarray of float, shape (m,)
+            Weights of S' in scaled units.
+
+        Returns
+        -------
+        MPIModel
+            Gamma with S from S' by (22)-(25) and ``z_H0 = 0`` (32).
+
+        """
+        r_h = self.hysteresis_thresholds
+        # Back to SI: H maps A -> A (w_H dimensionless); S' maps m -> A.
+        hysteresis = PIHysteresisOperator(r_h * self.x_scale, w_h, np.zeros(r_h.size))
+        s_inv = PISuperpositionOperator(self.inverse_superposition_thresholds * self.y_scale,
+                                        w_s_inv * (self.x_scale / self.y_scale))
+        return MPIModel(hysteresis, invert_superposition(s_inv))               # (22)-(25)
+
+
+def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int  # noqa: E741
+                  ) -> ScaledDesign:
+    """
+    Return the scaling and the thresholds (28)-(31) :func:`identify` uses for a record.
+
+    Parameters
+    ----------
+    x : ndarray of float, shape (N,)
+        Input [A].
+    y : ndarray of float, shape (N,)
+        Output [m].
+    n, l : int
+        Model orders.
+
+    Returns
+    -------
+    ScaledDesign
+        Scales, scaled thresholds and the index of S' zero threshold.
+
+    """
     x_scale = float(np.max(np.abs(x)))
     y_scale = float(np.max(np.abs(y)))
-    xs = x / x_scale
     ys = y / y_scale
     r_h = hysteresis_thresholds(1.0, n)                                          # (28)
     y_max, y_min = float(np.max(ys)), float(np.min(ys))
@@ -356,17 +424,20 @@ def _fit(x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
     r_s_inv = inverse_superposition_thresholds(
         y_max if y_max > _BRANCH_FRACTION * span else 0.0,
         y_min if y_min < -_BRANCH_FRACTION * span else 0.0, l)                 # (29)-(31)
-    gram = _mpi_gram(xs, ys, r_h, r_s_inv)                                      # (34)
     c = int(np.flatnonzero(r_s_inv == 0.0)[0])
+    return ScaledDesign(x_scale, y_scale, r_h, r_s_inv, c)
+
+
+def _fit(x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
+         epsilon: float) -> tuple[MPIModel, Any]:
+    design = scaled_design(x, y, n, l)
+    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
+    gram = _mpi_gram(x / design.x_scale, y / design.y_scale, r_h, r_s_inv)      # (34)
     equality = 1.0 - r_h                                                        # (36), scaled
     w_h, w_s_inv, _, info = fit_generalized_error(
         gram, equality, n_hysteresis=n + 1, n_superposition=r_s_inv.size,
-        superposition_center=c, epsilon=epsilon)
-    # Back to SI: H maps A -> A (w_H dimensionless); S' maps m -> A.
-    hysteresis = PIHysteresisOperator(r_h * x_scale, w_h, np.zeros(n + 1))
-    s_inv = PISuperpositionOperator(r_s_inv * y_scale, w_s_inv * (x_scale / y_scale))
-    model = MPIModel(hysteresis, invert_superposition(s_inv))                   # (22)-(25)
-    return model, info
+        superposition_center=design.center, epsilon=epsilon)
+    return design.model(w_h, w_s_inv), info
 
 
 def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,

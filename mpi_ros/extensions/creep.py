@@ -1,0 +1,210 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Creep extension: Kuhnen-style linear creep operators added to the hysteresis operator.
+
+The extended operator is ``s = S[ H[x] + sum_j w_Cj C_j[x] ]`` where each creep operator
+``C_j`` is a first-order lag ``tau_j dc_j/dt = x - c_j`` of the input (see
+:mod:`mpi_ros.extensions._signals`) and the time constants ``tau_j`` are spaced
+logarithmically over the record's time scales.  After a step of the input the lags
+settle one after the other, which gives the ``log t``-like creep of the output.
+
+The creep weights enter the generalised error (33) like the play weights,
+``E = w_H^T H[x] + w_C^T C[x] - w'_S^T S'[y]``, so ``w_H``, ``w_C`` and ``w'_S`` are
+found together in the convex QP (34)-(36) with ``w_C >= 0``.  With the lag states fixed,
+the present input enters ``C_j`` with a positive gain ``b_j``, so the step map
+``x -> H[x] + sum_j w_Cj b_j x + const`` is a PI operator whose first weight is
+``w_H0 + sum_j w_Cj b_j > 0``: (8) holds and the inverse follows from the laws
+(12)-(14) at every step (see :class:`mpi_ros.extensions.ExtendedCompensator`).
+
+Parameter keys (besides the five ``model.*`` keys of Gamma):
+
+- ``model.creep.time_constants``: ``tau_j`` [s], ascending, > 0;
+- ``model.creep.weights``: ``w_Cj`` [1] (H-output per input unit, like ``w_H``), >= 0.
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+import math
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ._common import check_series, vector_parameter
+from ._signals import lag_bank
+from ..deadzone import dead_zone_operator
+from ..errors import ModelError
+from ..identification import fit_generalized_error, generalized_error_gram, scaled_design
+from ..model import MPIModel
+from ..play import play_operator
+
+__all__ = ['CreepModel', 'creep_time_constants', 'fit_creep', 'CREEP_TIME_CONSTANTS',
+           'CREEP_WEIGHTS']
+
+FloatArray = npt.NDArray[np.float64]
+
+CREEP_TIME_CONSTANTS = 'model.creep.time_constants'
+CREEP_WEIGHTS = 'model.creep.weights'
+
+
+@dataclass(frozen=True, eq=False)
+class CreepModel:
+    """
+    MPI model with creep operators: ``s = S[H[x] + sum_j w_Cj C_j[x]]``.
+
+    Parameters
+    ----------
+    model : MPIModel
+        Forward model Gamma = S o H.
+    time_constants : ndarray of float, shape (k,)
+        ``tau_j`` [s] of the creep lags.
+    weights : ndarray of float, shape (k,)
+        ``w_Cj >= 0`` [1].
+
+    """
+
+    model: MPIModel
+    time_constants: FloatArray
+    weights: FloatArray
+    cause = 'creep'
+
+    def __post_init__(self) -> None:
+        """Validate the creep parameters (ModelError names the key)."""
+        params = {CREEP_TIME_CONSTANTS: list(self.time_constants),
+                  CREEP_WEIGHTS: list(self.weights)}
+        taus = vector_parameter(params, CREEP_TIME_CONSTANTS, strict=True)
+        weights = vector_parameter(params, CREEP_WEIGHTS, unit='1')
+        if taus.size != weights.size:
+            msg = (f'{CREEP_WEIGHTS} must have one weight per time constant: expected'
+                   f' {taus.size}, found {weights.size}')
+            raise ModelError(msg)
+        object.__setattr__(self, 'time_constants', taus)
+        object.__setattr__(self, 'weights', weights)
+
+    @classmethod
+    def from_params(cls, mapping: Mapping[str, Any]) -> 'CreepModel':
+        """
+        Build from the parameter form (the five ``model.*`` keys plus ``model.creep.*``).
+
+        Parameters
+        ----------
+        mapping : Mapping[str, Any]
+            Flat parameters.
+
+        Returns
+        -------
+        CreepModel
+            The validated model.
+
+        """
+        return cls(MPIModel.from_params(mapping),
+                   vector_parameter(mapping, CREEP_TIME_CONSTANTS, strict=True),
+                   vector_parameter(mapping, CREEP_WEIGHTS, unit='1'))
+
+    def to_params(self) -> dict[str, Any]:
+        """Return the flat parameter form (Gamma's keys plus ``model.creep.*``)."""
+        params: dict[str, Any] = self.model.to_params()
+        params[CREEP_TIME_CONSTANTS] = [float(v) for v in self.time_constants]
+        params[CREEP_WEIGHTS] = [float(v) for v in self.weights]
+        return params
+
+    def creep_term(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """Return ``sum_j w_Cj C_j[x]`` [A] (lags start in steady state at the first sample)."""
+        t, x = check_series(time, current)
+        return lag_bank(t, x, self.time_constants) @ self.weights
+
+    def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """
+        Simulate the displacement for a current record.
+
+        Parameters
+        ----------
+        time : array_like of float, shape (N,)
+            Sample times [s].
+        current : array_like of float, shape (N,)
+            Coil current [A].
+
+        Returns
+        -------
+        ndarray of float, shape (N,)
+            Displacement [m].
+
+        """
+        t, x = check_series(time, current)
+        h, _ = self.model.hysteresis.apply(x)
+        return self.model.superposition.apply(h + self.creep_term(t, x))
+
+
+def creep_time_constants(time: npt.ArrayLike, *, per_decade: float = 2.0,
+                         maximum_count: int = 10) -> FloatArray:
+    """
+    Log-spaced creep time constants over a record's time scales.
+
+    From ten sample intervals (at least 0.01 s) to twice the record length (slower creep
+    looks like drift within the record), about ``per_decade`` per decade, between 2 and
+    ``maximum_count`` of them.
+
+    Parameters
+    ----------
+    time : array_like of float, shape (N,)
+        Sample times [s].
+    per_decade : float
+        Density of the time constants.
+    maximum_count : int
+        Upper bound on their number.
+
+    Returns
+    -------
+    ndarray of float, shape (k,)
+        Ascending time constants [s].
+
+    """
+    t = np.asarray(time, dtype=np.float64)
+    dt = float(np.median(np.diff(t)))
+    lo = max(10.0 * dt, 0.01)
+    hi = max(2.0 * float(t[-1] - t[0]), 2.0 * lo)
+    count = int(min(max(round(per_decade * math.log10(hi / lo)) + 1, 2), maximum_count))
+    return np.geomspace(lo, hi, count)
+
+
+def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.ArrayLike, *,
+              order: tuple[int, int], time_constants: npt.ArrayLike | None = None,
+              epsilon: float = 1e-6) -> CreepModel:
+    """
+    Identify an MPI model with creep operators jointly in the QP (34)-(36).
+
+    Parameters
+    ----------
+    time : array_like of float, shape (N,)
+        Sample times [s].
+    current : array_like of float, shape (N,)
+        Coil current [A].
+    displacement : array_like of float, shape (N,)
+        Displacement [m].
+    order : (int, int)
+        ``(n, l)`` of Gamma.
+    time_constants : array_like of float, optional
+        Creep time constants [s]; :func:`creep_time_constants` of ``time`` by default.
+    epsilon : float
+        Bound of (8)/(19), scaled units.
+
+    Returns
+    -------
+    CreepModel
+        The identified model.
+
+    """
+    t, x, y = check_series(time, current, displacement)
+    taus = (creep_time_constants(t) if time_constants is None
+            else np.asarray(time_constants, dtype=np.float64))
+    n, l = order  # noqa: E741
+    design = scaled_design(x, y, n, l)
+    xs, ys = x / design.x_scale, y / design.y_scale
+    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
+    plays, _ = play_operator(xs, r_h)
+    creep = lag_bank(t, xs, taus)
+    gram = generalized_error_gram(plays, -dead_zone_operator(ys, r_s_inv), creep)   # (34)
+    w_h, w_s_inv, w_c, _ = fit_generalized_error(
+        gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,
+        superposition_center=design.center, epsilon=epsilon)
+    return CreepModel(design.model(w_h, w_s_inv), taus, w_c)

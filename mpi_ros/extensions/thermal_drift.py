@@ -1,0 +1,160 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Thermal-drift extension: a drift driven by a thermal state that integrates I^2.
+
+``s = S[H[x] + w_T T]`` with ``tau_T dT/dt = x^2 - T`` (Joule heating of the coil; ``T`` in
+A^2 starts in steady state at the first sample, ``x_0^2``).  The drift enters before the
+superposition operator S, in H's output unit (A), so that ``w_H``, ``w'_S`` and ``w_T``
+(any sign) are found together in one convex QP (34)-(36) for each trial ``tau_T``: ``T``
+is one more column of the generalised error (33).  Near an operating point the output
+drift is ``k_T T`` with ``k_T = w_T dS/dv`` [m/A^2]; an alternation between Gamma and an
+output-additive ``k_T`` was tried and rejected, because Gamma absorbs most of a slow drift
+and the alternation stalls far from the joint optimum.  ``tau_T`` is found by a 1-D search
+over slow time constants (a twentieth of the record to five records).  With the thermal
+state fixed, the step map is Gamma shifted inside, so (8)/(19) and the inverse still hold.
+
+Parameter keys (besides Gamma's five keys): ``model.thermal_drift.time_constant``
+(``tau_T`` [s], > 0) and ``model.thermal_drift.weight`` (``w_T`` [1/A], any sign).
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+import math
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ._common import check_series, scalar_parameter, search_scalar
+from ._signals import first_order_lag
+from ..deadzone import dead_zone_operator
+from ..identification import fit_generalized_error, generalized_error_gram, scaled_design
+from ..model import MPIModel
+from ..play import play_operator
+
+__all__ = ['ThermalDriftModel', 'fit_thermal_drift', 'THERMAL_TIME_CONSTANT',
+           'THERMAL_WEIGHT']
+
+FloatArray = npt.NDArray[np.float64]
+
+THERMAL_TIME_CONSTANT = 'model.thermal_drift.time_constant'
+THERMAL_WEIGHT = 'model.thermal_drift.weight'
+
+
+@dataclass(frozen=True, eq=False)
+class ThermalDriftModel:
+    """
+    MPI model with a thermal drift: ``s = S[H[x] + w_T L_tau_T[x^2]]``.
+
+    Parameters
+    ----------
+    model : MPIModel
+        Forward model Gamma.
+    time_constant : float
+        ``tau_T`` [s], > 0.
+    weight : float
+        ``w_T`` [1/A] (H output per unit thermal state).
+
+    """
+
+    model: MPIModel
+    time_constant: float
+    weight: float
+    cause = 'thermal_drift'
+
+    def __post_init__(self) -> None:
+        """Validate the drift parameters."""
+        object.__setattr__(self, 'time_constant', scalar_parameter(
+            {THERMAL_TIME_CONSTANT: self.time_constant}, THERMAL_TIME_CONSTANT, strict=True))
+        object.__setattr__(self, 'weight', scalar_parameter(
+            {THERMAL_WEIGHT: self.weight}, THERMAL_WEIGHT, minimum=-math.inf, unit='1/A'))
+
+    @classmethod
+    def from_params(cls, mapping: Mapping[str, Any]) -> 'ThermalDriftModel':
+        """Build from Gamma's keys plus ``model.thermal_drift.*``."""
+        return cls(MPIModel.from_params(mapping),
+                   scalar_parameter(mapping, THERMAL_TIME_CONSTANT, strict=True),
+                   scalar_parameter(mapping, THERMAL_WEIGHT, minimum=-math.inf, unit='1/A'))
+
+    def to_params(self) -> dict[str, Any]:
+        """Return the flat parameter form."""
+        params: dict[str, Any] = self.model.to_params()
+        params[THERMAL_TIME_CONSTANT] = float(self.time_constant)
+        params[THERMAL_WEIGHT] = float(self.weight)
+        return params
+
+    def thermal_state(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """Return the thermal state ``T`` [A^2] for a current record."""
+        t, x = check_series(time, current)
+        return first_order_lag(t, x * x, self.time_constant)
+
+    def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """
+        Simulate the displacement [m] for a current record.
+
+        Parameters
+        ----------
+        time : array_like of float, shape (N,)
+            Sample times [s].
+        current : array_like of float, shape (N,)
+            Coil current [A].
+
+        Returns
+        -------
+        ndarray of float, shape (N,)
+            Displacement [m].
+
+        """
+        t, x = check_series(time, current)
+        h, _ = self.model.hysteresis.apply(x)
+        return self.model.superposition.apply(h + self.weight * self.thermal_state(t, x))
+
+
+def _fit_at(t: FloatArray, x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
+            tau: float, epsilon: float) -> tuple[ThermalDriftModel, float]:
+    design = scaled_design(x, y, n, l)
+    xs, ys = x / design.x_scale, y / design.y_scale
+    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
+    plays, _ = play_operator(xs, r_h)
+    state = first_order_lag(t, xs * xs, tau)
+    gram = generalized_error_gram(plays, -dead_zone_operator(ys, r_s_inv), state[:, None])
+    w_h, w_s_inv, w_t, _ = fit_generalized_error(
+        gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,
+        superposition_center=design.center, epsilon=epsilon,
+        extra_lower=np.array([-np.inf]))
+    model = ThermalDriftModel(design.model(w_h, w_s_inv), tau, float(w_t[0]) / design.x_scale)
+    error = float(np.mean((model.simulate(t, x) - y) ** 2))
+    return model, error
+
+
+def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
+                      displacement: npt.ArrayLike, *, order: tuple[int, int],
+                      epsilon: float = 1e-6) -> ThermalDriftModel:
+    """
+    Identify Gamma, ``tau_T`` and ``w_T`` (1-D search, one joint QP per trial).
+
+    Parameters
+    ----------
+    time : array_like of float, shape (N,)
+        Sample times [s].
+    current : array_like of float, shape (N,)
+        Coil current [A].
+    displacement : array_like of float, shape (N,)
+        Displacement [m].
+    order : (int, int)
+        ``(n, l)`` of Gamma.
+    epsilon : float
+        Bound of (8)/(19).
+
+    Returns
+    -------
+    ThermalDriftModel
+        The identified model (the trial with the smallest output error).
+
+    """
+    t, x, y = check_series(time, current, displacement)
+    n, l = order  # noqa: E741
+    duration = float(t[-1] - t[0])
+    tau, _ = search_scalar(lambda v: _fit_at(t, x, y, n, l, v, epsilon)[1],
+                           np.geomspace(duration / 20.0, 5.0 * duration, 5), refine=4)
+    return _fit_at(t, x, y, n, l, tau, epsilon)[0]
