@@ -23,8 +23,6 @@ import argparse
 import json
 import os
 import random
-import signal
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -45,116 +43,33 @@ def _progress(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
-class _Process:
-    """A node process started by the demo and stopped by PID."""
-
-    def __init__(self, node: str, ros_args: list[str], log: Path) -> None:
-        self.log = open(log, 'w')  # noqa: SIM115 - closed in stop()
-        cmd = [sys.executable, '-m', 'mpi_ros.cli', node, '--ros-args', *ros_args]
-        self.proc = subprocess.Popen(cmd, stdout=self.log, stderr=subprocess.STDOUT,
-                                     stdin=subprocess.DEVNULL, env=os.environ.copy())
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(timeout=5)
-        self.log.close()
-
-
-def _driver(rclpy: Any) -> Any:
-    from rclpy.node import Node
-    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-    from std_msgs.msg import Float64
-
-    class DemoDriver(Node):
-        """Publishes commands or desired values and waits for each measured reply."""
-
-        def __init__(self) -> None:
-            super().__init__('mpi_ros_demo')
-            qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
-                             reliability=ReliabilityPolicy.RELIABLE)
-            self.msg = Float64
-            self.current_pub = self.create_publisher(Float64, 'current_command', qos)
-            self.desired_pub = self.create_publisher(Float64, 'desired_displacement', qos)
-            self.create_subscription(Float64, 'displacement', self._on_displacement, qos)
-            self.create_subscription(Float64, 'current_command', self._on_command, qos)
-            self.displacement: float | None = None
-            self.command: float | None = None
-
-        def _on_displacement(self, msg: Any) -> None:
-            self.displacement = msg.data
-
-        def _on_command(self, msg: Any) -> None:
-            self.command = msg.data
-
-        def wait_for(self, executor: Any, condition: Any, what: str, timeout: float) -> None:
-            deadline = time.monotonic() + timeout
-            while not condition():
-                if time.monotonic() > deadline:
-                    msg = f'timed out after {timeout:g} s waiting for {what}'
-                    raise MPIError(msg)
-                executor.spin_once(timeout_sec=0.005)
-
-        def handshake(self, executor: Any, publisher: Any, value: float) -> float:
-            """Repeat the first sample until the loop answers (DDS matching takes time)."""
-            deadline = time.monotonic() + 60.0
-            while time.monotonic() < deadline:
-                self.displacement = None
-                publisher.publish(self.msg(data=float(value)))
-                end = time.monotonic() + 0.5
-                while self.displacement is None and time.monotonic() < end:
-                    executor.spin_once(timeout_sec=0.005)
-                if self.displacement is not None:
-                    end = time.monotonic() + 0.3            # drain answers to earlier tries
-                    while time.monotonic() < end:
-                        executor.spin_once(timeout_sec=0.01)
-                    return float(self.displacement)
-            msg = 'no answer from the loop within 60 s; see the node logs in the output folder'
-            raise MPIError(msg)
-
-        def exchange(self, executor: Any, publisher: Any, value: float) -> float:
-            self.displacement = None
-            publisher.publish(self.msg(data=float(value)))
-            self.wait_for(executor, lambda: self.displacement is not None,
-                          'the plant simulator to answer', _REPLY_TIMEOUT)
-            return float(self.displacement)
-
-    return DemoDriver()
-
-
 def _run(args: argparse.Namespace) -> dict[str, Any]:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
 
     from .compensation import operating_range
     from .excitation import identification_excitation, tracking_trajectory
     from .identification import identify
     from .metrics import control_error
     from .nodes.identifier import push_model_parameters
+    from .nodes.loop import LoopDriver, NodeProcess
     from .recordings import BagRecorder, read_bag_signals
 
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     started = time.monotonic()
     rclpy.init(args=['mpi_ros_demo'])
-    processes: list[_Process] = []
+    processes: list[NodeProcess] = []
     results: dict[str, Any] = {'domain_id': args.domain_id, 'tracking': []}
     try:
-        driver = _driver(rclpy)
-        executor = SingleThreadedExecutor()
-        executor.add_node(driver)
+        driver = LoopDriver('mpi_ros_demo')
         plant_args = ['-p', f'noise_std:={args.noise_std!r}', '-p', f'seed:={args.seed}']
 
-        def start_plant() -> _Process:
-            plant = _Process('plant-simulator', plant_args, out / 'plant_simulator.log')
+        def start_plant() -> NodeProcess:
+            plant = NodeProcess('plant-simulator', plant_args, out / 'plant_simulator.log')
             processes.append(plant)
-            driver.wait_for(executor, lambda: driver.current_pub.get_subscription_count() > 0,
+            driver.wait_for(lambda: driver.current_pub.get_subscription_count() > 0,
                             'the plant simulator to start', 60.0)
             return plant
 
@@ -165,10 +80,10 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
                                                seed=args.seed, holds=False, bursts=False)
         bag = out / 'identification_bag'
         _progress(f'[demo] recording {t.size} excitation samples into {bag} ...')
-        driver.handshake(executor, driver.current_pub, current[0])
+        driver.handshake(driver.current_pub, current[0])
         with BagRecorder(bag, overwrite=True) as recorder:
             for k in range(t.size):
-                s = driver.exchange(executor, driver.current_pub, current[k])
+                s = driver.exchange(driver.current_pub, current[k])
                 recorder.write_input(float(t[k]), float(current[k]))
                 recorder.write_output(float(t[k]) + 1e-6, s)
         plant.stop()
@@ -200,21 +115,17 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
         traces = {}
         for label, model, enabled in runs:
             plant = start_plant()
-            comp = _Process('compensator', ['-p', f'output.min:={args.output_min!r}',
+            comp = NodeProcess('compensator', ['-p', f'output.min:={args.output_min!r}',
                                             '-p', f'output.max:={args.output_max!r}',
                                             '-p', f'enabled:={str(enabled).lower()}'],
                             out / 'compensator.log')
             processes.append(comp)
-            executor.remove_node(driver)          # the push spins the node on its own executor
-            try:
+            with driver.detached():            # the push spins the node on its own executor
                 push_model_parameters(driver, '/compensator', model.to_params(), timeout=60.0)
-            finally:
-                executor.add_node(driver)
-            driver.wait_for(executor, lambda: driver.desired_pub.get_subscription_count() > 0,
+            driver.wait_for(lambda: driver.desired_pub.get_subscription_count() > 0,
                             'the compensator to subscribe', 30.0)
-            driver.handshake(executor, driver.desired_pub, desired_all[0])
-            measured = np.array([driver.exchange(executor, driver.desired_pub, v)
-                                 for v in desired_all])
+            driver.handshake(driver.desired_pub, desired_all[0])
+            measured = np.array([driver.exchange(driver.desired_pub, v) for v in desired_all])
             comp.stop()
             plant.stop()
             processes.remove(comp)
@@ -227,7 +138,6 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
         results['elapsed_s'] = time.monotonic() - started
         _report(out, data, models, t_track, desired_all[lead.size:],
                 {k: v[lead.size:] for k, v in traces.items()}, results)
-        executor.remove_node(driver)
         driver.destroy_node()
     finally:
         for p in processes:

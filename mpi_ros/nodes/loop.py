@@ -1,0 +1,198 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Drive the compensator/plant loop from outside: node processes and a lock-step driver.
+
+Used by ``mpi-ros demo``, the integration tests and the benchmarks.  Every node runs in
+its own process (``python -m mpi_ros.cli <node> --ros-args ...``), started and stopped
+by PID.  The driver publishes a command or a desired displacement and waits for the
+measured displacement it causes, so results do not depend on DDS timing.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Float64
+
+from ..errors import MPIError
+
+__all__ = ['NodeProcess', 'LoopDriver', 'loop_qos']
+
+
+def loop_qos(depth: int = 1000) -> QoSProfile:
+    """Return the QoS of the loop topics (reliable, keep-last ``depth``), as the nodes use."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=ReliabilityPolicy.RELIABLE)
+
+
+class NodeProcess:
+    """
+    One node in its own process, stopped by PID (SIGINT, then SIGKILL after a grace period).
+
+    Parameters
+    ----------
+    node : str
+        ``compensator``, ``identifier`` or ``plant-simulator``.
+    ros_args : list of str
+        Arguments after ``--ros-args``.
+    log : Path
+        File that receives the process's stdout and stderr.
+    env : dict, optional
+        Environment (default: this process's).
+
+    """
+
+    def __init__(self, node: str, ros_args: list[str], log: Path,
+                 env: Optional[dict[str, str]] = None) -> None:
+        self.log_path = Path(log)
+        self._log = open(self.log_path, 'w')  # noqa: SIM115 - closed in stop()
+        cmd = [sys.executable, '-m', 'mpi_ros.cli', node, '--ros-args', *ros_args]
+        self.proc = subprocess.Popen(cmd, stdout=self._log, stderr=subprocess.STDOUT,
+                                     stdin=subprocess.DEVNULL,
+                                     env=dict(os.environ if env is None else env))
+
+    @property
+    def pid(self) -> int:
+        """Process id."""
+        return self.proc.pid
+
+    def running(self) -> bool:
+        """Tell whether the process is still alive."""
+        return self.proc.poll() is None
+
+    def stop(self, grace: float = 5.0) -> Optional[int]:
+        """Stop the process (SIGINT, then SIGKILL); return its exit status."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(timeout=grace)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(timeout=grace)
+        if not self._log.closed:
+            self._log.close()
+        return self.proc.returncode
+
+    def kill(self) -> None:
+        """Kill the process at once (fault injection)."""
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(timeout=5.0)
+        if not self._log.closed:
+            self._log.close()
+
+
+class LoopDriver(Node):
+    """
+    Publishes ``current_command`` or ``desired_displacement``, waits for ``displacement``.
+
+    Parameters
+    ----------
+    node_name : str
+        Name of the driver node.
+    **kwargs
+        Passed on to :class:`rclpy.node.Node`.
+
+    """
+
+    def __init__(self, node_name: str = 'mpi_ros_loop_driver', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        qos = loop_qos()
+        self.current_pub = self.create_publisher(Float64, 'current_command', qos)
+        self.desired_pub = self.create_publisher(Float64, 'desired_displacement', qos)
+        self.create_subscription(Float64, 'displacement', self._on_displacement, qos)
+        self.create_subscription(Float64, 'current_command', self._on_command, qos)
+        self.displacement: Optional[float] = None
+        self.command: Optional[float] = None
+        self.commands: list[float] = []
+        self.executor_ = SingleThreadedExecutor(context=self.context)
+        self.executor_.add_node(self)
+
+    def _on_displacement(self, msg: Float64) -> None:
+        self.displacement = msg.data
+
+    def _on_command(self, msg: Float64) -> None:
+        self.command = msg.data
+        self.commands.append(msg.data)
+
+    def spin_for(self, seconds: float) -> None:
+        """Process callbacks for ``seconds``."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor_.spin_once(timeout_sec=0.005)
+
+    def wait_for(self, condition: Callable[[], bool], what: str, timeout: float) -> None:
+        """Spin until ``condition()`` holds; raise MPIError naming ``what`` on timeout."""
+        deadline = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > deadline:
+                msg = f'timed out after {timeout:g} s waiting for {what}'
+                raise MPIError(msg)
+            self.executor_.spin_once(timeout_sec=0.005)
+
+    def detached(self) -> '_Detached':
+        """Context in which the node may be spun by another executor (service calls)."""
+        return _Detached(self)
+
+    def handshake(self, publisher: Any, value: float, timeout: float = 60.0) -> float:
+        """
+        Repeat the first sample until the loop answers (DDS matching takes time).
+
+        Repeating one value is harmless for a rate-independent plant.  Answers to
+        earlier tries are drained before returning, so lock step is kept.
+        """
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.displacement = None
+            publisher.publish(Float64(data=float(value)))
+            end = time.monotonic() + 0.5
+            while self.displacement is None and time.monotonic() < end:
+                self.executor_.spin_once(timeout_sec=0.005)
+            if self.displacement is not None:
+                self.spin_for(0.3)
+                return float(self.displacement)
+        msg = f'no answer from the loop within {timeout:g} s; see the node logs'
+        raise MPIError(msg)
+
+    def exchange(self, publisher: Any, value: float, timeout: float = 5.0) -> float:
+        """
+        Publish one value and return the displacement it causes.
+
+        For a desired displacement, also wait until the compensator's command has
+        arrived: the two topics are delivered independently.
+        """
+        self.displacement = None
+        self.command = None
+        publisher.publish(Float64(data=float(value)))
+        if publisher is self.desired_pub:
+            self.wait_for(lambda: self.displacement is not None and self.command is not None,
+                          'the compensator and the plant simulator to answer', timeout)
+        else:
+            self.wait_for(lambda: self.displacement is not None,
+                          'the plant simulator to answer', timeout)
+        return float(self.displacement)
+
+    def destroy_node(self) -> None:
+        """Shut the private executor down, then destroy the node."""
+        self.executor_.remove_node(self)
+        self.executor_.shutdown()
+        super().destroy_node()
+
+
+class _Detached:
+    def __init__(self, driver: LoopDriver) -> None:
+        self.driver = driver
+
+    def __enter__(self) -> LoopDriver:
+        self.driver.executor_.remove_node(self.driver)
+        return self.driver
+
+    def __exit__(self, *exc: Any) -> None:
+        self.driver.executor_.add_node(self.driver)
