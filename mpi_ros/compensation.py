@@ -247,6 +247,10 @@ class FeedforwardCompensator:
         lo, hi = self.displacement_range
         if s_c < lo or s_c > hi:
             c['out_of_range'] += 1
+            # Gamma^-1 is increasing: far beyond the operating range the clamped command is
+            # the same, and saturating keeps the arithmetic finite (1e308 would give inf-inf).
+            margin = 10.0 * (hi - lo)
+            s_c = min(max(s_c, lo - margin), hi + margin)
         r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si = self._kernel
         if self.enabled:
             current, raw = _compensate_step(s_c, self.output_min, self.output_max, r_h, w_h,

@@ -142,3 +142,11 @@ def test_swap_to_same_model_is_seamless():
 def test_bad_limits_rejected(lo, hi):
     with pytest.raises(ModelError, match='output.min must be finite and below output.max'):
         FeedforwardCompensator(MPIModel.from_params(PARAMS), output_min=lo, output_max=hi)
+
+
+@pytest.mark.parametrize('desired', [1e308, -1e308, 1.7976931348623157e308, 1e200, -5e305])
+def test_extreme_finite_input_gives_clamped_finite_command(desired):
+    comp = FeedforwardCompensator(MPIModel.from_params(PARAMS), output_min=0.2, output_max=1.8)
+    current = comp.command(desired)
+    assert np.isfinite(current) and current == (1.8 if desired > 0 else 0.2)
+    assert np.all(np.isfinite(comp.state))

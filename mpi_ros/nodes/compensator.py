@@ -1,0 +1,380 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Compensator node: desired displacement in, current command out, through the inverse (27).
+
+Topics (relative names, std_msgs/msg/Float64, SI units)
+    ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
+    ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray) every ``diagnostics_period``.
+
+Model life cycle
+    The node starts *unconfigured* unless the five ``model.*`` parameters are given
+    (e.g. ``--params-file params.yaml`` written by ``mpi-ros identify``). While
+    unconfigured it publishes nothing: without a model there is no safe command, and
+    the current source keeps its last value. Its diagnostics say so (WARN).
+    A model is replaced through the standard ``set_parameters_atomically`` service with
+    all five ``model.*`` keys in one request. The on-set validator lays the request over
+    the current values and builds the candidate with ``MPIModel.from_params``; any
+    error rejects the whole request with a reason naming the parameter, and the running
+    model stays untouched. A request that carries only some ``model.*`` keys is
+    rejected too, because rclpy's ``set_parameters`` delivers keys one at a time and
+    would otherwise switch through mixed models. The post-set callback swaps the
+    prebuilt model in through ``FeedforwardCompensator.swap_model`` (bumpless, (14)).
+
+A ``--params-file`` with an invalid model, or with output limits that are not
+ordered, makes the node refuse to start (exit status 1) rather than run a model
+nobody asked for.
+"""
+
+import math
+import sys
+import time
+from typing import Any, Dict, List, Optional
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import SetParametersResult
+import rclpy
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Float64
+
+from .parameters import (
+    check_parameter, declare_parameters, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
+    ParameterRejected, ParameterSpec, specs_by_name,
+)
+from .spinning import events_executor, shutdown, spin
+from ..compensation import FeedforwardCompensator
+from ..errors import MPIError
+from ..model import MPIModel
+
+__all__ = ['CompensatorNode', 'PARAMETERS', 'main']
+
+Type = Parameter.Type
+
+PARAMETERS = MODEL_PARAMETERS + (
+    ParameterSpec(
+        'output.min', Type.DOUBLE, 0.0,
+        'Lowest current command ever published (safe actuator range); '
+        'must be below output.max', 'A', value_range=(-1.0e3, 1.0e3)),
+    ParameterSpec(
+        'output.max', Type.DOUBLE, 2.0,
+        'Highest current command ever published (safe actuator range); '
+        'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
+    ParameterSpec(
+        'enabled', Type.BOOL, True,
+        'true: invert the MPI model (27); false: pass the best linear map of the '
+        'model instead, for comparison'),
+    ParameterSpec(
+        'diagnostics_period', Type.DOUBLE, 1.0,
+        'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0)),
+    ParameterSpec(
+        'qos_depth', Type.INTEGER, 1000,
+        'History depth (reliable, keep-last) of desired_displacement and current_command',
+        '', value_range=(1, 100000), read_only=True),
+)
+
+_SPECS = specs_by_name(PARAMETERS)
+_LIMIT_KEYS = ('output.min', 'output.max')
+
+
+class CompensatorNode(Node):
+    """
+    Feedforward hysteresis compensator: publishes Gamma^-1[desired] per message.
+
+    Parameters
+    ----------
+    node_name : str
+        Node name; ``compensator`` unless remapped.
+    **kwargs
+        Passed on to :class:`rclpy.node.Node` (``context=``, ``parameter_overrides=``,
+        ``namespace=``...).
+
+    Raises
+    ------
+    mpi_ros.errors.MPIError
+        When the declared (``--params-file``) model or limits are invalid.
+
+    """
+
+    def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        self._declaring = True
+        self._pending: Optional[Dict[str, Any]] = None
+        self._compensator: Optional[FeedforwardCompensator] = None
+        self._model_version = 0
+        self._rejected_updates = 0
+        self._messages_in = 0
+        self._messages_out = 0
+        self._dropped_unconfigured = 0
+        self._last_report = (time.monotonic(), 0, {})
+        # Validator first: rclpy runs it once per key while declaring (a bad
+        # --params-file override is rejected there), then once per request.
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        declare_parameters(self, PARAMETERS)
+        self._declaring = False
+        self._configure_from_declared()
+
+        depth = self.get_parameter('qos_depth').value
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                         reliability=ReliabilityPolicy.RELIABLE)
+        self._command = Float64()
+        self._publisher = self.create_publisher(Float64, 'current_command', qos)
+        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._subscription = self.create_subscription(
+            Float64, 'desired_displacement', self._on_desired_displacement, qos)
+        self._timer = self.create_timer(
+            self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
+
+    # -- public read-only state -------------------------------------------------------
+    @property
+    def model_version(self) -> int:
+        """Return how many models were applied so far (0: unconfigured)."""
+        return self._model_version
+
+    @property
+    def compensator(self) -> Optional[FeedforwardCompensator]:
+        """Return the core compensator, or ``None`` while unconfigured."""
+        return self._compensator
+
+    @property
+    def counters(self) -> Dict[str, int]:
+        """
+        Message and fault counters, as reported on ``/diagnostics``.
+
+        Returns
+        -------
+        dict of str to int
+            The core's ``clamped``, ``nonfinite_input``, ``out_of_range`` plus
+            ``messages_in``, ``messages_out``, ``dropped_unconfigured``,
+            ``rejected_updates`` and ``model_version``.
+
+        """
+        counters = dict(self._compensator.counters) if self._compensator else {}
+        counters.update(
+            messages_in=self._messages_in,
+            messages_out=self._messages_out,
+            dropped_unconfigured=self._dropped_unconfigured,
+            rejected_updates=self._rejected_updates,
+            model_version=self._model_version,
+        )
+        return counters
+
+    def command(self, desired_displacement: float) -> Optional[float]:
+        """
+        Compute (and count) the command for one desired displacement, without publishing.
+
+        Parameters
+        ----------
+        desired_displacement : float
+            Desired displacement [m]; any float, including NaN and +-Inf.
+
+        Returns
+        -------
+        float or None
+            Current command [A], finite and within [output.min, output.max];
+            ``None`` while unconfigured.
+
+        """
+        self._messages_in += 1
+        compensator = self._compensator
+        if compensator is None:
+            self._dropped_unconfigured += 1
+            return None
+        return compensator.command(desired_displacement)
+
+    # -- message path -----------------------------------------------------------------
+    def _on_desired_displacement(self, msg: Float64) -> None:
+        current = self.command(msg.data)
+        if current is None:
+            return
+        self._command.data = current
+        self._publisher.publish(self._command)
+        self._messages_out += 1
+
+    # -- parameters ---------------------------------------------------------------------
+    def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
+        """Check only: type, range, whole model and limits; keep the candidate for apply."""
+        try:
+            for parameter in parameters:
+                spec = _SPECS.get(parameter.name)
+                if spec is None:
+                    msg = f'{parameter.name} is not a parameter of this node'
+                    raise ParameterRejected(msg)
+                check_parameter(spec, parameter, allow_unset=self._declaring)
+            if self._declaring:
+                # One key at a time, the others not declared yet: cross-key checks
+                # run once all keys are declared (_configure_from_declared).
+                return SetParametersResult(successful=True)
+            self._pending = self._candidate(parameters)
+        except (ParameterRejected, MPIError) as err:
+            self._pending = None
+            self._rejected_updates += 1
+            self.get_logger().warning(f'rejected parameter update: {err}')
+            return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    def _candidate(self, parameters: List[Parameter]) -> Dict[str, Any]:
+        names = {parameter.name for parameter in parameters}
+        values = parameter_values(self, list(_SPECS), parameters)
+        pending: Dict[str, Any] = {}
+        model_names = names.intersection(MODEL_KEYS)
+        if model_names:
+            missing = [key for key in MODEL_KEYS if key not in model_names]
+            if missing:
+                msg = (f'{sorted(model_names)[0]}: model parameters must be set together in '
+                       f'one set_parameters_atomically request; missing: {", ".join(missing)}')
+                raise ParameterRejected(msg)
+            model = MPIModel.from_params({key: values[key] for key in MODEL_KEYS})
+            model.inverse()  # (12)-(14), (22)-(25) must exist before the swap is promised
+            pending['model'] = model
+        if names.intersection(_LIMIT_KEYS):
+            pending['limits'] = _ordered_limits(values['output.min'], values['output.max'])
+        if 'enabled' in names:
+            pending['enabled'] = values['enabled']
+        if 'diagnostics_period' in names:
+            pending['diagnostics_period'] = values['diagnostics_period']
+        return pending
+
+    def _apply_parameters(self, parameters: List[Parameter]) -> None:
+        """Swap in what the validator prepared (post-set: the values are stored)."""
+        pending, self._pending = self._pending, None
+        if self._declaring or not pending:
+            return
+        if 'limits' in pending and self._compensator is not None:
+            self._compensator.set_limits(*pending['limits'])
+        if 'enabled' in pending and self._compensator is not None:
+            self._compensator.enabled = pending['enabled']
+        if 'model' in pending:
+            self._install_model(pending['model'])
+        if 'diagnostics_period' in pending:
+            self.destroy_timer(self._timer)
+            self._timer = self.create_timer(
+                pending['diagnostics_period'], self._publish_diagnostics)
+
+    def _configure_from_declared(self) -> None:
+        values = parameter_values(self, list(_SPECS))
+        _ordered_limits(values['output.min'], values['output.max'])
+        given = [key for key in MODEL_KEYS if values[key] is not None]
+        if not given:
+            self.get_logger().info(
+                'no model given: unconfigured, publishing nothing until a model arrives '
+                'through set_parameters_atomically')
+            return
+        if len(given) != len(MODEL_KEYS):
+            missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
+            msg = f'incomplete model in the parameters: missing {missing}'
+            raise ParameterRejected(msg)
+        self._install_model(MPIModel.from_params({key: values[key] for key in MODEL_KEYS}))
+
+    def _install_model(self, model: MPIModel) -> None:
+        if self._compensator is None:
+            output_min = self.get_parameter('output.min').value
+            output_max = self.get_parameter('output.max').value
+            self._compensator = FeedforwardCompensator(
+                model, output_min=output_min, output_max=output_max,
+                enabled=self.get_parameter('enabled').value)
+        else:
+            self._compensator.swap_model(model)
+        self._model_version += 1
+        self.get_logger().info(f'model version {self._model_version} applied')
+
+    # -- diagnostics --------------------------------------------------------------------
+    def _publish_diagnostics(self) -> None:
+        self._diagnostics.publish(self.diagnostics())
+
+    def diagnostics(self) -> DiagnosticArray:
+        """
+        Build the diagnostics message (and restart the rate window).
+
+        Returns
+        -------
+        diagnostic_msgs.msg.DiagnosticArray
+            One status named ``<node name>: feedforward``.
+
+        """
+        now = time.monotonic()
+        last_time, last_count, last_counters = self._last_report
+        counters = self.counters
+        elapsed = now - last_time
+        rate = (self._messages_in - last_count) / elapsed if elapsed > 0.0 else 0.0
+        self._last_report = (now, self._messages_in, counters)
+
+        status = DiagnosticStatus(name=f'{self.get_name()}: feedforward', hardware_id='')
+        faults = {key: counters.get(key, 0) - last_counters.get(key, 0)
+                  for key in ('nonfinite_input', 'out_of_range', 'clamped')}
+        if self._compensator is None:
+            status.level = DiagnosticStatus.WARN
+            status.message = ('unconfigured: no model, no commands published; push all '
+                              'model.* parameters with set_parameters_atomically')
+        elif faults['nonfinite_input'] or faults['out_of_range']:
+            status.level = DiagnosticStatus.WARN
+            status.message = (f'{faults["nonfinite_input"]} non-finite and '
+                              f'{faults["out_of_range"]} out-of-range inputs in the last period')
+        elif not self.get_parameter('enabled').value:
+            status.level = DiagnosticStatus.OK
+            status.message = 'compensation disabled: best linear map'
+        else:
+            status.level = DiagnosticStatus.OK
+            status.message = 'compensating'
+        values = dict(counters)
+        values.update(
+            rate_hz=round(rate, 3),
+            enabled=self.get_parameter('enabled').value,
+            output_min=self.get_parameter('output.min').value,
+            output_max=self.get_parameter('output.max').value,
+        )
+        status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
+        array = DiagnosticArray()
+        array.header.stamp = self.get_clock().now().to_msg()
+        array.status = [status]
+        return array
+
+
+def main(args: Optional[List[str]] = None) -> int:
+    """
+    Run the compensator node (``ros2 run mpi_ros compensator --ros-args ...``).
+
+    Parameters
+    ----------
+    args : list of str, optional
+        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
+
+    Returns
+    -------
+    int
+        Exit status: 0 on shutdown, 1 when the configured model or limits are invalid.
+
+    """
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = CompensatorNode()
+        executor = events_executor(node.context)
+        executor.add_node(node)
+        spin(executor, node.context)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (MPIError, ParameterRejected, InvalidParameterTypeException,
+            InvalidParameterValueException) as err:
+        print(f'error: compensator: {err}', file=sys.stderr, flush=True)
+        return 1
+    finally:
+        if node is not None:
+            node.destroy_node()
+        shutdown()
+    return 0
+
+
+def _ordered_limits(output_min: float, output_max: float) -> tuple:
+    if not (math.isfinite(output_min) and math.isfinite(output_max)):
+        msg = f'output.min and output.max must be finite; found {output_min}, {output_max}'
+        raise ParameterRejected(msg)
+    if not output_min < output_max:
+        msg = (f'output.min must be below output.max; found output.min={output_min} A and '
+               f'output.max={output_max} A; set both together with '
+               'set_parameters_atomically when moving the range')
+        raise ParameterRejected(msg)
+    return (output_min, output_max)

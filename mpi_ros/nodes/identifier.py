@@ -1,0 +1,345 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Identifier node: fit an MPI model (28)-(36) from a rosbag2 bag and push it atomically.
+
+One run: read the bag (sqlite3 or mcap) with :func:`mpi_ros.recordings.read_bag_signals`,
+pairing ``input_topic`` (current [A]) with ``output_topic`` (displacement [m]); fit with
+:func:`mpi_ros.identify` (``order`` ``auto`` or ``N,L``); report the fit errors (37);
+optionally write the parameter YAML (``params_file``); then send all five ``model.*``
+keys in **one** ``set_parameters_atomically`` request to ``target_node``. The target
+either applies the whole model or rejects it, so nothing is ever half-applied; the
+wait for the service and for its answer is bounded by ``service_timeout``.
+
+The node exits with status 0 when the model was fitted (and, if ``push`` is true,
+accepted by the target), and with status 1 and one ``error: ...`` line on stderr for
+any failure: unreadable bag, failed fit, target missing, push rejected or unanswered.
+"""
+
+from dataclasses import dataclass
+import sys
+import time
+from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
+
+from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.srv import SetParametersAtomically
+import rclpy
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from .parameters import (
+    check_parameter, declare_parameters, MODEL_KEYS, ParameterRejected, ParameterSpec,
+    specs_by_name,
+)
+from .spinning import shutdown
+from .. import IdentificationResult, identify
+from ..errors import DataError, IdentificationError, MPIError
+from ..params import write_params_yaml
+from ..recordings import read_bag_signals
+
+__all__ = [
+    'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS',
+    'fit_bag', 'parse_order', 'push_model_parameters', 'main',
+]
+
+Type = Parameter.Type
+
+PARAMETERS = (
+    ParameterSpec('bag', Type.STRING, '',
+                  'Path of the rosbag2 bag (directory, or .mcap/.db3 file) to identify from'),
+    ParameterSpec('input_topic', Type.STRING, '/current_command',
+                  'Topic of the actuator current in the bag (std_msgs/msg/Float64)', 'A'),
+    ParameterSpec('output_topic', Type.STRING, '/displacement',
+                  'Topic of the measured displacement in the bag (std_msgs/msg/Float64)', 'm'),
+    ParameterSpec('order', Type.STRING, 'auto',
+                  "Model orders: 'auto' (selection by the fit errors) or 'N,L' (N play "
+                  'operators in H, L dead-zone operators in S)'),
+    ParameterSpec('target_node', Type.STRING, '/compensator',
+                  'Fully qualified name of the node that receives the model'),
+    ParameterSpec('push', Type.BOOL, True,
+                  'Push the fitted model to target_node (false: only fit and report)'),
+    ParameterSpec('service_timeout', Type.DOUBLE, 10.0,
+                  'Longest wait for the target parameter service, and again for its answer',
+                  's', value_range=(0.0, 3600.0)),
+    ParameterSpec('params_file', Type.STRING, '',
+                  'Also write the model as a parameter YAML keyed by the compensator node '
+                  'name (empty: do not write)'),
+)
+
+_SPECS = specs_by_name(PARAMETERS)
+
+
+class ParameterPushError(MPIError, RuntimeError):
+    """The model could not be pushed: target missing, request rejected or unanswered."""
+
+
+@dataclass(frozen=True)
+class BagFit:
+    """
+    A model fitted from a bag.
+
+    Attributes
+    ----------
+    result : mpi_ros.IdentificationResult
+        The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
+        ``.samples``, solver status.
+    parameters : dict of str to list of float
+        ``result.model.to_params()``: the five ``model.*`` keys.
+
+    """
+
+    result: IdentificationResult
+    parameters: Dict[str, List[float]]
+
+    def summary(self) -> str:
+        """
+        Describe the fit in one line.
+
+        Returns
+        -------
+        str
+            Orders, sample count and errors in percent.
+
+        """
+        n, l_s = self.result.order
+        return (f'fitted order n={n}, l={l_s} on {self.result.samples} samples: '
+                f'nonlinearity error {100.0 * self.result.nonlinearity_error:.3f} %, '
+                f'relative RMS error {100.0 * self.result.rms_error:.3f} %')
+
+
+class IdentifierNode(Node):
+    """
+    Fit a model from a bag and push it to the target node; see the module docstring.
+
+    Parameters
+    ----------
+    node_name : str
+        Node name; ``identifier`` unless remapped.
+    **kwargs
+        Passed on to :class:`rclpy.node.Node`.
+
+    """
+
+    def __init__(self, node_name: str = 'identifier', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        declare_parameters(self, PARAMETERS)
+
+    def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
+        try:
+            for parameter in parameters:
+                spec = _SPECS.get(parameter.name)
+                if spec is None:
+                    msg = f'{parameter.name} is not a parameter of this node'
+                    raise ParameterRejected(msg)
+                check_parameter(spec, parameter)
+                if parameter.name == 'order':
+                    parse_order(parameter.value)
+        except (ParameterRejected, MPIError) as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    def run(self) -> BagFit:
+        """
+        Fit, report, write the YAML if asked, and push if asked.
+
+        Returns
+        -------
+        BagFit
+            The fit that was pushed (or only computed, with ``push:=false``).
+
+        Raises
+        ------
+        mpi_ros.errors.MPIError
+            ``DataError`` (bag), ``IdentificationError`` (fit), ``ParameterPushError``.
+
+        """
+        value = self.get_parameter
+        bag = value('bag').value
+        if not bag:
+            msg = 'no bag given; run with --ros-args -p bag:=PATH'
+            raise DataError(msg)
+        logger = self.get_logger()
+        logger.info(f'identifying from {bag} ({value("input_topic").value} -> '
+                    f'{value("output_topic").value}, order {value("order").value})')
+        fit = fit_bag(bag, input_topic=value('input_topic').value,
+                      output_topic=value('output_topic').value,
+                      order=parse_order(value('order').value))
+        logger.info(fit.summary())
+        params_file = value('params_file').value
+        if params_file:
+            write_params_yaml(params_file, fit.parameters, node_name='compensator',
+                              header=f'mpi_ros identifier: {fit.summary()}\nbag: {bag}')
+            logger.info(f'wrote {params_file}')
+        if value('push').value:
+            target = value('target_node').value
+            push_model_parameters(self, target, fit.parameters,
+                                  timeout=value('service_timeout').value)
+            logger.info(f'{target} accepted the model')
+        return fit
+
+
+def parse_order(text: str) -> Union[str, Tuple[int, int]]:
+    """
+    Parse the ``order`` parameter.
+
+    Parameters
+    ----------
+    text : str
+        ``auto`` or ``N,L`` (also ``N L``), with N >= 1 and L >= 1.
+
+    Returns
+    -------
+    str or tuple of (int, int)
+        ``'auto'`` or ``(n, l)``.
+
+    Raises
+    ------
+    mpi_ros.nodes.parameters.ParameterRejected
+        For anything else.
+
+    """
+    cleaned = text.strip().lower()
+    if cleaned == 'auto':
+        return 'auto'
+    parts = cleaned.replace(',', ' ').split()
+    try:
+        n, l_s = (int(part) for part in parts)
+    except ValueError:
+        n = l_s = 0
+    if n < 1 or l_s < 1:
+        msg = f"order must be 'auto' or 'N,L' with N, L >= 1 (e.g. '14,7'); found {text!r}"
+        raise ParameterRejected(msg)
+    return (n, l_s)
+
+
+def fit_bag(path: str, *, input_topic: str, output_topic: str,
+            order: Union[str, Tuple[int, int]] = 'auto') -> BagFit:
+    """
+    Read a bag, fit an MPI model and compute its errors on the same data.
+
+    Parameters
+    ----------
+    path : str
+        rosbag2 bag (directory or file).
+    input_topic, output_topic : str
+        Topics of the current [A] and of the displacement [m].
+    order : 'auto' or tuple of (int, int)
+        Model orders (n, l), or automatic selection.
+
+    Returns
+    -------
+    BagFit
+        The model as parameters, with its errors.
+
+    Raises
+    ------
+    mpi_ros.errors.DataError
+        When the bag is unreadable or the topics are missing or unusable.
+    mpi_ros.errors.IdentificationError
+        When the fit fails.
+
+    """
+    recording = read_bag_signals(path, input_topic=input_topic, output_topic=output_topic)
+    result = identify(recording.current, recording.displacement, order=order)
+    parameters = {key: [float(v) for v in values]
+                  for key, values in result.model.to_params().items()}
+    if set(parameters) != set(MODEL_KEYS):
+        msg = f'identify returned parameters {sorted(parameters)}; expected {list(MODEL_KEYS)}'
+        raise IdentificationError(msg)
+    return BagFit(result=result, parameters=parameters)
+
+
+def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str, Any], *,
+                          timeout: float) -> None:
+    """
+    Send all parameters to ``target_node`` in one ``set_parameters_atomically`` request.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Node that owns the client (it is spun on a private executor while waiting).
+    target_node : str
+        Fully qualified target name, e.g. ``/compensator``.
+    parameters : Mapping[str, sequence of float]
+        The ``model.*`` keys (as from ``MPIModel.to_params()``).
+    timeout : float
+        Longest wait [s] for the service to appear, and again for the answer.
+
+    Raises
+    ------
+    ParameterPushError
+        Target missing, request rejected (with the target's reason) or unanswered.
+
+    """
+    service = f'{target_node.rstrip("/")}/set_parameters_atomically'
+    client = node.create_client(SetParametersAtomically, service)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            msg = (f'no parameter service {service} within {timeout:g} s; is the node '
+                   f'{target_node} running with the same ROS_DOMAIN_ID? Nothing was pushed')
+            raise ParameterPushError(msg)
+        request = SetParametersAtomically.Request()
+        request.parameters = [
+            Parameter(name, Type.DOUBLE_ARRAY, [float(v) for v in values]).to_parameter_msg()
+            for name, values in parameters.items()
+        ]
+        future = client.call_async(request)
+        executor = SingleThreadedExecutor(context=node.context)
+        executor.add_node(node)
+        deadline = time.monotonic() + timeout
+        try:
+            while not future.done() and time.monotonic() < deadline:
+                executor.spin_once(timeout_sec=min(0.1, max(deadline - time.monotonic(), 0.0)))
+        finally:
+            executor.remove_node(node)
+            executor.shutdown()
+        if not future.done():
+            future.cancel()
+            msg = (f'{service} did not answer within {timeout:g} s; the target applied either '
+                   'the whole new model or none of it: check model_version on /diagnostics')
+            raise ParameterPushError(msg)
+        response = future.result()
+        if response is None or not response.result.successful:
+            reason = response.result.reason if response is not None else 'no response'
+            msg = f'{target_node} rejected the model (its old model keeps running): {reason}'
+            raise ParameterPushError(msg)
+    finally:
+        node.destroy_client(client)
+
+
+def main(args: Optional[List[str]] = None) -> int:
+    """
+    Run the identifier once (``ros2 run mpi_ros identifier --ros-args -p bag:=PATH``).
+
+    Parameters
+    ----------
+    args : list of str, optional
+        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
+
+    Returns
+    -------
+    int
+        0 when the model was fitted and (if asked) accepted; 1 on any failure.
+
+    """
+    rclpy.init(args=args)
+    node = None
+    status = 0
+    try:
+        node = IdentifierNode()
+        node.run()
+    except KeyboardInterrupt:
+        status = 1
+        print('error: identifier: interrupted; nothing was pushed unless the target said so',
+              file=sys.stderr, flush=True)
+    except (MPIError, ParameterRejected, InvalidParameterTypeException,
+            InvalidParameterValueException) as err:
+        status = 1
+        print(f'error: identifier: {err}', file=sys.stderr, flush=True)
+    finally:
+        if node is not None:
+            node.destroy_node()
+        shutdown()
+    return status

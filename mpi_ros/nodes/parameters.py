@@ -1,0 +1,281 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Parameter declarations and per-key validation shared by the mpi_ros nodes.
+
+Every node describes its parameters once, as a tuple of :class:`ParameterSpec`,
+and declares them with :func:`declare_parameters`. The specs are declared with
+``dynamic_typing=True`` on purpose: rclpy's own static type check answers
+``Wrong parameter type, expected ...`` without naming the parameter, which is
+useless in a ``set_parameters_atomically`` call carrying five arrays. The nodes'
+on-set validators call :func:`check_parameter` instead, which rejects every type
+but the declared one (and an unset value) with a reason that names the key.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+__all__ = [
+    'MODEL_KEYS',
+    'MODEL_PARAMETERS',
+    'ParameterSpec',
+    'ParameterRejected',
+    'check_parameter',
+    'declare_parameters',
+    'parameter_values',
+    'specs_by_name',
+]
+
+Type = Parameter.Type
+
+_TYPE_WORDS = {
+    Type.BOOL: 'a bool (true/false)',
+    Type.INTEGER: 'an integer',
+    Type.DOUBLE: 'a double (write 2.0, not 2)',
+    Type.STRING: 'a string',
+    Type.DOUBLE_ARRAY: 'an array of doubles (write [0.0, 1.0], not [0, 1])',
+    Type.INTEGER_ARRAY: 'an array of integers',
+    Type.STRING_ARRAY: 'an array of strings',
+}
+
+
+class ParameterRejected(Exception):
+    """A parameter value failed validation; the message names the parameter."""
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """
+    One node parameter: name, type, default and documentation.
+
+    Attributes
+    ----------
+    name : str
+        Parameter key, e.g. ``output.min``.
+    type_ : rclpy.parameter.Parameter.Type
+        The only type the parameter accepts.
+    default : object or None
+        Default value; ``None`` declares the parameter unset (no default).
+    description : str
+        What the parameter does, shown by ``ros2 param describe``.
+    unit : str
+        SI unit (REP 103), empty when dimensionless; appended to the description.
+    value_range : tuple of (number, number) or None
+        Inclusive range for DOUBLE and INTEGER parameters.
+    read_only : bool
+        True when the value can only be given at start-up.
+    choices : tuple of str
+        Allowed values of a STRING parameter; empty for any string.
+    constraints : str
+        Extra constraints in words (``ros2 param describe`` shows them).
+
+    """
+
+    name: str
+    type_: Type
+    default: Any
+    description: str
+    unit: str = ''
+    value_range: Optional[Tuple[float, float]] = None
+    read_only: bool = False
+    choices: Tuple[str, ...] = ()
+    constraints: str = ''
+
+    def descriptor(self) -> ParameterDescriptor:
+        """
+        Build the ROS parameter descriptor of this spec.
+
+        Returns
+        -------
+        rcl_interfaces.msg.ParameterDescriptor
+            Dynamically typed descriptor (types are checked by :func:`check_parameter`)
+            with description, unit, range and read-only flag.
+
+        """
+        unit = f' [{self.unit}]' if self.unit else ''
+        constraints = self.constraints
+        if self.choices:
+            constraints = ('one of: ' + ', '.join(self.choices) + '. ' + constraints).strip()
+        descriptor = ParameterDescriptor(
+            name=self.name,
+            description=f'{self.description}{unit} (type: {self.type_.name.lower()})',
+            additional_constraints=constraints,
+            read_only=self.read_only,
+            dynamic_typing=True,
+        )
+        if self.value_range is not None and self.type_ == Type.DOUBLE:
+            descriptor.floating_point_range = [FloatingPointRange(
+                from_value=float(self.value_range[0]),
+                to_value=float(self.value_range[1]),
+                step=0.0,
+            )]
+        if self.value_range is not None and self.type_ == Type.INTEGER:
+            descriptor.integer_range = [IntegerRange(
+                from_value=int(self.value_range[0]),
+                to_value=int(self.value_range[1]),
+                step=0,
+            )]
+        return descriptor
+
+
+MODEL_KEYS = (
+    'model.hysteresis.thresholds',
+    'model.hysteresis.weights',
+    'model.hysteresis.initial_states',
+    'model.superposition.thresholds',
+    'model.superposition.weights',
+)
+
+MODEL_PARAMETERS = (
+    ParameterSpec(
+        'model.hysteresis.thresholds', Type.DOUBLE_ARRAY, None,
+        'Play-operator thresholds r_H of the hysteresis operator H (5), ascending, '
+        'first one 0', 'A'),
+    ParameterSpec(
+        'model.hysteresis.weights', Type.DOUBLE_ARRAY, None,
+        'Play-operator weights w_H, one per threshold, w_H0 > 0 and the rest >= 0 (8)', ''),
+    ParameterSpec(
+        'model.hysteresis.initial_states', Type.DOUBLE_ARRAY, None,
+        'Initial states z_H0 of the play operators (their outputs at start), '
+        'one per threshold', 'A'),
+    ParameterSpec(
+        'model.superposition.thresholds', Type.DOUBLE_ARRAY, None,
+        'One-sided dead-zone thresholds r_S of the superposition operator S (18), '
+        'ascending, exactly one 0', 'A'),
+    ParameterSpec(
+        'model.superposition.weights', Type.DOUBLE_ARRAY, None,
+        'Dead-zone weights w_S, one per threshold, satisfying (19)', 'm/A'),
+)
+
+
+def declare_parameters(node: Node, specs: Iterable[ParameterSpec]) -> None:
+    """
+    Declare every spec on ``node`` with its descriptor.
+
+    Register the node's on-set validator *before* calling this: rclpy runs it once per
+    key during declaration, which is the only chance to reject a bad override from a
+    ``--params-file``.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The node to declare on.
+    specs : iterable of ParameterSpec
+        The parameters.
+
+    """
+    for spec in specs:
+        node.declare_parameter(spec.name, spec.default, spec.descriptor())
+
+
+def check_parameter(spec: ParameterSpec, parameter: Parameter, *,
+                    allow_unset: bool = False) -> None:
+    """
+    Check one incoming value against its spec (type, finiteness, range, choices).
+
+    Parameters
+    ----------
+    spec : ParameterSpec
+        The declared spec of ``parameter.name``.
+    parameter : rclpy.parameter.Parameter
+        Incoming value.
+    allow_unset : bool
+        Accept an unset value (only while declaring a parameter without default).
+
+    Raises
+    ------
+    ParameterRejected
+        With a message that names the parameter, the expectation and the finding.
+
+    """
+    found = parameter.type_
+    if found == Type.NOT_SET:
+        if allow_unset:
+            return
+        msg = (f'{spec.name} cannot be unset; expected {_TYPE_WORDS[spec.type_]}')
+        raise ParameterRejected(msg)
+    if found != spec.type_:
+        msg = (f'{spec.name} must be {_TYPE_WORDS[spec.type_]}; '
+               f'found {found.name.lower()} {parameter.value!r}')
+        raise ParameterRejected(msg)
+    value = parameter.value
+    if spec.type_ == Type.DOUBLE:
+        if not math.isfinite(value):
+            msg = f'{spec.name} must be finite; found {value!r}'
+            raise ParameterRejected(msg)
+    if spec.type_ == Type.DOUBLE_ARRAY:
+        for index, item in enumerate(value):
+            if not math.isfinite(item):
+                msg = f'{spec.name}[{index}] must be finite; found {item!r}'
+                raise ParameterRejected(msg)
+    if spec.value_range is not None and spec.type_ in (Type.DOUBLE, Type.INTEGER):
+        low, high = spec.value_range
+        if not low <= value <= high:
+            unit = f' {spec.unit}' if spec.unit else ''
+            msg = (f'{spec.name} must lie in [{low}, {high}]{unit}; found {value!r}')
+            raise ParameterRejected(msg)
+    if spec.choices and value not in spec.choices:
+        msg = (f'{spec.name} must be one of {", ".join(spec.choices)}; found {value!r}')
+        raise ParameterRejected(msg)
+
+
+def parameter_values(node: Node, names: Sequence[str],
+                     incoming: Sequence[Parameter] = ()) -> Dict[str, Any]:
+    """
+    Lay ``incoming`` over the node's current values of ``names``.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Node whose current values are read (unset parameters give ``None``).
+    names : sequence of str
+        Keys to return.
+    incoming : sequence of rclpy.parameter.Parameter
+        Values about to be set; they win over the current ones.
+
+    Returns
+    -------
+    dict
+        ``{name: value}`` with Python values (lists for arrays, ``None`` when unset).
+
+    """
+    values: Dict[str, Any] = {}
+    for name in names:
+        if node.has_parameter(name):
+            current = node.get_parameter_or(name, Parameter(name, Type.NOT_SET, None))
+            values[name] = _plain(current.value)
+        else:
+            values[name] = None
+    for parameter in incoming:
+        if parameter.name in values:
+            values[parameter.name] = _plain(parameter.value)
+    return values
+
+
+def specs_by_name(specs: Iterable[ParameterSpec]) -> Mapping[str, ParameterSpec]:
+    """
+    Index specs by parameter name.
+
+    Parameters
+    ----------
+    specs : iterable of ParameterSpec
+        The parameters.
+
+    Returns
+    -------
+    dict
+        ``{spec.name: spec}``.
+
+    """
+    return {spec.name: spec for spec in specs}
+
+
+def _plain(value: Any) -> Any:
+    """Turn rclpy's array values (array.array, tuples) into lists."""
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return list(value)

@@ -1,0 +1,376 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Plant simulator node: current command in, measured displacement out.
+
+Topics (relative names, std_msgs/msg/Float64, SI units)
+    ``current_command`` (subscribed) [A] and ``displacement`` (published) [m].
+
+Timing
+    Event-driven: every received command advances the plant by one sample and
+    publishes one displacement, at once. The sample time is the steady clock at
+    arrival, so the dynamic effects (creep, eddy-current lag, Joule heating, dead
+    time) see the real command rate, and a test gets exactly one displacement per
+    command. A non-finite command is not applied (a current source cannot output
+    it); it is counted and logged, and no displacement is published for it.
+
+Truth (``truth``, read-only)
+    ``builtin``: :class:`mpi_ros.actuator.MagnetostrictiveActuator`, a Preisach-type
+    actuator that is *not* an MPI model, configured by the ``actuator.*`` parameters
+    (the fields of :class:`mpi_ros.actuator.ActuatorConfig`; every effect is off at 0).
+    ``mpi``: the MPI model given by the five ``model.*`` parameters (forward model,
+    streamed). ``noise_std`` adds seeded Gaussian sensor noise to either truth.
+
+Excitation mode (``excitation.enabled:=true``)
+    The node drives itself with :func:`mpi_ros.excitation.identification_excitation`:
+    it publishes each sample's current on ``current_command`` and the plant's answer on
+    ``displacement``, on the schedule's own time base (so the data do not depend on
+    timer jitter). It subscribes to ``current_command`` only afterwards, so neither its
+    own commands nor anybody else's reach the plant meanwhile. When done it exits
+    (``excitation.exit_when_done``) or continues as a normal plant.
+
+Recording (``record.path``)
+    Every applied command and displacement is written to a new rosbag2 bag through
+    :class:`mpi_ros.recordings.BagRecorder`; the bag appears at ``record.path`` only
+    when the node stops cleanly (written beside it and renamed).
+"""
+
+from dataclasses import fields, replace
+import math
+import sys
+import time
+from typing import Any, Dict, List, Optional
+
+import numpy as np
+from rcl_interfaces.msg import SetParametersResult
+import rclpy
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+from std_msgs.msg import Float64
+
+from .parameters import (
+    check_parameter, declare_parameters, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
+    ParameterRejected, ParameterSpec, specs_by_name,
+)
+from .spinning import events_executor, shutdown, spin
+from ..actuator import ActuatorConfig, MagnetostrictiveActuator
+from ..errors import MPIError
+from ..excitation import identification_excitation
+from ..model import MPIModel
+from ..recordings import BagRecorder
+
+__all__ = ['PlantSimulatorNode', 'PARAMETERS', 'main']
+
+Type = Parameter.Type
+
+#: ActuatorConfig fields that the node sets itself instead of an ``actuator.*`` parameter.
+_NODE_OWNED_FIELDS = {'noise_std_m': 'noise_std'}
+
+
+def _actuator_parameters() -> tuple:
+    defaults = ActuatorConfig().to_mapping()
+    descriptions = ActuatorConfig.descriptions()
+    specs = []
+    for field in fields(ActuatorConfig):
+        if field.name in _NODE_OWNED_FIELDS:
+            continue
+        default = defaults[field.name]
+        type_ = Type.INTEGER if isinstance(default, int) else Type.DOUBLE
+        specs.append(ParameterSpec(
+            f'actuator.{field.name}', type_, default,
+            f'Built-in actuator (truth:=builtin): {descriptions[field.name]}',
+            read_only=True))
+    return tuple(specs)
+
+
+PARAMETERS = (
+    ParameterSpec('truth', Type.STRING, 'builtin',
+                  'What the simulated plant is: the built-in magnetostrictive actuator '
+                  '(actuator.*) or an MPI model (model.*)',
+                  choices=('builtin', 'mpi'), read_only=True),
+    *(replace(spec, description=f'truth:=mpi: {spec.description}', read_only=True)
+      for spec in MODEL_PARAMETERS),
+    *_actuator_parameters(),
+    ParameterSpec('noise_std', Type.DOUBLE, 0.0,
+                  'Standard deviation of additive Gaussian sensor noise, 0 = off', 'm',
+                  value_range=(0.0, 1.0), read_only=True),
+    ParameterSpec('seed', Type.INTEGER, 0, 'Seed of the sensor-noise generator',
+                  value_range=(0, 2 ** 62), read_only=True),
+    ParameterSpec('excitation.enabled', Type.BOOL, False,
+                  'Drive the plant with the identification excitation and publish it on '
+                  'current_command', read_only=True),
+    ParameterSpec('excitation.duration', Type.DOUBLE, 20.0,
+                  'Length of the identification excitation', 's',
+                  value_range=(0.01, 86400.0), read_only=True),
+    ParameterSpec('excitation.sample_rate', Type.DOUBLE, 1000.0,
+                  'Sample rate of the identification excitation', 'Hz',
+                  value_range=(1.0, 100000.0), read_only=True),
+    ParameterSpec('excitation.bias', Type.DOUBLE, 1.0,
+                  'Centre current of the identification excitation', 'A',
+                  value_range=(-1.0e3, 1.0e3), read_only=True),
+    ParameterSpec('excitation.amplitude', Type.DOUBLE, 0.8,
+                  'Largest deviation of the excitation current from its centre', 'A',
+                  value_range=(0.0, 1.0e3), read_only=True),
+    ParameterSpec('excitation.holds', Type.BOOL, True,
+                  'Include constant-current holds (expose creep) in the excitation',
+                  read_only=True),
+    ParameterSpec('excitation.bursts', Type.BOOL, True,
+                  'Include high-frequency bursts (expose rate dependence) in the excitation',
+                  read_only=True),
+    ParameterSpec('excitation.exit_when_done', Type.BOOL, True,
+                  'Stop the node when the excitation is done (false: go on as a plant)',
+                  read_only=True),
+    ParameterSpec('record.path', Type.STRING, '',
+                  'Record current_command and displacement into a new rosbag2 bag here '
+                  '(empty: no recording)', read_only=True),
+    ParameterSpec('record.storage', Type.STRING, 'sqlite3', 'rosbag2 storage plugin',
+                  choices=('sqlite3', 'mcap'), read_only=True),
+    ParameterSpec('qos_depth', Type.INTEGER, 1000,
+                  'History depth (reliable, keep-last) of current_command and displacement',
+                  value_range=(1, 100000), read_only=True),
+)
+
+_SPECS = specs_by_name(PARAMETERS)
+
+#: Wall-clock period of the excitation timer; each tick publishes every due sample.
+_EXCITATION_TICK_S = 0.005
+
+
+class PlantSimulatorNode(Node):
+    """
+    Simulated actuator with a sensor; see the module docstring.
+
+    Parameters
+    ----------
+    node_name : str
+        Node name; ``plant_simulator`` unless remapped.
+    **kwargs
+        Passed on to :class:`rclpy.node.Node`.
+
+    Raises
+    ------
+    mpi_ros.errors.MPIError
+        When the truth cannot be built from the parameters.
+
+    """
+
+    def __init__(self, node_name: str = 'plant_simulator', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        declare_parameters(self, PARAMETERS)
+        values = parameter_values(self, list(_SPECS))
+        self._values = values
+        self._rng = np.random.default_rng(values['seed'])
+        self._noise_std = values['noise_std']
+        self._plant = self._build_truth(values)
+        self.finished = Future()
+        self.counters: Dict[str, int] = {
+            'commands': 0, 'nonfinite_commands': 0, 'published': 0}
+        self._t0 = time.monotonic()
+        self._last_t = -math.inf
+        self._recorder: Optional[BagRecorder] = None
+        if values['record.path']:
+            self._recorder = BagRecorder(values['record.path'],
+                                         storage=values['record.storage'])
+            self._recorder.open()
+
+        depth = values['qos_depth']
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                         reliability=ReliabilityPolicy.RELIABLE)
+        self._displacement = Float64()
+        self._command = Float64()
+        self._publisher = self.create_publisher(Float64, 'displacement', qos)
+        self._command_publisher = None
+        self._excitation = None
+        if values['excitation.enabled']:
+            self._command_publisher = self.create_publisher(Float64, 'current_command', qos)
+            schedule_t, schedule_i = identification_excitation(
+                values['excitation.duration'], sample_rate=values['excitation.sample_rate'],
+                bias=values['excitation.bias'], amplitude=values['excitation.amplitude'],
+                seed=values['seed'], holds=values['excitation.holds'],
+                bursts=values['excitation.bursts'])
+            self._excitation = (np.asarray(schedule_t, dtype=float),
+                                np.asarray(schedule_i, dtype=float))
+            self._excitation_index = 0
+            self._excitation_start = None
+            self._excitation_stamp = self._now()
+            self._excitation_timer = self.create_timer(_EXCITATION_TICK_S, self._excite)
+            self.get_logger().info(
+                f'excitation: {len(schedule_t)} samples over '
+                f'{values["excitation.duration"]:g} s')
+        self._qos = qos
+        self._subscription = None
+        if self._excitation is None:
+            self._subscribe()
+
+    @property
+    def exits_when_done(self) -> bool:
+        """Tell whether the node stops by itself after the excitation."""
+        return bool(self._values['excitation.enabled']
+                    and self._values['excitation.exit_when_done'])
+
+    @property
+    def exciting(self) -> bool:
+        """Tell whether the excitation is running."""
+        return self._excitation is not None
+
+    def measure(self, t: float, current: float) -> float:
+        """
+        Advance the plant by one sample and return the measured displacement.
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s], after the previous one (used by the built-in actuator).
+        current : float
+            Coil current [A], finite.
+
+        Returns
+        -------
+        float
+            Displacement [m] with sensor noise.
+
+        """
+        if isinstance(self._plant, MagnetostrictiveActuator):
+            displacement = self._plant.step(t, current)
+        else:
+            displacement = self._plant.step(current)
+        if self._noise_std > 0.0:
+            displacement += self._noise_std * float(self._rng.standard_normal())
+        return float(displacement)
+
+    def close(self) -> None:
+        """Finish the recording (the bag appears at ``record.path``); idempotent."""
+        recorder, self._recorder = self._recorder, None
+        if recorder is not None:
+            recorder.close()
+            self.get_logger().info(f'recorded {recorder.counts} into {recorder.path}')
+
+    def destroy_node(self) -> None:
+        """Close the recording, then destroy the node."""
+        self.close()
+        super().destroy_node()
+
+    # -- callbacks ---------------------------------------------------------------------
+    def _subscribe(self) -> None:
+        self._subscription = self.create_subscription(
+            Float64, 'current_command', self._on_current_command, self._qos)
+
+    def _on_current_command(self, msg: Float64) -> None:
+        current = msg.data
+        self.counters['commands'] += 1
+        if not math.isfinite(current):
+            self.counters['nonfinite_commands'] += 1
+            self.get_logger().warning(
+                f'ignoring non-finite current command {current!r}',
+                throttle_duration_sec=1.0)
+            return
+        t = max(time.monotonic() - self._t0, self._last_t + 1e-9)
+        self._last_t = t
+        self._emit(t, self._now(), current, publish_command=False)
+
+    def _excite(self) -> None:
+        schedule_t, schedule_i = self._excitation
+        now = time.monotonic()
+        if self._excitation_start is None:
+            self._excitation_start = now - schedule_t[0]
+        due = now - self._excitation_start
+        stop = int(np.searchsorted(schedule_t, due, side='right'))
+        for k in range(self._excitation_index, stop):
+            t = float(schedule_t[k])
+            self._last_t = t
+            self._emit(t, self._excitation_stamp + t - schedule_t[0], float(schedule_i[k]),
+                       publish_command=True)
+        self._excitation_index = stop
+        if stop >= len(schedule_t):
+            self.destroy_timer(self._excitation_timer)
+            self._excitation = None
+            self._t0 = time.monotonic() - self._last_t
+            self.get_logger().info(f'excitation done: {stop} samples')
+            if self.exits_when_done:
+                self.close()
+                self.finished.set_result(True)
+            else:
+                # Subscribing only now keeps the excitation's own commands (volatile
+                # QoS, already sent) out of the plant.
+                self._subscribe()
+
+    def _emit(self, t: float, stamp: float, current: float, *, publish_command: bool) -> None:
+        displacement = self.measure(t, current)
+        if publish_command:
+            self._command.data = current
+            self._command_publisher.publish(self._command)
+        self._displacement.data = displacement
+        self._publisher.publish(self._displacement)
+        self.counters['published'] += 1
+        if self._recorder is not None:
+            self._recorder.write_input(stamp, current)
+            self._recorder.write_output(stamp, displacement)
+
+    def _now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    # -- parameters --------------------------------------------------------------------
+    def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
+        try:
+            for parameter in parameters:
+                spec = _SPECS.get(parameter.name)
+                if spec is None:
+                    msg = f'{parameter.name} is not a parameter of this node'
+                    raise ParameterRejected(msg)
+                check_parameter(spec, parameter, allow_unset=True)
+        except ParameterRejected as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    def _build_truth(self, values: Dict[str, Any]) -> Any:
+        if values['truth'] == 'mpi':
+            missing = [key for key in MODEL_KEYS if values[key] is None]
+            if missing:
+                msg = f'truth:=mpi needs the model parameters; missing: {", ".join(missing)}'
+                raise ParameterRejected(msg)
+            return MPIModel.from_params({key: values[key] for key in MODEL_KEYS}).stream()
+        mapping = {name: value for name, value in values.items()
+                   if name.startswith('actuator.')}
+        for field_name in _NODE_OWNED_FIELDS:
+            mapping[f'actuator.{field_name}'] = 0.0
+        return MagnetostrictiveActuator(ActuatorConfig.from_mapping(mapping),
+                                        seed=values['seed'])
+
+
+def main(args: Optional[List[str]] = None) -> int:
+    """
+    Run the plant simulator (``ros2 run mpi_ros plant_simulator --ros-args ...``).
+
+    Parameters
+    ----------
+    args : list of str, optional
+        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
+
+    Returns
+    -------
+    int
+        0 on shutdown or after the excitation; 1 when the truth cannot be built.
+
+    """
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = PlantSimulatorNode()
+        executor = events_executor(node.context)
+        executor.add_node(node)
+        spin(executor, node.context, until=node.finished if node.exits_when_done else None)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (MPIError, ParameterRejected, InvalidParameterTypeException,
+            InvalidParameterValueException) as err:
+        print(f'error: plant_simulator: {err}', file=sys.stderr, flush=True)
+        return 1
+    finally:
+        if node is not None:
+            node.destroy_node()
+        shutdown()
+    return 0

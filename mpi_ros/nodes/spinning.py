@@ -1,0 +1,84 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Spin a node on rclpy's EventsExecutor and shut down, around two traps of the rclpy wheel.
+
+In the rclpy 7.1.6 wheel (``ros-jazzy-rclpy`` on PyPI), ``EventsExecutor.spin()`` busy-loops
+without dispatching subscriptions from other processes and without reacting to SIGINT, while
+``spin_once()`` works and keeps up with 10 kHz. :func:`spin` therefore loops over
+``spin_once`` until the context shuts down (Ctrl-C, ``rclpy.shutdown``) or ``until`` is done.
+
+On Ctrl-C, rclpy's signal-handler thread shuts the context down while the main thread,
+woken by ``KeyboardInterrupt``, runs ``rclpy.try_shutdown()``: that checks ``ok()`` and then
+calls ``rcl_shutdown``, which fails with ``RCLError: rcl_shutdown already called`` when the
+handler thread got there in between (about 1 run in 10 here). :func:`shutdown` tolerates
+exactly that case.
+"""
+
+from typing import Optional
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import Executor
+from rclpy.experimental import EventsExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.task import Future
+
+__all__ = ['events_executor', 'shutdown', 'spin']
+
+#: Longest time one spin_once waits for work [s]; bounds the reaction to shutdown.
+SPIN_PERIOD_S = 0.1
+
+
+def events_executor(context: Optional[Context] = None) -> Executor:
+    """
+    Create an EventsExecutor on ``context`` (the default context if None).
+
+    Parameters
+    ----------
+    context : rclpy.context.Context, optional
+        The context the executor serves.
+
+    Returns
+    -------
+    rclpy.executors.Executor
+        The executor (spin it with :func:`spin`, not its own ``spin()``).
+
+    """
+    return EventsExecutor(context=context)
+
+
+def spin(executor: Executor, context: Context, *, until: Optional[Future] = None) -> None:
+    """
+    Process callbacks until the context shuts down or ``until`` completes.
+
+    Parameters
+    ----------
+    executor : rclpy.executors.Executor
+        Executor with the node(s) added.
+    context : rclpy.context.Context
+        Context whose shutdown ends the loop.
+    until : rclpy.task.Future, optional
+        Stop as soon as this future is done.
+
+    """
+    while context.ok() and (until is None or not until.done()):
+        executor.spin_once(timeout_sec=SPIN_PERIOD_S)
+
+
+def shutdown(context: Optional[Context] = None) -> None:
+    """
+    Shut ``context`` down unless it already is (also when the signal handler races us).
+
+    Parameters
+    ----------
+    context : rclpy.context.Context, optional
+        The context; the default context if None (which rclpy then replaces, so that
+        ``rclpy.init`` works again in the same process).
+
+    """
+    try:
+        rclpy.try_shutdown(context=context)
+    except _rclpy.RCLError:
+        # The signal-handler thread shut it down between ok() and rcl_shutdown; the
+        # second call sees it shut down and only does rclpy's bookkeeping.
+        rclpy.try_shutdown(context=context)

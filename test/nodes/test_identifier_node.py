@@ -1,0 +1,107 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""The identifier in-process: bag -> fit -> atomic push, and its failures (exit status 1)."""
+
+import threading
+
+from mpi_ros.actuator import MagnetostrictiveActuator
+from mpi_ros.excitation import identification_excitation
+from mpi_ros.nodes import identifier
+from mpi_ros.nodes.compensator import CompensatorNode
+from mpi_ros.nodes.identifier import IdentifierNode, parse_order
+from mpi_ros.nodes.parameters import MODEL_KEYS, ParameterRejected
+from mpi_ros.params import read_params_yaml
+from mpi_ros.recordings import write_bag_signals
+import pytest
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+
+ORDER = '6,3'
+
+
+@pytest.fixture(scope='module')
+def excitation_bag(tmp_path_factory):
+    """Return a bag of the built-in actuator driven by the identification excitation."""
+    t, current = identification_excitation(12.0, sample_rate=250.0, seed=1)
+    displacement = MagnetostrictiveActuator().simulate(t, current)
+    path = tmp_path_factory.mktemp('bags') / 'excitation'
+    write_bag_signals(path, t, current, displacement)
+    return path
+
+
+@pytest.fixture
+def compensator(ros_context):
+    """Spin a compensator node (unconfigured) in a background executor."""
+    node = CompensatorNode(context=ros_context, parameter_overrides=[
+        Parameter('output.min', value=0.2), Parameter('output.max', value=1.8)])
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(node)
+    thread = threading.Thread(target=executor.spin, daemon=True)
+    thread.start()
+    yield node
+    executor.shutdown()
+    thread.join(timeout=5.0)
+    node.destroy_node()
+
+
+def test_parse_order():
+    assert parse_order('auto') == 'auto'
+    assert parse_order(' 14, 7 ') == (14, 7)
+    assert parse_order('14 7') == (14, 7)
+    for bad in ('', '14', '0,3', 'a,b', '1,2,3'):
+        with pytest.raises(ParameterRejected, match='order must be'):
+            parse_order(bad)
+
+
+def test_fit_and_push_applies_the_model(ros_context, compensator, excitation_bag, tmp_path):
+    params_file = tmp_path / 'params.yaml'
+    node = IdentifierNode(context=ros_context, parameter_overrides=[
+        Parameter('bag', value=str(excitation_bag)), Parameter('order', value=ORDER),
+        Parameter('params_file', value=str(params_file)),
+        Parameter('service_timeout', value=10.0)])
+    try:
+        fit = node.run()
+    finally:
+        node.destroy_node()
+    assert fit.result.order == (6, 3)
+    assert fit.result.nonlinearity_error < 0.2
+    assert compensator.model_version == 1
+    applied = compensator.compensator.model.to_params()
+    assert applied == fit.parameters
+    written = read_params_yaml(params_file)
+    for key in MODEL_KEYS:
+        assert written[key] == pytest.approx(fit.parameters[key], rel=1e-12, abs=0.0)
+    assert set(fit.parameters) == set(MODEL_KEYS)
+
+
+def _main(monkeypatch, capsys, *ros_args):
+    from test.nodes.ros_env import run_domain_id
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(run_domain_id()))
+    status = identifier.main(['identifier', '--ros-args', *ros_args])
+    return status, capsys.readouterr().err
+
+
+def test_missing_bag_fails_cleanly(monkeypatch, capsys, tmp_path):
+    status, err = _main(monkeypatch, capsys, '-p', f'bag:={tmp_path / "nope"}')
+    assert status == 1
+    assert 'error: identifier:' in err
+
+
+def test_no_bag_parameter_fails_cleanly(monkeypatch, capsys):
+    status, err = _main(monkeypatch, capsys)
+    assert status == 1
+    assert 'no bag given' in err
+
+
+def test_bad_order_fails_cleanly(monkeypatch, capsys, excitation_bag):
+    status, err = _main(monkeypatch, capsys, '-p', f'bag:={excitation_bag}', '-p', 'order:=x')
+    assert status == 1
+    assert 'order must be' in err
+
+
+def test_missing_target_fails_with_bounded_wait(monkeypatch, capsys, excitation_bag):
+    status, err = _main(monkeypatch, capsys, '-p', f'bag:={excitation_bag}',
+                        '-p', f'order:={ORDER}', '-p', 'target_node:=/nobody_here',
+                        '-p', 'service_timeout:=0.5')
+    assert status == 1
+    assert 'no parameter service /nobody_here/set_parameters_atomically' in err
