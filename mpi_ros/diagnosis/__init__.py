@@ -7,7 +7,7 @@ Verdicts (``DiagnosisReport.cause``): ``creep``, ``rate_dependence``, ``thermal_
 describe, e.g. butterfly loops; nothing is fitted).
 """
 
-from .diagnose import CAUSES, DiagnosisReport, diagnose, noise_floor
+from .diagnose import CAUSES, diagnose, DiagnosisReport, noise_floor
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .report import write_report

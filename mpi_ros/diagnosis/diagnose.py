@@ -16,44 +16,45 @@ Procedure (documented in ``docs/diagnosis.md``):
    thermal proxy ``x^2`` (lagged) and the lag of the best cross-correlation.
 4. **Candidates** (:mod:`mpi_ros.extensions`) are fitted on the training data with the same
    order and simulated on the validation data.
-5. **Decision** (model comparison on validation data):
+5. **Decision** (two independent kinds of evidence, both on the validation data):
 
-   - a candidate is *significant* when its validation gain (relative RMS reduction) is at
-     least ``min_gain`` and a Diebold-Mariano test on the squared errors (block means over
-     ``blocks`` contiguous blocks, so correlated residuals are not over-counted) rejects
-     "no improvement" with ``z >= z_critical``, and the baseline residual exceeds the noise
-     floor by ``noise_factor``;
-   - no significant candidate: ``none``;
-   - otherwise the largest gain wins, unless a candidate with fewer parameters is not
-     significantly worse (same test between the two, with the critical value raised by
-     1.45 for the multiple pairwise comparisons; parsimony); between candidates with the
-     same number of parameters that are not significantly different (in practice a lag
-     and a delay, which differ only at high frequency), the smaller RMS error on the
-     training data decides (equal complexity, so the larger sample counts).
+   - *significance*: the candidate's validation gain (relative RMS reduction) is at least
+     ``min_gain`` and a Diebold-Mariano test on the squared errors rejects "no improvement"
+     (``z >= z_critical``, one-sided).  The variance of the mean loss difference is a
+     Newey-West (Bartlett) HAC estimate whose bandwidth follows the autocorrelation of the
+     loss difference (Andrews' AR(1) plug-in), so a slow effect gets a long window;
+   - *signature* (:mod:`mpi_ros.diagnosis.signatures`, computed from the baseline
+     residual and the input alone): creep needs a ``log t`` component during holds;
+     thermal drift a smooth drift during holds *without* one; rate dependence and dead
+     time a frequency-dependent burst response that follows the lag law
+     (``atan(w tau)``, falling amplitude) resp. the delay law (phase linear in ``w``)
+     better than the other.  Each test runs at ``alpha / 4`` (Bonferroni over the four
+     causes).  A record without holds (bursts) leaves the slow (fast) signatures
+     *unavailable*; they then do not veto, and the report says so.
+
+   The cause is the candidate with the largest gain among those that are significant and
+   whose signature is present (or unavailable); ``none`` when there is none, or when the
+   baseline residual does not exceed the noise floor by ``noise_factor``.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 import math
 from typing import Any, Callable
 
 import numpy as np
 import numpy.typing as npt
 
-from .invertibility import OUTSIDE_INVERTIBLE_CLASS, check_invertible_class
+from .invertibility import check_invertible_class, OUTSIDE_INVERTIBLE_CLASS
+from .signatures import burst_signature, hold_segments, hold_signature
 from ..errors import DataError
 from ..extensions import fit_creep, fit_dead_time, fit_rate_dependence, fit_thermal_drift
 from ..extensions._signals import first_order_lag
 from ..identification import identify
 from ..metrics import nonlinearity_error, relative_rms_error
-from ..model import MPIModel
 
 __all__ = ['DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
 
 FloatArray = npt.NDArray[np.float64]
-
-#: Bonferroni-type factor on z for the pairwise comparisons between candidates (six pairs
-#: among four candidates: one-sided p = 0.05 / 6 gives z of about 2.4 = 1.645 * 1.45).
-_PAIRWISE_FACTOR = 1.45
 
 #: Causes in the catalogue, then the two other verdicts.
 CAUSES = ('creep', 'rate_dependence', 'thermal_drift', 'dead_time')
@@ -81,7 +82,8 @@ class DiagnosisReport:
         Relative reduction of the validation RMS error, 0..1 (0 for ``none``).
     candidates : list of dict
         Per candidate: ``cause``, ``rms_error``, ``nonlinearity_error``, ``gain``,
-        ``z`` (Diebold-Mariano statistic), ``significant``, ``parameters``.
+        ``z`` (Diebold-Mariano statistic), ``bandwidth`` (HAC lags), ``significant``,
+        ``signature`` (``present``, ``absent`` or ``unavailable``), ``parameters``.
     evidence : str
         One or two sentences a control engineer can check.
     residual : dict
@@ -148,8 +150,9 @@ def noise_floor(displacement: npt.ArrayLike) -> float:
 
 def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
              order: str | tuple[int, int] = 'auto', causes: tuple[str, ...] = CAUSES,
-             min_gain: float = 0.05, z_critical: float = 1.645, blocks: int = 20,
-             noise_factor: float = 1.2, progress: Callable[[str], None] | None = None
+             min_gain: float = 0.05, z_critical: float = 1.645, alpha: float = 0.05,
+             bandwidth: int | None = None, noise_factor: float = 1.2,
+             progress: Callable[[str], None] | None = None
              ) -> DiagnosisReport:
     """
     Diagnose what the MPI model misses in a recording and fit the best extension.
@@ -171,8 +174,11 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         Smallest validation gain that counts.
     z_critical : float
         Critical value of the Diebold-Mariano statistic (one-sided; 1.645 is p = 0.05).
-    blocks : int
-        Number of contiguous validation blocks for the test.
+    alpha : float
+        Family-wise level of the four signature tests (each runs at ``alpha / 4``).
+    bandwidth : int, optional
+        HAC bandwidth [samples] of the Diebold-Mariano test; by default chosen from the
+        autocorrelation of the loss difference (Andrews' AR(1) plug-in).
     noise_factor : float
         The baseline validation RMS residual must exceed this times the noise floor.
     progress : callable, optional
@@ -243,6 +249,13 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     say(f'baseline order n={n}, l={l}: validation RMS error {baseline["rms_error"]:.4f},'
         f' (37) {baseline["nonlinearity_error"]:.4f}')
     residual = _residual_structure(tv, xv, yv, sim0, offset, sigma)
+    holds = hold_signature(tv[val], xv[val], r0)
+    bursts = burst_signature(tv[val], xv[val], yv[val], sim0[val])
+    residual['hold_signature'] = asdict(holds) if holds is not None else None
+    residual['burst_signature'] = (
+        {**asdict(bursts), 'law': bursts.law,
+         'log_ratio': [[v.real, v.imag] for v in bursts.log_ratio]}
+        if bursts is not None else None)
     candidates = []
     sims = {}
     for cause in causes:
@@ -253,24 +266,26 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         rc = yv[val] - sim[val]
         errs = _errors(sim[val], yv[val])
         gain = 1.0 - errs['rms_error'] / baseline['rms_error']
-        z = _dm_statistic(r0, rc, blocks)
+        z, lags = _dm_statistic(r0, rc, bandwidth)
         params = {k: v for k, v in model.to_params().items()
                   if not k.startswith(('model.hysteresis', 'model.superposition'))}
         train = relative_rms_error(model.simulate(tt, xt), yt)
-        candidates.append({'cause': cause, **errs, 'gain': gain, 'z': z,
+        candidates.append({'cause': cause, **errs, 'gain': gain, 'z': z, 'bandwidth': lags,
                            'training_rms_error': train,
                            'parameter_count': _PARAMETER_COUNT[cause](params),
                            'parameters': params, 'model': model})
         say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
             f' z {z:.1f}')
     excess = math.sqrt(float(np.mean(r0 ** 2))) > noise_factor * sigma
+    verdicts = _signature_verdicts(residual, alpha / len(CAUSES))
     for c in candidates:
+        c['signature'] = verdicts[c['cause']]
         c['significant'] = bool(excess and c['gain'] >= min_gain and c['z'] >= z_critical)
-    decision = {'min_gain': min_gain, 'z_critical': z_critical, 'blocks': blocks,
+    decision = {'min_gain': min_gain, 'z_critical': z_critical, 'alpha': alpha,
+                'signature_level': alpha / len(CAUSES), 'bandwidth': bandwidth,
                 'noise_factor': noise_factor, 'noise_floor': sigma,
                 'baseline_above_noise': bool(excess), 'steps': []}
-    chosen = _decide(candidates, yv[val], {c: s[val] for c, s in sims.items()},
-                     blocks, z_critical, decision['steps'])
+    chosen = _decide(candidates, excess, decision['steps'])
     series.update({'baseline': sim0, 'candidates': sims})
     if chosen is None:
         cause, model, extended, gain = 'none', base.model, dict(baseline), 0.0
@@ -319,64 +334,65 @@ _PARAMETER_COUNT: dict[str, Callable[[dict[str, Any]], int]] = {
     'rate_dependence': lambda p: 1, 'thermal_drift': lambda p: 2, 'dead_time': lambda p: 1}
 
 
-def _dm_statistic(r_a: FloatArray, r_b: FloatArray, blocks: int) -> float:
-    """Diebold-Mariano z of ``mean(r_a^2 - r_b^2) > 0`` over contiguous block means."""
+def _dm_statistic(r_a: FloatArray, r_b: FloatArray,
+                  bandwidth: int | None) -> tuple[float, int]:
+    """Diebold-Mariano z of ``mean(r_a^2 - r_b^2) > 0`` with a Newey-West variance."""
     d = r_a ** 2 - r_b ** 2
-    k = max(min(blocks, d.size // 10), 2)
-    means = np.array([m.mean() for m in np.array_split(d, k)])
-    spread = float(np.std(means, ddof=1))
-    if spread == 0.0:
-        return math.inf if means.mean() > 0 else 0.0
-    return float(means.mean() / (spread / math.sqrt(k)))
+    e = d - d.mean()
+    n = d.size
+    gamma0 = float(np.dot(e, e)) / n
+    if gamma0 == 0.0:
+        return (math.inf if d.mean() > 0 else 0.0), 0
+    if bandwidth is None:
+        # Andrews (1991), Bartlett kernel, AR(1) plug-in: 1.1447 (alpha n)^(1/3).
+        rho = min(float(np.dot(e[1:], e[:-1])) / n / gamma0, 0.999)
+        alpha = 4.0 * rho ** 2 / (1.0 - rho ** 2) ** 2
+        bandwidth = int(math.ceil(1.1447 * (alpha * n) ** (1.0 / 3.0)))
+    lags = int(min(max(bandwidth, 0), n - 1))
+    variance = gamma0
+    for k in range(1, lags + 1):
+        variance += 2.0 * (1.0 - k / (lags + 1.0)) * float(np.dot(e[k:], e[:-k])) / n
+    return float(d.mean() / math.sqrt(max(variance, 1e-300) / n)), lags
 
 
-def _decide(candidates: list[dict[str, Any]], y: FloatArray, sims: dict[str, FloatArray],
-            blocks: int, z_critical: float,
+def _signature_verdicts(residual: dict[str, Any], level: float) -> dict[str, str]:
+    holds, bursts = residual['hold_signature'], residual['burst_signature']
+    out = {}
+    if holds is None:
+        out['creep'] = out['thermal_drift'] = 'unavailable'
+    else:
+        creep = holds['log_p'] < level
+        out['creep'] = 'present' if creep else 'absent'
+        out['thermal_drift'] = ('present' if holds['drift_p'] < level and not creep
+                                else 'absent')
+    if bursts is None:
+        out['rate_dependence'] = out['dead_time'] = 'unavailable'
+    else:
+        fast = bursts['p'] < level
+        out['rate_dependence'] = 'present' if fast and bursts['law'] == 'lag' else 'absent'
+        out['dead_time'] = 'present' if fast and bursts['law'] == 'delay' else 'absent'
+    return out
+
+
+def _decide(candidates: list[dict[str, Any]], excess: bool,
             steps: list[str]) -> dict[str, Any] | None:
-    significant = [c for c in candidates if c['significant']]
-    if not significant:
-        steps.append('no candidate is significant: none')
+    if not excess:
+        steps.append('the baseline residual does not exceed the noise floor: none')
         return None
-    best = max(significant, key=lambda c: c['gain'])
-    steps.append(f'largest significant gain: {best["cause"]} ({best["gain"]:.3f})')
-    pair_critical = z_critical * _PAIRWISE_FACTOR
-    for other in sorted(significant, key=lambda c: (c['parameter_count'], -c['gain'])):
-        if other is best or other['parameter_count'] > best['parameter_count']:
-            continue
-        z = _dm_statistic(y - sims[other['cause']], y - sims[best['cause']], blocks)
-        if z >= pair_critical:
-            steps.append(f'{best["cause"]} is significantly better than {other["cause"]}'
-                         f' (z {z:.1f})')
-            continue
-        if other['parameter_count'] < best['parameter_count']:
-            steps.append(f'{other["cause"]} ({other["parameter_count"]} parameters) is not'
-                         f' significantly worse than {best["cause"]}'
-                         f' ({best["parameter_count"]}; z {z:.1f}): parsimony')
-            best = other
-            continue
-        steps.append(f'{best["cause"]} and {other["cause"]} are not significantly'
-                     f' different on validation data (z {z:.1f}) and equally complex; their'
-                     f' training RMS errors are {best["training_rms_error"]:.4g} and'
-                     f' {other["training_rms_error"]:.4g}: the smaller decides')
-        if other['training_rms_error'] < best['training_rms_error']:
-            best = other
+    for c in candidates:
+        steps.append(f'{c["cause"]}: gain {c["gain"]:+.3f}, z {c["z"]:.1f}'
+                     f' ({"" if c["significant"] else "not "}significant), signature'
+                     f' {c["signature"]}')
+    eligible = [c for c in candidates if c['significant'] and c['signature'] != 'absent']
+    if not eligible:
+        steps.append('no candidate is both significant and physically supported: none')
+        return None
+    best = max(eligible, key=lambda c: c['gain'])
+    note = (' (signature unavailable in this record: decided on the gain alone)'
+            if best['signature'] == 'unavailable' else '')
+    steps.append(f'largest gain among the eligible: {best["cause"]}'
+                 f' ({best["gain"]:.3f}){note}')
     return best
-
-
-def _hold_segments(t: FloatArray, x: FloatArray, minimum: float) -> list[tuple[int, int]]:
-    still = np.abs(np.diff(x)) <= 1e-6 * max(float(np.ptp(x)), 1e-300)
-    segments = []
-    k = 0
-    while k < still.size:
-        if still[k]:
-            j = k
-            while j < still.size and still[j]:
-                j += 1
-            if t[j] - t[k] >= minimum:
-                segments.append((k, j))
-            k = j
-        k += 1
-    return segments
 
 
 def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatArray,
@@ -387,7 +403,7 @@ def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatA
     scale = float(np.sqrt(np.mean(y[val] ** 2)))
     out: dict[str, Any] = {'rms': float(np.sqrt(np.mean(r ** 2))), 'noise_floor': sigma,
                            'noise_floor_relative': sigma / scale if scale else 0.0}
-    holds = _hold_segments(tv, xv, 0.5)
+    holds = hold_segments(tv, xv, 0.5)
     moves = [float(r[j] - r[k]) for k, j in holds]
     steps = [float(np.sign(xv[k] - xv[max(k - int(0.2 * (j - k)) - 1, 0)])) for k, j in holds]
     out['holds'] = {'count': len(holds),
@@ -429,17 +445,25 @@ def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, A
     if cause == 'none':
         return f'{base}; no extension reduces it significantly ({listing}).'
     c = next(c for c in candidates if c['cause'] == cause)
-    detail = {
-        'creep': (f'during {residual["holds"]["count"]} input hold(s) the residual keeps'
-                  f' moving by {residual["holds"]["mean_abs_residual_change"]:.3g} m on'
-                  ' average'),
-        'rate_dependence': (f'the residual correlates with the input rate'
-                            f' (r = {residual["rate_correlation"]:.2f})'),
-        'thermal_drift': (f'the residual correlates with the lagged input power'
-                          f' (r = {residual["power_correlation"]:.2f})'),
-        'dead_time': (f'the measured output follows the simulation best when shifted by'
-                      f' {1e3 * residual["lag_of_best_correlation"]:.1f} ms'),
-    }[cause]
+    holds, bursts = residual['hold_signature'], residual['burst_signature']
+    if cause in ('creep', 'thermal_drift') and holds is not None:
+        detail = (f'during {holds["holds"]} input holds the residual has a log(t) component'
+                  f' of {holds["log_amplitude"]:.3g} m RMS (chi2 p = {holds["log_p"]:.2g})'
+                  f' and drifts by {holds["drift_amplitude"]:.3g} m RMS (p ='
+                  f' {holds["drift_p"]:.2g})')
+        if cause == 'thermal_drift':
+            detail += ': a smooth drift without the log(t) shape of creep'
+    elif cause in ('rate_dependence', 'dead_time') and bursts is not None:
+        freqs = bursts['frequencies']
+        detail = (f'over bursts at {freqs[0]:.3g}-{freqs[-1]:.3g} Hz the phase of the'
+                  f' measured/simulated response follows the '
+                  + (f'lag law atan(w tau) with tau = {1e3 * bursts["lag_time_constant"]:.2f}'
+                     ' ms' if cause == 'rate_dependence' else
+                     f'delay law w L with L = {1e3 * bursts["delay"]:.2f} ms')
+                  + f' (residual {min(bursts["lag_sse"], bursts["delay_sse"]):.2g} against'
+                  f' {max(bursts["lag_sse"], bursts["delay_sse"]):.2g} for the other law)')
+    else:
+        detail = 'the record has no holds or bursts to check the physical signature'
     return (f'{base}; the {cause} extension cuts it by {100 * c["gain"]:.0f} % (z ='
             f' {c["z"]:.1f}; all: {listing}), and {detail}.')
 

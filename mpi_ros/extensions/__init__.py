@@ -13,25 +13,28 @@ cause                  model                                       extra paramet
 
 Every model has ``simulate(time, current)``, ``to_params()``, ``from_params(mapping)`` and a
 ``cause`` name; :func:`extended_model_from_params` picks the class from the keys present.
+:class:`ExtendedCompensator` inverts creep, rate dependence and thermal drift step by step;
+:func:`compensator_from_params` builds the right compensator from a parameter set.
 """
 
 from collections.abc import Mapping
 from typing import Any
 
-# from .compensation import ExtendedCompensator
-from .creep import CREEP_TIME_CONSTANTS, CREEP_WEIGHTS, CreepModel, creep_time_constants, \
+from .compensation import compensator_from_params, ExtendedCompensator
+from .creep import CREEP_TIME_CONSTANTS, creep_time_constants, CREEP_WEIGHTS, CreepModel, \
     fit_creep
 from .dead_time import DEAD_TIME, DeadTimeModel, fit_dead_time
-from .rate_dependence import RATE_TIME_CONSTANT, RateDependentModel, fit_rate_dependence
-from .thermal_drift import THERMAL_WEIGHT, THERMAL_TIME_CONSTANT, ThermalDriftModel, \
-    fit_thermal_drift
+from .rate_dependence import fit_rate_dependence, RATE_TIME_CONSTANT, RateDependentModel
+from .thermal_drift import fit_thermal_drift, THERMAL_TIME_CONSTANT, THERMAL_WEIGHT, \
+    ThermalDriftModel
 from ..errors import ModelError
 from ..model import MPIModel
 
 __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeModel',
            'ExtendedModel', 'fit_creep', 'fit_rate_dependence',
            'fit_thermal_drift', 'fit_dead_time', 'creep_time_constants',
-           'extended_model_from_params', 'EXTENSION_KEYS']
+           'extended_model_from_params', 'EXTENSION_KEYS', 'ExtendedCompensator',
+           'compensator_from_params']
 
 ExtendedModel = CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
 

@@ -1,0 +1,164 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""Model extensions: parameter round trips, validation messages, simulation, compensation."""
+
+import warnings
+
+from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.diagnosis.signatures import diagnostic_excitation
+from mpi_ros.errors import ModelError, MPIWarning
+from mpi_ros.excitation import identification_excitation
+from mpi_ros.extensions import compensator_from_params, CreepModel, DeadTimeModel, \
+    extended_model_from_params, ExtendedCompensator, fit_creep, fit_rate_dependence, \
+    RateDependentModel, ThermalDriftModel
+from mpi_ros.extensions._signals import delay, first_order_lag
+from mpi_ros.identification import identify
+from mpi_ros.metrics import control_error
+import numpy as np
+import pytest
+
+from .core_models import random_model
+
+EXACT = 1e-9          # [A] inverse round trip of creep and rate dependence
+THERMAL = 1e-3        # [A] thermal drift: the h / tau_T term of the state update is dropped
+
+
+def _models(rng):
+    m = random_model(rng)
+    return [CreepModel(m, np.array([0.01, 0.1, 1.0]), np.array([0.05, 0.1, 0.2])),
+            RateDependentModel(m, 0.004), ThermalDriftModel(m, 2.0, 0.05),
+            DeadTimeModel(m, 0.003)]
+
+
+def _signal(rng, size=2000):
+    t = np.cumsum(rng.uniform(0.5e-3, 1.5e-3, size))
+    x = np.clip(1.0 + np.cumsum(rng.normal(0.0, 0.03, size)), 0.1, 1.9)
+    return t - t[0], x
+
+
+@pytest.mark.parametrize('seed', range(3))
+def test_parameter_round_trip_and_simulation(seed):
+    rng = np.random.default_rng(seed)
+    t, x = _signal(rng)
+    for model in _models(rng):
+        again = extended_model_from_params(model.to_params())
+        assert type(again) is type(model) and again.cause == model.cause
+        np.testing.assert_array_equal(again.simulate(t, x), model.simulate(t, x))
+    creep, rate, thermal, dead = _models(np.random.default_rng(seed))
+    gamma = creep.model
+    # Consistency with the definitions (module docstrings).
+    np.testing.assert_allclose(rate.simulate(t, x),
+                               gamma.simulate(first_order_lag(t, x, 0.004)), atol=1e-15)
+    np.testing.assert_allclose(dead.simulate(t, x), gamma.simulate(delay(t, x, 0.003)),
+                               atol=1e-15)
+    zero = CreepModel(gamma, np.array([0.1]), np.array([0.0]))
+    np.testing.assert_allclose(zero.simulate(t, x), gamma.simulate(x), atol=1e-15)
+    h, _ = gamma.hysteresis.apply(x)
+    state = first_order_lag(t, x * x, 2.0)
+    np.testing.assert_allclose(thermal.simulate(t, x),
+                               gamma.superposition.apply(h + 0.05 * state), atol=1e-15)
+
+
+@pytest.mark.parametrize('key, value, match', [
+    ('model.creep.weights', [0.1, -0.2], r'model\.creep\.weights\[1\] must be finite and >= 0'),
+    ('model.creep.time_constants', [0.0, 1.0],
+     r'model\.creep\.time_constants\[0\] must be finite and > 0'),
+    ('model.creep.weights', [0.1], r'model\.creep\.weights must have one weight per time'),
+    ('model.rate_dependence.time_constant', 'fast',
+     r'model\.rate_dependence\.time_constant must be a number'),
+    ('model.thermal_drift.time_constant', -1.0,
+     r'model\.thermal_drift\.time_constant must be finite and > 0'),
+    ('model.thermal_drift.weight', float('nan'), r'model\.thermal_drift\.weight must be finite'),
+    ('model.dead_time', -0.1, r'model\.dead_time must be finite and >= 0'),
+])
+def test_bad_extension_parameters_name_the_key(key, value, match):
+    creep, rate, thermal, dead = _models(np.random.default_rng(0))
+    base = {'model.creep.': creep, 'model.rate_dependence.': rate,
+            'model.thermal_drift.': thermal, 'model.dead_time': dead}
+    params = next(m for prefix, m in base.items() if key.startswith(prefix)).to_params()
+    params[key] = value
+    with pytest.raises(ModelError, match=match):
+        extended_model_from_params(params)
+
+
+def test_missing_key_and_two_extensions_are_rejected():
+    creep, rate, _, _ = _models(np.random.default_rng(1))
+    params = creep.to_params()
+    del params['model.creep.weights']
+    with pytest.raises(ModelError, match=r'model\.creep\.weights is missing'):
+        extended_model_from_params(params)
+    with pytest.raises(ModelError, match='keys of several model extensions'):
+        extended_model_from_params({**creep.to_params(), **rate.to_params()})
+
+
+@pytest.mark.parametrize('seed', range(3))
+def test_extended_compensator_inverts_its_model(seed):
+    rng = np.random.default_rng(seed)
+    t, x = _signal(rng)
+    for model, tolerance in zip(_models(rng)[:3], (EXACT, EXACT, THERMAL)):
+        comp = ExtendedCompensator(model, output_min=-10.0, output_max=10.0)
+        commands = [comp.command(s, time=tk) for s, tk in zip(model.simulate(t, x), t)]
+        np.testing.assert_allclose(commands, x, atol=tolerance, rtol=0.0)
+        assert comp.counters['clamped'] == 0
+
+
+def test_extended_compensator_is_safe():
+    creep = _models(np.random.default_rng(2))[0]
+    comp = ExtendedCompensator(creep, output_min=0.2, output_max=1.0)
+    for value in (float('nan'), 1.0, -1.0, 'x', float('inf')):
+        current = comp.command(value)
+        assert np.isfinite(current) and 0.2 <= current <= 1.0
+    assert comp.counters['nonfinite_input'] == 3 and comp.counters['clamped'] >= 1
+    comp.command(0.0, time=1.0)
+    comp.command(0.0, time=0.5)
+    assert comp.counters['bad_time'] == 1
+    comp.swap_model(CreepModel(creep.model, creep.time_constants, 2 * creep.weights))
+    assert comp.version == 2
+    with pytest.raises(ModelError, match='swap_model needs a CreepModel'):
+        comp.swap_model(_models(np.random.default_rng(2))[1])
+    comp.enabled = False
+    lin = comp.linear_map
+    assert comp.command(0.0) == pytest.approx(min(max(lin.offset, 0.2), 1.0))
+    with pytest.raises(ModelError, match='output.min must be finite'):
+        comp.set_limits(1.0, 0.0)
+
+
+def test_compensator_from_params_picks_the_class():
+    creep, rate, thermal, dead = _models(np.random.default_rng(3))
+    limits = {'output_min': 0.0, 'output_max': 2.0}
+    assert isinstance(compensator_from_params(creep.model.to_params(), **limits),
+                      FeedforwardCompensator)
+    for model in (creep, rate, thermal):
+        assert isinstance(compensator_from_params(model.to_params(), **limits),
+                          ExtendedCompensator)
+    with pytest.warns(MPIWarning, match='cannot be inverted causally'):
+        comp = compensator_from_params(dead.to_params(), **limits)
+    assert isinstance(comp, FeedforwardCompensator)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        compensator_from_params(rate.to_params(), **limits)
+
+
+@pytest.mark.parametrize('effect, fit', [({'creep_gain': 0.06}, fit_creep),
+                                         ({'eddy_time_constant_s': 0.005},
+                                          fit_rate_dependence)])
+def test_closed_loop_control_error_extended_beats_plain(effect, fit):
+    # Plant simulator with the effect on (no noise); control error (38) after 2 s.
+    cfg = ActuatorConfig(**effect)
+    t, x = identification_excitation(60.0, sample_rate=1000.0, burst_frequency=40.0,
+                                     hold_duration=5.0, seed=3)
+    y = MagnetostrictiveActuator(cfg).simulate(t, x)
+    base = identify(x, y, order='auto')
+    extended = fit(t, x, y, order=base.order)
+    tv, xv = diagnostic_excitation(sample_rate=1000.0, seed=4)
+    desired = base.model.simulate(xv)
+    errors = []
+    for comp in (FeedforwardCompensator(base.model, output_min=0.0, output_max=2.0),
+                 ExtendedCompensator(extended, output_min=0.0, output_max=2.0)):
+        stamp = isinstance(comp, ExtendedCompensator)
+        commands = [comp.command(s, **({'time': tk} if stamp else {}))
+                    for s, tk in zip(desired, tv)]
+        measured = MagnetostrictiveActuator(cfg).simulate(tv, commands)
+        errors.append(control_error(desired[tv > 2.0], measured[tv > 2.0]))
+    plain, ext = errors
+    assert ext < 0.75 * plain, (plain, ext)
