@@ -5,89 +5,81 @@ Compensator node throughput, latency and soak benchmark over DDS (run on demand)
 
 Three processes: this one publishes ``desired_displacement`` at ``--rate`` Hz, the
 compensator node computes ``current_command``, and a receiver process records the arrival
-time of every command.  Times come from CLOCK_MONOTONIC, which all processes share;
-reliable in-order delivery pairs the k-th command with the k-th desired value.
+time and the value of every command.  Times come from CLOCK_MONOTONIC, which all processes
+share; reliable in-order delivery pairs the k-th command with the k-th desired value.
 
 Reports: messages sent/received (drops), achieved rate, latency percentiles (desired in ->
-command out, measured in another process), latency per 10 s window (drift) and the
-compensator's resident memory over time (growth).
+command out, measured in another process), latency percentiles per 10 s window (drift),
+non-finite or out-of-range commands, and the compensator's resident memory over time
+(growth).
 
 Targets: 10,000 messages/s for 10 s, zero drops, p99 <= 1 ms (ROS package issue);
 10 minutes at 10,000/s without drops, memory growth or latency drift (reliability issue:
 ``--duration 600``).
 
 Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]``
+
+The core is importable (``run_benchmark`` returns the numbers as a dict); the test suite
+runs a short soak through it (``test/faults/test_soak.py``).
 """
 
 import argparse
 import os
 import random
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any, Optional
 
 import numpy as np
 
+__all__ = ['BENCH_MODEL', 'run_benchmark', 'format_results', 'main']
 
-def _receiver(out: str, count: int, timeout: float) -> None:
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-    from std_msgs.msg import Float64
-
-    from mpi_ros.nodes.loop import loop_qos
-    rclpy.init()
-    node = rclpy.create_node('bench_receiver')
-    stamps = np.zeros(count, dtype=np.int64)
-    received = [0]
-
-    def on_command(msg: Float64) -> None:
-        # Take every queued message in this one callback: rclpy's per-spin cost would
-        # otherwise make the receiver, not the compensator, the bottleneck.
-        while True:
-            k = received[0]
-            if k < count:
-                stamps[k] = time.monotonic_ns()
-            received[0] = k + 1
-            if subscription.handle.take_message(Float64, False) is None:
-                break
-
-    subscription = node.create_subscription(Float64, 'current_command', on_command,
-                                            loop_qos(10000))
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    Path(out + '.ready').touch()
-    deadline = time.monotonic() + timeout
-    while received[0] < count and time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.01)
-    np.save(out, stamps[:min(received[0], count)])
-    node.destroy_node()
-    rclpy.try_shutdown()
+#: The model the benchmark's compensator runs (n=14, l=7, as in the paper).
+BENCH_MODEL = {
+    'model.hysteresis.thresholds': list(np.arange(15) / 15 * 1.8),
+    'model.hysteresis.weights': [1.0] + [0.05] * 14,
+    'model.hysteresis.initial_states': [0.0] * 15,
+    'model.superposition.thresholds': [0.0] + list(np.arange(1, 8) / 8 * 1.5),
+    'model.superposition.weights': [2e-5] + [-1e-6, 1e-6] * 3 + [-1e-6],
+}
 
 
-def _rss_kib(pid: int) -> int:
-    for line in Path(f'/proc/{pid}/status').read_text().splitlines():
-        if line.startswith('VmRSS:'):
-            return int(line.split()[1])
-    return 0
+def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
+                  output_max: float = 2.0, window: float = 10.0,
+                  workdir: Optional[Path] = None) -> dict[str, Any]:
+    """
+    Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
+    The caller's environment (``ROS_DOMAIN_ID``, ``ROS_AUTOMATIC_DISCOVERY_RANGE``) is
+    used by this process and by the two it starts; both are stopped before returning.
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument('--rate', type=float, default=10000.0, help='messages per second')
-    parser.add_argument('--duration', type=float, default=10.0, help='seconds of load')
-    parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
-    parser.add_argument('--out', default='', help=argparse.SUPPRESS)
-    parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    if args.role == 'receiver':
-        _receiver(args.out, args.count, args.duration)
-        return
+    Parameters
+    ----------
+    rate : float
+        Desired displacements published per second [1/s].
+    duration : float
+        Length of the load [s].
+    output_min, output_max : float
+        The compensator's output limits [A].
+    window : float
+        Length [s] of the windows of the latency drift statistics.
+    workdir : Path, optional
+        Directory for logs and the receiver's data (default: a new temporary one).
 
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
-    import subprocess
+    Returns
+    -------
+    dict
+        ``sent``, ``received``, ``drops``, ``elapsed`` [s], ``achieved_rate`` [1/s],
+        ``latency_us`` (``p50``, ``p99``, ``p999``, ``max``), ``windows`` (list of
+        ``(start_s, p50, p99, p999)`` in us), ``nonfinite`` and ``outside_limits``
+        (command counts), ``command_range`` [A], ``rss_kib`` (list of ``(t_s, KiB)``),
+        ``rss_growth_mib`` (from t=1 s to the end), ``compensator_exit``, ``cores``,
+        ``domain_id``, ``workdir``.
 
+    """
     import rclpy
     from std_msgs.msg import Float64
 
@@ -95,40 +87,38 @@ def main() -> None:
     from mpi_ros.nodes.loop import loop_qos, NodeProcess
     from mpi_ros.params import write_params_yaml
 
-    model = MPIModel.from_params({
-        'model.hysteresis.thresholds': list(np.arange(15) / 15 * 1.8),
-        'model.hysteresis.weights': [1.0] + [0.05] * 14,
-        'model.hysteresis.initial_states': [0.0] * 15,
-        'model.superposition.thresholds': [0.0] + list(np.arange(1, 8) / 8 * 1.5),
-        'model.superposition.weights': [2e-5] + [-1e-6, 1e-6] * 3 + [-1e-6]})
-    count = int(args.rate * args.duration)
-    tmp = Path(tempfile.mkdtemp(prefix='mpi_ros_bench_'))
+    model = MPIModel.from_params(BENCH_MODEL)
+    count = int(rate * duration)
+    tmp = Path(tempfile.mkdtemp(prefix='mpi_ros_bench_')) if workdir is None else Path(workdir)
     params = tmp / 'params.yaml'
-    write_params_yaml(params, dict(model.to_params(), **{'qos_depth': 10000}))
+    write_params_yaml(params, dict(model.to_params(), **{
+        'qos_depth': 10000, 'output.min': output_min, 'output.max': output_max}))
     comp = NodeProcess('compensator', ['--params-file', str(params), '-p',
                                        'diagnostics_period:=5.0'], tmp / 'compensator.log')
     out = str(tmp / 'received.npy')
     receiver = subprocess.Popen(
         [sys.executable, __file__, '--role', 'receiver', '--out', out, '--count', str(count),
-         '--duration', str(args.duration + 60.0)], env=dict(os.environ))
-    rclpy.init()
-    node = rclpy.create_node('bench_sender')
+         '--duration', str(duration + 60.0)], env=dict(os.environ))
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node('bench_sender', context=context)
     pub = node.create_publisher(Float64, 'desired_displacement', loop_qos(10000))
     try:
         deadline = time.monotonic() + 60.0
         while (pub.get_subscription_count() < 1 or not Path(out + '.ready').exists()
                or node.count_subscribers('current_command') < 1):
             if time.monotonic() > deadline:
-                raise SystemExit('error: compensator or receiver did not start in 60 s')
+                msg = 'compensator or receiver did not start in 60 s'
+                raise RuntimeError(msg)
             time.sleep(0.05)
         time.sleep(2.0)                                      # let DDS finish matching
         lo, hi = 5e-6, 3e-5
-        t = np.arange(count) / args.rate
+        t = np.arange(count) / rate
         desired = lo + (hi - lo) * (0.5 + 0.4 * np.sin(2 * np.pi * 1.0 * t)
                                     + 0.1 * np.sin(2 * np.pi * 13.0 * t))
         sent = np.zeros(count, dtype=np.int64)
         rss = []
-        period_ns = int(1e9 / args.rate)
+        period_ns = int(1e9 / rate)
         msg = Float64()
         start = time.monotonic_ns()
         next_rss = start
@@ -148,33 +138,148 @@ def main() -> None:
                 next_rss += 1_000_000_000
             time.sleep(0.0002)
         elapsed = (time.monotonic_ns() - start) / 1e9
-        receiver.wait(timeout=args.duration + 120.0)
+        receiver.wait(timeout=duration + 120.0)
         rss.append((elapsed, _rss_kib(comp.pid)))
     finally:
         node.destroy_node()
-        rclpy.try_shutdown()
-        comp.stop()
+        rclpy.try_shutdown(context=context)
+        status = comp.stop()
         if receiver.poll() is None:
             receiver.kill()
+            receiver.wait()
     stamps = np.load(out)
+    values = np.load(out.replace('.npy', '_values.npy'))
     n = stamps.size
     latency_us = (stamps - sent[:n]) / 1e3
-    print(f'machine: {os.cpu_count()} cores; ROS_DOMAIN_ID {os.environ["ROS_DOMAIN_ID"]}')
-    print(f'sent {count} desired values in {elapsed:.2f} s ({count / elapsed:,.0f}/s), '
-          f'received {n} commands, drops {count - n}')
+    results: dict[str, Any] = {
+        'cores': os.cpu_count(), 'domain_id': os.environ.get('ROS_DOMAIN_ID'),
+        'rate': rate, 'duration': duration, 'sent': count, 'received': n,
+        'drops': count - n, 'elapsed': elapsed, 'achieved_rate': count / elapsed,
+        'nonfinite': int(np.count_nonzero(~np.isfinite(values))),
+        'outside_limits': int(np.count_nonzero((values < output_min) | (values > output_max))),
+        'command_range': (float(values.min()), float(values.max())) if n else None,
+        'latency_us': {}, 'windows': [], 'rss_kib': rss,
+        'rss_growth_mib': (rss[-1][1] - rss[1][1]) / 1024 if len(rss) > 2 else None,
+        'compensator_exit': status, 'workdir': str(tmp),
+    }
     if n:
         p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
-        print(f'latency desired->command [us]: p50 {p50:.0f}, p99 {p99:.0f}, '
-              f'p99.9 {p999:.0f}, max {latency_us.max():.0f} (target p99 <= 1000)')
-        window = int(10 * args.rate)
-        if n >= 2 * window:
-            p99s = [np.percentile(latency_us[i:i + window], 99)
-                    for i in range(0, n - window + 1, window)]
-            print('p99 per 10 s window [us]: ' + ' '.join(f'{v:.0f}' for v in p99s))
-    print('compensator RSS [MiB] over time: ' + ' '.join(
-        f'{t_:.0f}s:{kib / 1024:.1f}' for t_, kib in rss[::max(1, len(rss) // 12)]))
-    print(f'compensator RSS growth: {(rss[-1][1] - rss[1][1]) / 1024:+.1f} MiB '
-          f'(from t={rss[1][0]:.0f} s to the end)' if len(rss) > 2 else '')
+        results['latency_us'] = {'p50': p50, 'p99': p99, 'p999': p999,
+                                 'max': float(latency_us.max())}
+        size = int(window * rate)
+        results['windows'] = [
+            (i / rate, *np.percentile(latency_us[i:i + size], [50, 99, 99.9]))
+            for i in range(0, n - size + 1, size)]
+    return results
+
+
+def format_results(results: dict[str, Any]) -> str:
+    """
+    Format the results of :func:`run_benchmark` as the report the script prints.
+
+    Parameters
+    ----------
+    results : dict
+        As returned by :func:`run_benchmark`.
+
+    Returns
+    -------
+    str
+        Several lines of text.
+
+    """
+    r = results
+    lines = [f'machine: {r["cores"]} cores; ROS_DOMAIN_ID {r["domain_id"]}',
+             f'sent {r["sent"]} desired values in {r["elapsed"]:.2f} s '
+             f'({r["achieved_rate"]:,.0f}/s), received {r["received"]} commands, '
+             f'drops {r["drops"]}',
+             f'commands: {r["nonfinite"]} non-finite, {r["outside_limits"]} outside the limits,'
+             f' range {r["command_range"]}']
+    lat = r['latency_us']
+    if lat:
+        lines.append(f'latency desired->command [us]: p50 {lat["p50"]:.0f}, p99 {lat["p99"]:.0f}'
+                     f', p99.9 {lat["p999"]:.0f}, max {lat["max"]:.0f} (target p99 <= 1000)')
+    if len(r['windows']) > 1:
+        lines.append('latency per window [us] (start s: p50/p99/p99.9):')
+        lines.extend(f'  {t:5.0f}: {p50:6.0f} {p99:7.0f} {p999:7.0f}'
+                     for t, p50, p99, p999 in r['windows'])
+    rss = r['rss_kib']
+    lines.append('compensator RSS [MiB] over time: ' + ' '.join(
+        f'{t_:.0f}s:{kib / 1024:.1f}' for t_, kib in rss[::max(1, len(rss) // 12)] + rss[-1:]))
+    if r['rss_growth_mib'] is not None:
+        lines.append(f'compensator RSS growth: {r["rss_growth_mib"]:+.1f} MiB '
+                     f'(from t={rss[1][0]:.0f} s to the end)')
+    lines.append(f'compensator exit status: {r["compensator_exit"]}')
+    return '\n'.join(lines)
+
+
+def main() -> None:
+    """Run the benchmark from the command line and print the report."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
+    parser.add_argument('--rate', type=float, default=10000.0, help='messages per second')
+    parser.add_argument('--duration', type=float, default=10.0, help='seconds of load')
+    parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
+    parser.add_argument('--out', default='', help=argparse.SUPPRESS)
+    parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.role == 'receiver':
+        _receiver(args.out, args.count, args.duration)
+        return
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
+    print(format_results(run_benchmark(args.rate, args.duration)), flush=True)
+
+
+def _receiver(out: str, count: int, timeout: float) -> None:
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from std_msgs.msg import Float64
+
+    from mpi_ros.nodes.loop import loop_qos
+    rclpy.init()
+    node = rclpy.create_node('bench_receiver')
+    stamps = np.zeros(count, dtype=np.int64)
+    values = np.zeros(count)
+    received = [0]
+
+    def on_command(msg: Float64) -> None:
+        # Take every queued message in this one callback: rclpy's per-spin cost would
+        # otherwise make the receiver, not the compensator, the bottleneck.
+        while True:
+            k = received[0]
+            if k < count:
+                stamps[k] = time.monotonic_ns()
+                values[k] = msg.data
+            received[0] = k + 1
+            taken = subscription.handle.take_message(Float64, False)
+            if taken is None:
+                break
+            msg = taken[0]
+
+    subscription = node.create_subscription(Float64, 'current_command', on_command,
+                                            loop_qos(10000))
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    Path(out + '.ready').touch()
+    deadline = time.monotonic() + timeout
+    while received[0] < count and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.01)
+    n = min(received[0], count)
+    np.save(out.replace('.npy', '_values.npy'), values[:n])
+    np.save(out, stamps[:n])
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def _rss_kib(pid: int) -> int:
+    try:
+        text = Path(f'/proc/{pid}/status').read_text()
+    except OSError:
+        return 0
+    for line in text.splitlines():
+        if line.startswith('VmRSS:'):
+            return int(line.split()[1])
+    return 0
 
 
 if __name__ == '__main__':

@@ -17,10 +17,9 @@ import os
 import platform
 import time
 
-import numpy as np
-
 from mpi_ros import identify
 from mpi_ros.compensation import FeedforwardCompensator
+import numpy as np
 
 
 def _signal(samples: int, rng: np.random.Generator) -> np.ndarray:

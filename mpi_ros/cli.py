@@ -15,10 +15,10 @@ The command returns an exit code; errors are printed as ``error: ...`` on stderr
 """
 
 import argparse
-import json
-import sys
 from collections.abc import Sequence
+import json
 from pathlib import Path
+import sys
 
 from .errors import MPIError
 

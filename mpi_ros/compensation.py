@@ -24,7 +24,7 @@ import numpy.typing as npt
 
 from .errors import ModelError
 from .memory import TurningPointMemory
-from .model import MPIModel, _hysteresis_step, _superposition_value
+from .model import _hysteresis_step, _superposition_value, MPIModel
 
 __all__ = ['FeedforwardCompensator', 'LinearMap', 'best_linear_map', 'operating_range']
 

@@ -22,15 +22,13 @@ machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) on a random or given
 import argparse
 import json
 import os
+from pathlib import Path
 import random
 import sys
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from .errors import MPIError
 
 __all__ = ['demo_main', 'ORDERS']
 
@@ -115,10 +113,10 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
         traces = {}
         for label, model, enabled in runs:
             plant = start_plant()
-            comp = NodeProcess('compensator', ['-p', f'output.min:={args.output_min!r}',
-                                            '-p', f'output.max:={args.output_max!r}',
-                                            '-p', f'enabled:={str(enabled).lower()}'],
-                            out / 'compensator.log')
+            comp_args = ['-p', f'output.min:={args.output_min!r}',
+                         '-p', f'output.max:={args.output_max!r}',
+                         '-p', f'enabled:={str(enabled).lower()}']
+            comp = NodeProcess('compensator', comp_args, out / 'compensator.log')
             processes.append(comp)
             with driver.detached():            # the push spins the node on its own executor
                 push_model_parameters(driver, '/compensator', model.to_params(), timeout=60.0)

@@ -28,8 +28,8 @@ Robustness choices (documented in the README):
   non-invertible model.
 """
 
-import time
 from dataclasses import dataclass, field
+import time
 from typing import Any
 
 import numpy as np
@@ -101,7 +101,7 @@ class IdentificationResult:
     order_table: list[dict[str, Any]] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
-        """Return a JSON-ready summary (``order``, errors, ``samples``, table)."""
+        """Return the result as a JSON-ready dict: ``order``, errors, ``samples``, table."""
         return {'order': list(self.order), 'nonlinearity_error': self.nonlinearity_error,
                 'rms_error': self.rms_error, 'samples': self.samples,
                 'solver_status': self.solver_status, 'iterations': self.iterations,
@@ -372,7 +372,7 @@ class ScaledDesign:
 
     def model(self, w_h: FloatArray, w_s_inv: FloatArray) -> MPIModel:
         """
-        Return the forward model (SI units) for QP weights found on the scaled data.
+        Return the forward MPI model in SI units for QP weights found on the scaled data.
 
         Parameters
         ----------
@@ -562,7 +562,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         if isinstance(order, str) or len(order) != 2:
             msg = f"order must be 'auto' or a pair (n, l); found {order!r}"
             raise DataError(msg)
-        n, l = int(order[0]), int(order[1])
+        n, l = int(order[0]), int(order[1])  # noqa: E741
     n = 14 if n is None else int(n)
     l = 7 if l is None else int(l)  # noqa: E741
     if n < 0 or l < 0:

@@ -47,7 +47,7 @@ class TurningPointMemory:
 
     @property
     def points(self) -> npt.NDArray[np.float64]:
-        """Stored points: first input, turning points, current input (a copy)."""
+        """Return the stored points: first input, turning points, current input (a copy)."""
         return np.array(self._points, dtype=np.float64)
 
     def clear(self) -> None:

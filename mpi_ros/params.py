@@ -15,9 +15,9 @@ ordering, finiteness, the constraints (8) and (19)) and names the offending key.
 A ROS 2 parameter file nests these keys under ``<node>: ros__parameters:``.
 """
 
+from collections.abc import Mapping
 import math
 import os
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -54,8 +54,8 @@ def _vector(mapping: Mapping[str, Any], key: str) -> FloatArray:
         raise ModelError(msg)
     items = list(value)
     for i, item in enumerate(items):
-        if isinstance(item, bool) or not isinstance(item, (int, float, np.floating,
-                                                            np.integer)):
+        number = isinstance(item, (int, float, np.floating, np.integer))
+        if isinstance(item, bool) or not number:
             msg = (f'{key} must be a list of floats; item {i} is'
                    f' {type(item).__name__} {item!r}')
             raise ModelError(msg)

@@ -125,7 +125,7 @@ class PlayOperatorStream:
 
     @property
     def state(self) -> FloatArray:
-        """Current play outputs (a read-only copy)."""
+        """Return the current play outputs (a read-only copy)."""
         z = self._z.copy()
         z.flags.writeable = False
         return z

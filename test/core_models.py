@@ -1,14 +1,14 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Random valid MPI models and signals shared by the core tests."""
 
-import numpy as np
-
 from mpi_ros.hysteresis import PIHysteresisOperator
 from mpi_ros.model import MPIModel
 from mpi_ros.superposition import PISuperpositionOperator
+import numpy as np
 
 
-def random_model(rng, *, n=None, l=None, initial_history=True, output_scale=1e-5):
+def random_model(rng, *, n=None, l=None,  # noqa: E741 - the paper's symbol
+                 initial_history=True, output_scale=1e-5):
     """
     Return a random forward MPI model satisfying (8) and (19).
 

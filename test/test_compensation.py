@@ -1,14 +1,13 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Feed-forward compensator core: exact inverse, clamping, bad input, bumpless swaps."""
 
-import numpy as np
-import pytest
-
 from mpi_ros import MPIModel
 from mpi_ros.compensation import FeedforwardCompensator
 from mpi_ros.errors import ModelError
 from mpi_ros.hysteresis import PIHysteresisOperator
 from mpi_ros.memory import TurningPointMemory
+import numpy as np
+import pytest
 
 from .core_models import random_model
 

@@ -1,9 +1,9 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """The math core never imports rclpy or message packages."""
 
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 CORE_MODULES = ['mpi_ros', 'mpi_ros.identification', 'mpi_ros.compensation', 'mpi_ros.params',
                 'mpi_ros.metrics', 'mpi_ros.memory', 'mpi_ros.inverse']

@@ -1,10 +1,7 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Identification (28)-(36): recovery, robustness, scale invariance, order selection."""
 
-import numpy as np
-import pytest
-
-from mpi_ros import identify, IdentificationError, MPIModel
+from mpi_ros import IdentificationError, identify, MPIModel
 from mpi_ros.errors import DataError
 from mpi_ros.hysteresis import PIHysteresisOperator
 from mpi_ros.identification import (hysteresis_thresholds, inverse_superposition_thresholds,
@@ -12,6 +9,8 @@ from mpi_ros.identification import (hysteresis_thresholds, inverse_superposition
 from mpi_ros.inverse import invert_superposition
 from mpi_ros.params import check_model_parameters
 from mpi_ros.superposition import PISuperpositionOperator
+import numpy as np
+import pytest
 
 from .core_models import random_walk
 

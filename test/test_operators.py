@@ -1,14 +1,13 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Elementary operators (2)-(4), (16)-(17), H (5), S (18), Gamma (26): batch == streaming."""
 
-import numpy as np
-import pytest
-
 from mpi_ros.deadzone import dead_zone_operator
 from mpi_ros.errors import ModelError
 from mpi_ros.hysteresis import PIHysteresisOperator
 from mpi_ros.play import play_operator, PlayOperatorStream
 from mpi_ros.superposition import PISuperpositionOperator
+import numpy as np
+import pytest
 
 from .core_models import random_model, random_walk
 

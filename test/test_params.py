@@ -3,12 +3,11 @@
 
 import math
 
-import numpy as np
-import pytest
-
 from mpi_ros import MPIModel
 from mpi_ros.errors import DataError, ModelError
 from mpi_ros.params import read_params_yaml, write_params_yaml
+import numpy as np
+import pytest
 
 from .core_models import random_model, random_walk
 
@@ -41,10 +40,12 @@ def test_valid_parameters_load():
     (_with(model__hysteresis__initial_states=[0.0]), r'initial_states must have one'),
     (_with(model__superposition__weights=[1e-5]), r'superposition\.weights must have one'),
     (_with(model__hysteresis__thresholds=[0.1, 0.4, 0.8]), r'start at exactly 0\.0'),
-    (_with(model__hysteresis__thresholds=[0.0, 0.8, 0.4]), r'thresholds must be strictly.*unsorted'),
+    (_with(model__hysteresis__thresholds=[0.0, 0.8, 0.4]),
+     r'thresholds must be strictly.*unsorted'),
     (_with(model__hysteresis__thresholds=[0.0, 0.4, 0.4]), r'duplicate'),
     (_with(model__superposition__thresholds=[-0.5, 0.1, 0.5]), r'exactly one 0; found none'),
-    (_with(model__superposition__thresholds=[0.5, 0.0, -0.5]), r'superposition\.thresholds must be'),
+    (_with(model__superposition__thresholds=[0.5, 0.0, -0.5]),
+     r'superposition\.thresholds must be'),
     (_with(model__hysteresis__weights=[0.0, 0.3, 0.2]), r'violates \(8\).*w_H0'),
     (_with(model__hysteresis__weights=[1.0, -0.3, 0.2]), r'violates \(8\).*item 1'),
     (_with(model__superposition__weights=[1e-5, 2e-5, -3e-5]), r'violates \(19\).*item 2'),

@@ -9,11 +9,11 @@ measured displacement it causes, so results do not depend on DDS timing.
 """
 
 import os
+from pathlib import Path
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 from typing import Any, Callable, Optional
 
 from rclpy.executors import SingleThreadedExecutor
@@ -187,6 +187,7 @@ class LoopDriver(Node):
 
 
 class _Detached:
+
     def __init__(self, driver: LoopDriver) -> None:
         self.driver = driver
 

@@ -2,41 +2,26 @@
 """
 The three nodes as separate processes over DDS: closed loop, model push, rejection, swap.
 
-Each test module runs on its own ``ROS_DOMAIN_ID`` (derived from the test process id)
-with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``; every process is started and stopped
-here, by PID.
+Each test module runs on its own ``ROS_DOMAIN_ID`` (the ``ros_env`` fixture of
+``test/conftest.py``) with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``; every process is
+started and stopped here, by PID.
 """
 
 import os
 
+from mpi_ros import identify, MPIModel
+from mpi_ros.compensation import FeedforwardCompensator, operating_range
+from mpi_ros.excitation import identification_excitation, tracking_trajectory
+from mpi_ros.inverse import invert_hysteresis_initial_states
+from mpi_ros.metrics import control_error
+from mpi_ros.nodes.identifier import ParameterPushError, push_model_parameters
+from mpi_ros.nodes.loop import LoopDriver, NodeProcess
 import numpy as np
 import pytest
-
-rclpy = pytest.importorskip('rclpy')
-
-from mpi_ros import identify, MPIModel  # noqa: E402
-from mpi_ros.compensation import FeedforwardCompensator, operating_range  # noqa: E402
-from mpi_ros.inverse import invert_hysteresis_initial_states  # noqa: E402
-from mpi_ros.excitation import identification_excitation, tracking_trajectory  # noqa: E402
-from mpi_ros.metrics import control_error  # noqa: E402
-from mpi_ros.nodes.identifier import ParameterPushError, push_model_parameters  # noqa: E402
-from mpi_ros.nodes.loop import LoopDriver, NodeProcess  # noqa: E402
+import rclpy
 
 RATE = 200.0
 LIMITS = (0.2, 1.8)
-
-
-@pytest.fixture(scope='module')
-def ros_env():
-    saved = {k: os.environ.get(k) for k in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE')}
-    os.environ['ROS_DOMAIN_ID'] = str(200 + os.getpid() % 30)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    yield
-    for k, v in saved.items():
-        if v is None:
-            os.environ.pop(k, None)
-        else:
-            os.environ[k] = v
 
 
 @pytest.fixture()
