@@ -17,6 +17,7 @@ initial-state law (14) at every step.  Hence
 """
 
 from dataclasses import dataclass
+import math
 
 import numba
 import numpy as np
@@ -26,7 +27,8 @@ from .errors import ModelError
 from .memory import TurningPointMemory
 from .model import _hysteresis_step, _superposition_value, MPIModel
 
-__all__ = ['FeedforwardCompensator', 'LinearMap', 'best_linear_map', 'operating_range']
+__all__ = ['FeedforwardCompensator', 'LinearMap', 'best_linear_map', 'operating_range',
+           'screen_desired']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -50,6 +52,45 @@ def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
         current = hi
     _hysteresis_step(current, r_h, w_h, z_h)                # forward plays, applied current
     return current, raw
+
+
+def screen_desired(desired: object, counters: dict[str, int],
+                   displacement_range: tuple[float, float]) -> float | None:
+    """
+    Screen one desired displacement before inversion; count what is wrong with it.
+
+    Parameters
+    ----------
+    desired : object
+        The incoming value (anything: NaN, Inf, text, None are possible).
+    counters : dict[str, int]
+        ``messages``, ``nonfinite_input`` and ``out_of_range`` are incremented here.
+    displacement_range : (float, float)
+        The model's operating range [m].
+
+    Returns
+    -------
+    float or None
+        The value to invert, or None when it is not a finite number (hold the last
+        command).  Values far outside the range are saturated: Gamma^-1 is increasing,
+        so the clamped command is the same, and the arithmetic stays finite (1e308
+        would otherwise give inf - inf = NaN inside the inverse).
+
+    """
+    counters['messages'] += 1
+    try:
+        s_c = float(desired)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        s_c = math.nan
+    if not math.isfinite(s_c):
+        counters['nonfinite_input'] += 1
+        return None
+    lo, hi = displacement_range
+    if s_c < lo or s_c > hi:
+        counters['out_of_range'] += 1
+        margin = 10.0 * (hi - lo)
+        s_c = min(max(s_c, lo - margin), hi + margin)
+    return s_c
 
 
 @dataclass(frozen=True)
@@ -236,21 +277,9 @@ class FeedforwardCompensator:
 
         """
         c = self.counters
-        c['messages'] += 1
-        try:
-            s_c = float(desired)
-        except (TypeError, ValueError):
-            s_c = float('nan')
-        if not np.isfinite(s_c):
-            c['nonfinite_input'] += 1
+        s_c = screen_desired(desired, c, self.displacement_range)
+        if s_c is None:
             return self.last_command
-        lo, hi = self.displacement_range
-        if s_c < lo or s_c > hi:
-            c['out_of_range'] += 1
-            # Gamma^-1 is increasing: far beyond the operating range the clamped command is
-            # the same, and saturating keeps the arithmetic finite (1e308 would give inf-inf).
-            margin = 10.0 * (hi - lo)
-            s_c = min(max(s_c, lo - margin), hi + margin)
         r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si = self._kernel
         if self.enabled:
             current, raw = _compensate_step(s_c, self.output_min, self.output_max, r_h, w_h,

@@ -162,3 +162,19 @@ def test_closed_loop_control_error_extended_beats_plain(effect, fit):
         errors.append(control_error(desired[tv > 2.0], measured[tv > 2.0]))
     plain, ext = errors
     assert ext < 0.75 * plain, (plain, ext)
+
+
+def test_extended_compensator_survives_extreme_finite_input():
+    params = {
+        'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
+        'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
+        'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
+        'model.superposition.thresholds': [0.0, 0.5, 1.0],
+        'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
+        'model.creep.time_constants': [0.1, 1.0, 10.0],
+        'model.creep.weights': [0.02, 0.02, 0.02],
+    }
+    comp = compensator_from_params(params, output_min=0.2, output_max=1.8)
+    for desired in (1e308, -1e308, 1.7976931348623157e308, 5e-5, float('nan')):
+        current = comp.command(desired)
+        assert np.isfinite(current) and 0.2 <= current <= 1.8

@@ -41,7 +41,8 @@ from .creep import CreepModel
 from .dead_time import DeadTimeModel
 from .rate_dependence import RateDependentModel
 from .thermal_drift import ThermalDriftModel
-from ..compensation import best_linear_map, FeedforwardCompensator, operating_range
+from ..compensation import (best_linear_map, FeedforwardCompensator, operating_range,
+                            screen_desired)
 from ..errors import ModelError, MPIWarning
 from ..memory import TurningPointMemory
 from ..model import _hysteresis_step, _superposition_value, MPIModel
@@ -212,17 +213,9 @@ class ExtendedCompensator:
 
         """
         c = self.counters
-        c['messages'] += 1
-        try:
-            s_c = float(desired)
-        except (TypeError, ValueError):
-            s_c = float('nan')
-        if not math.isfinite(s_c):
-            c['nonfinite_input'] += 1
+        s_c = screen_desired(desired, c, self.displacement_range)
+        if s_c is None:
             return self.last_command
-        lo, hi = self.displacement_range
-        if s_c < lo or s_c > hi:
-            c['out_of_range'] += 1
         h = self._interval(time)
         r_h, w_h, z_h, r_si, w_si = self._kernel
         model = self.model
