@@ -1,0 +1,16 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""The examples in the core's docstrings run (numpydoc ``Examples`` sections)."""
+
+import doctest
+import importlib
+
+import pytest
+
+MODULES = ['mpi_ros.play', 'mpi_ros.deadzone', 'mpi_ros.model', 'mpi_ros.identification',
+           'mpi_ros.metrics', 'mpi_ros.recordings', 'mpi_ros.actuator', 'mpi_ros.excitation']
+
+
+@pytest.mark.parametrize('name', MODULES)
+def test_docstring_examples(name):
+    result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)
+    assert result.failed == 0
