@@ -2,9 +2,15 @@
 """
 ``mpi-ros diagnose``: the command-line front of :func:`mpi_ros.diagnosis.diagnose`.
 
-``mpi-ros diagnose DATA [--validate DATA2] [--input-topic T] [--output-topic T]
-[--time-column C --input-column C --output-column C --input-scale F --output-scale F]
-[--order auto|N L] --json report.json --report DIR [--params-out extended.yaml]``
+``mpi-ros diagnose DATA [--validate DATA2] [--window T0 T1] [--input-topic T]
+[--output-topic T] [--time-column C --input-column C --output-column C --input-scale F
+--output-scale F] [--order auto|N L] --json report.json --report DIR
+[--params-out extended.yaml]``
+
+``mpi-ros diagnose --excitation OUT.csv [--excitation-rate HZ --excitation-bias A
+--excitation-amplitude A --seed N]`` writes the diagnostic validation excitation (columns
+``time`` [s], ``current`` [A]) to play on a rig; record the answer and pass it as
+``--validate``.
 """
 
 import argparse
@@ -13,8 +19,9 @@ from typing import Any, Sequence
 
 from .diagnose import diagnose
 from .report import write_extended_params, write_json, write_report
-from ..errors import MPIError
-from ..recordings import read_signals
+from .signatures import diagnostic_excitation
+from ..errors import DataError, MPIError
+from ..recordings import read_signals, Recording, write_csv_columns
 
 __all__ = ['diagnose_main', 'build_parser']
 
@@ -24,8 +31,11 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog=prog, description=(
         'Diagnose what the MPI model misses in measured data, name the cause, fit the'
         ' extended model and measure the gain on validation data.'))
-    p.add_argument('data', help='rosbag2 bag or CSV file (training data)')
+    p.add_argument('data', nargs='?',
+                   help='rosbag2 bag or CSV file (training data); optional with --excitation')
     p.add_argument('--validate', help='separate validation recording (default: split DATA)')
+    p.add_argument('--window', nargs=2, type=float, metavar=('T0', 'T1'),
+                   help='diagnose only DATA between T0 and T1 [s] after its first sample')
     p.add_argument('--split', type=float, default=0.6,
                    help='training fraction when no --validate is given (default 0.6)')
     p.add_argument('--input-topic', help='bag topic of the current')
@@ -37,10 +47,41 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p.add_argument('--output-scale', type=float, help='factor to m (e.g. 1e-9 for nm)')
     p.add_argument('--order', nargs='+', default=['auto'], metavar='auto|N L',
                    help="model order: 'auto' or two integers n l")
-    p.add_argument('--json', required=True, help='report.json to write')
-    p.add_argument('--report', required=True, help='directory for summary.md and plots')
+    p.add_argument('--json', help='report.json to write (required with DATA)')
+    p.add_argument('--report', help='directory for summary.md and plots (required with DATA)')
     p.add_argument('--params-out', help='parameter YAML of the extended model')
+    p.add_argument('--excitation', metavar='OUT.csv',
+                   help='write the diagnostic validation excitation (time [s], current [A])')
+    p.add_argument('--excitation-rate', type=float, default=1000.0,
+                   help='sample rate of --excitation [Hz] (default 1000; >= 800)')
+    p.add_argument('--excitation-bias', type=float, default=1.0,
+                   help='centre current of --excitation [A] (default 1.0)')
+    p.add_argument('--excitation-amplitude', type=float, default=0.8,
+                   help='half-width of --excitation [A] (default 0.8)')
+    p.add_argument('--seed', type=int, default=0, help='seed of --excitation (default 0)')
     return p
+
+
+def _window(recording: Recording, window: Sequence[float]) -> Recording:
+    t0, t1 = window
+    time = recording.time - recording.time[0]
+    keep = (time >= t0) & (time <= t1)
+    if not t0 < t1 or int(keep.sum()) < 2:
+        msg = (f'--window {t0:g} {t1:g} must give T0 < T1 [s] after the first sample and'
+               f' hold at least 2 samples; the data span 0 to {time[-1]:g} s')
+        raise DataError(msg)
+    return Recording(recording.time[keep], recording.current[keep],
+                     recording.displacement[keep],
+                     source=f'{recording.source} [{t0:g} s, {t1:g} s]',
+                     notes=recording.notes)
+
+
+def _write_excitation(args: argparse.Namespace) -> None:
+    t, current = diagnostic_excitation(sample_rate=args.excitation_rate,
+                                       bias=args.excitation_bias,
+                                       amplitude=args.excitation_amplitude, seed=args.seed)
+    write_csv_columns(args.excitation, {'time': t, 'current': current},
+                      comment='diagnostic validation excitation of mpi-ros diagnose')
 
 
 def _read(path: str, args: argparse.Namespace) -> Any:
@@ -84,9 +125,22 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
     def say(line: str) -> None:
         print(line, file=sys.stderr, flush=True)
 
+    if args.data is None and args.excitation is None:
+        parser.error('give DATA to diagnose, or --excitation OUT.csv')
+    if args.data is not None and (args.json is None or args.report is None):
+        parser.error('--json and --report are required with DATA')
+
     try:
+        if args.excitation:
+            _write_excitation(args)
+            say(f'wrote {args.excitation}')
+            if args.data is None:
+                return 0
         say(f'reading {args.data}')
         data = _read(args.data, args)
+        if args.window is not None:
+            data = _window(data, args.window)
+            say(f'window: {len(data)} samples')
         validation = None
         if args.validate:
             say(f'reading {args.validate}')

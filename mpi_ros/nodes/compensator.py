@@ -20,6 +20,24 @@ Model life cycle
     would otherwise switch through mixed models. The post-set callback swaps the
     prebuilt model in through ``FeedforwardCompensator.swap_model`` (bumpless, (14)).
 
+Extended models (:mod:`mpi_ros.extensions`)
+    The ``model.creep.*``, ``model.rate_dependence.time_constant``,
+    ``model.thermal_drift.*`` and ``model.dead_time`` keys add one extension to Gamma;
+    the candidate is built with ``extended_model_from_params`` (a bad key is rejected with
+    a reason naming it). Creep, rate dependence and thermal drift run through an
+    ``ExtendedCompensator``, fed with each message's arrival time on the steady clock
+    (``message_time``; queued messages served together get close times); a dead time
+    cannot be inverted, so Gamma alone is compensated and a warning is logged. An
+    extension is off while its keys are unset or 0 / empty. A request carrying all five
+    core keys describes the whole model: the pre-set callback adds the "off" value of every
+    extension key the request leaves out, so pushing a plain model switches an extension
+    off and the parameters always describe the running model. Extension keys alone (no
+    core key) change the extension of the running Gamma. A swap within the same kind of
+    compensator uses its ``swap_model``; a change of kind builds a new compensator that
+    takes over the turning points of the applied current (play state replayed through
+    the new H, (14)), the last command and the counters; its lag states start settled at
+    the last command.
+
 A ``--params-file`` with an invalid model, or with output limits that are not
 ordered, makes the node refuse to start (exit status 1) rather than run a model
 nobody asked for.
@@ -28,7 +46,8 @@ nobody asked for.
 import math
 import sys
 import time
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Union
+import warnings
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
@@ -41,19 +60,23 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64
 
 from .parameters import (
-    check_parameter, declare_parameters, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
-    ParameterRejected, ParameterSpec, specs_by_name,
+    check_parameter, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS, MODEL_KEYS,
+    MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import events_executor, shutdown, spin
 from ..compensation import FeedforwardCompensator
-from ..errors import MPIError
+from ..errors import MPIError, MPIWarning
+from ..extensions import (
+    compensator_from_params, DeadTimeModel, extended_model_from_params, ExtendedCompensator,
+    EXTENSION_KEYS,
+)
 from ..model import MPIModel
 
 __all__ = ['CompensatorNode', 'PARAMETERS', 'main']
 
 Type = Parameter.Type
 
-PARAMETERS = MODEL_PARAMETERS + (
+PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
     ParameterSpec(
         'output.min', Type.DOUBLE, 0.0,
         'Lowest current command ever published (safe actuator range); '
@@ -67,6 +90,17 @@ PARAMETERS = MODEL_PARAMETERS + (
         'true: invert the MPI model (27); false: pass the best linear map of the '
         'model instead, for comparison'),
     ParameterSpec(
+        'sample_period', Type.DOUBLE, 1.0e-3,
+        'Nominal interval between desired displacements; extended models (creep, rate '
+        'dependence, thermal drift) use it when a message has no usable time',
+        's', value_range=(1.0e-6, 10.0)),
+    ParameterSpec(
+        'message_time', Type.STRING, 'arrival',
+        'Time of each desired displacement for the lags of extended models: arrival '
+        '(steady clock when the message is served, as the plant simulator does) or '
+        'nominal (sample_period apart, for a stream at a fixed rate)',
+        choices=('arrival', 'nominal'), read_only=True),
+    ParameterSpec(
         'diagnostics_period', Type.DOUBLE, 1.0,
         'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0)),
     ParameterSpec(
@@ -77,6 +111,10 @@ PARAMETERS = MODEL_PARAMETERS + (
 
 _SPECS = specs_by_name(PARAMETERS)
 _LIMIT_KEYS = ('output.min', 'output.max')
+_EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
+_ALL_MODEL_KEYS = MODEL_KEYS + _EXTENSION_KEYS
+
+Compensator = Union[FeedforwardCompensator, ExtendedCompensator]
 
 
 class CompensatorNode(Node):
@@ -102,7 +140,9 @@ class CompensatorNode(Node):
         super().__init__(node_name, **kwargs)
         self._declaring = True
         self._pending: Optional[Dict[str, Any]] = None
-        self._compensator: Optional[FeedforwardCompensator] = None
+        self._compensator: Optional[Compensator] = None
+        self._extended = False
+        self._model_kind = 'none'
         self._model_version = 0
         self._rejected_updates = 0
         self._messages_in = 0
@@ -111,10 +151,15 @@ class CompensatorNode(Node):
         self._last_report = (time.monotonic(), 0, {})
         # Validator first: rclpy runs it once per key while declaring (a bad
         # --params-file override is rejected there), then once per request.
+        self.add_pre_set_parameters_callback(self._complete_model_request)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         declare_parameters(self, PARAMETERS)
         self._declaring = False
+        # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
+        # Time object per message) or None: sample_period apart.
+        self._stamp = (time.monotonic if self.get_parameter('message_time').value == 'arrival'
+                       else _no_stamp)
         self._configure_from_declared()
 
         depth = self.get_parameter('qos_depth').value
@@ -135,8 +180,8 @@ class CompensatorNode(Node):
         return self._model_version
 
     @property
-    def compensator(self) -> Optional[FeedforwardCompensator]:
-        """Return the core compensator, or ``None`` while unconfigured."""
+    def compensator(self) -> Optional[Compensator]:
+        """Return the core compensator: plain, extended, or ``None`` while unconfigured."""
         return self._compensator
 
     @property
@@ -147,8 +192,9 @@ class CompensatorNode(Node):
         Returns
         -------
         dict of str to int
-            The core's ``clamped``, ``nonfinite_input``, ``out_of_range`` plus
-            ``messages_in``, ``messages_out``, ``dropped_unconfigured``,
+            The core's ``clamped``, ``nonfinite_input``, ``out_of_range`` (and
+            ``bad_time`` for an extended model) plus ``messages_in``, ``messages_out``,
+            ``dropped_unconfigured``,
             ``rejected_updates`` and ``model_version``.
 
         """
@@ -162,7 +208,8 @@ class CompensatorNode(Node):
         )
         return counters
 
-    def command(self, desired_displacement: float) -> Optional[float]:
+    def command(self, desired_displacement: float, *,
+                stamp: Optional[float] = None) -> Optional[float]:
         """
         Compute (and count) the command for one desired displacement, without publishing.
 
@@ -170,6 +217,9 @@ class CompensatorNode(Node):
         ----------
         desired_displacement : float
             Desired displacement [m]; any float, including NaN and +-Inf.
+        stamp : float, optional
+            Time of the desired displacement [s] (any steady time base); drives the lags
+            of an extended model. None: ``sample_period`` after the previous one.
 
         Returns
         -------
@@ -183,16 +233,21 @@ class CompensatorNode(Node):
         if compensator is None:
             self._dropped_unconfigured += 1
             return None
+        if self._extended:
+            return compensator.command(desired_displacement, time=stamp)
         return compensator.command(desired_displacement)
 
     # -- message path -----------------------------------------------------------------
     def _on_desired_displacement(self, msg: Optional[Float64]) -> None:
         # Serve every message already queued in this one callback: rclpy rebuilds its wait
         # set on every spin, which alone would cap the node far below 10 kHz.  Messages
-        # are still handled one by one, in order, each with its own command.
+        # are still handled one by one, in order, each with its own command (and, for an
+        # extended model, its own arrival time).  The callback takes no MessageInfo: the
+        # rclpy 7.1.6 EventsExecutor raises SystemError for such callbacks, so the
+        # publisher's source time stamp is out of reach.
         take = self._subscription.handle.take_message
         while msg is not None:
-            current = self.command(msg.data)
+            current = self.command(msg.data, stamp=self._stamp() if self._extended else None)
             if current is not None:
                 self._command.data = current
                 self._publisher.publish(self._command)
@@ -201,6 +256,22 @@ class CompensatorNode(Node):
             msg = taken[0] if taken is not None else None
 
     # -- parameters ---------------------------------------------------------------------
+    def _complete_model_request(self, parameters: List[Parameter]) -> List[Parameter]:
+        """Pre-set: a request with all five core keys switches omitted extensions off."""
+        names = {parameter.name for parameter in parameters}
+        if not names.issuperset(MODEL_KEYS):
+            return parameters
+        completed = list(parameters)
+        for key in _EXTENSION_KEYS:
+            if key in names or _is_off(self.get_parameter(key).value):
+                continue
+            off = EXTENSION_OFF[key]
+            if isinstance(off, list):
+                completed.append(Parameter(key, Type.DOUBLE_ARRAY, list(off)))
+            else:
+                completed.append(Parameter(key, Type.DOUBLE, off))
+        return completed
+
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         """Check only: type, range, whole model and limits; keep the candidate for apply."""
         try:
@@ -233,13 +304,23 @@ class CompensatorNode(Node):
                 msg = (f'{sorted(model_names)[0]}: model parameters must be set together in '
                        f'one set_parameters_atomically request; missing: {", ".join(missing)}')
                 raise ParameterRejected(msg)
-            model = MPIModel.from_params({key: values[key] for key in MODEL_KEYS})
-            model.inverse()  # (12)-(14), (22)-(25) must exist before the swap is promised
-            pending['model'] = model
+        if names.intersection(_ALL_MODEL_KEYS):
+            params = _model_params(values)
+            if params is None:
+                key = sorted(names.intersection(_EXTENSION_KEYS))[0]
+                msg = (f'{key}: a model extension needs the five model.* keys of Gamma; '
+                       'push them in the same set_parameters_atomically request')
+                raise ParameterRejected(msg)
+            model = extended_model_from_params(params)
+            gamma = model if isinstance(model, MPIModel) else model.model
+            gamma.inverse()  # (12)-(14), (22)-(25) must exist before the swap is promised
+            pending['model'] = (model, params)
         if names.intersection(_LIMIT_KEYS):
             pending['limits'] = _ordered_limits(values['output.min'], values['output.max'])
         if 'enabled' in names:
             pending['enabled'] = values['enabled']
+        if 'sample_period' in names:
+            pending['sample_period'] = values['sample_period']
         if 'diagnostics_period' in names:
             pending['diagnostics_period'] = values['diagnostics_period']
         return pending
@@ -253,8 +334,10 @@ class CompensatorNode(Node):
             self._compensator.set_limits(*pending['limits'])
         if 'enabled' in pending and self._compensator is not None:
             self._compensator.enabled = pending['enabled']
+        if 'sample_period' in pending and self._extended:
+            self._compensator.sample_period = pending['sample_period']
         if 'model' in pending:
-            self._install_model(pending['model'])
+            self._install_model(*pending['model'])
         if 'diagnostics_period' in pending:
             self.destroy_timer(self._timer)
             self._timer = self.create_timer(
@@ -265,6 +348,11 @@ class CompensatorNode(Node):
         _ordered_limits(values['output.min'], values['output.max'])
         given = [key for key in MODEL_KEYS if values[key] is not None]
         if not given:
+            extensions = [key for key in _EXTENSION_KEYS if not _is_off(values[key])]
+            if extensions:
+                msg = (f'{extensions[0]}: a model extension needs the five model.* keys of '
+                       'Gamma; add them to the parameters')
+                raise ParameterRejected(msg)
             self.get_logger().info(
                 'no model given: unconfigured, publishing nothing until a model arrives '
                 'through set_parameters_atomically')
@@ -273,19 +361,51 @@ class CompensatorNode(Node):
             missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
             msg = f'incomplete model in the parameters: missing {missing}'
             raise ParameterRejected(msg)
-        self._install_model(MPIModel.from_params({key: values[key] for key in MODEL_KEYS}))
+        params = _model_params(values)
+        self._install_model(extended_model_from_params(params), params)
 
-    def _install_model(self, model: MPIModel) -> None:
-        if self._compensator is None:
-            output_min = self.get_parameter('output.min').value
-            output_max = self.get_parameter('output.max').value
-            self._compensator = FeedforwardCompensator(
-                model, output_min=output_min, output_max=output_max,
-                enabled=self.get_parameter('enabled').value)
+    def _install_model(self, model: Any, params: Dict[str, Any]) -> None:
+        """Apply a validated model: swap within the same kind, else build a new compensator."""
+        old = self._compensator
+        if isinstance(model, DeadTimeModel):
+            self.get_logger().warning(
+                f'model.dead_time = {model.dead_time:g} s cannot be inverted causally: '
+                'compensating Gamma only; the displacement lags the desired one by it')
+        if isinstance(old, FeedforwardCompensator) and isinstance(
+                model, (MPIModel, DeadTimeModel)):
+            old.swap_model(model if isinstance(model, MPIModel) else model.model)
+        elif isinstance(old, ExtendedCompensator) and type(model) is type(old.model):
+            old.swap_model(model)
         else:
-            self._compensator.swap_model(model)
+            self._compensator = self._build_compensator(params, old)
+            self._extended = isinstance(self._compensator, ExtendedCompensator)
         self._model_version += 1
-        self.get_logger().info(f'model version {self._model_version} applied')
+        self._model_kind = _kind(model)
+        self.get_logger().info(
+            f'model version {self._model_version} applied ({self._model_kind})')
+
+    def _build_compensator(self, params: Dict[str, Any],
+                           old: Optional[Compensator]) -> Compensator:
+        """Build the compensator for ``params``; take over ``old``'s operating point."""
+        with warnings.catch_warnings():
+            # The dead-time MPIWarning is logged by _install_model.
+            warnings.simplefilter('ignore', MPIWarning)
+            new = compensator_from_params(
+                params, output_min=self.get_parameter('output.min').value,
+                output_max=self.get_parameter('output.max').value,
+                enabled=self.get_parameter('enabled').value,
+                sample_period=self.get_parameter('sample_period').value)
+        if old is not None:
+            # Bumpless across kinds: the new compensator starts from the applied current's
+            # turning points (its play state replayed through the new H, (14)) and the last
+            # command; its lag states start settled at that command.  Counters go on.
+            new.memory = old.memory
+            new.last_command = old.last_command
+            for key, value in old.counters.items():
+                if key in new.counters:
+                    new.counters[key] = value
+            new.swap_model(new.model)
+        return new
 
     # -- diagnostics --------------------------------------------------------------------
     def _publish_diagnostics(self) -> None:
@@ -326,6 +446,11 @@ class CompensatorNode(Node):
             status.level = DiagnosticStatus.OK
             status.message = 'compensating'
         values = dict(counters)
+        compensator = self._compensator
+        if compensator is not None:
+            values['extension'] = self._model_kind
+        if self._extended:
+            values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
         values.update(
             rate_hz=round(rate, 3),
             enabled=self.get_parameter('enabled').value,
@@ -372,6 +497,39 @@ def main(args: Optional[List[str]] = None) -> int:
             node.destroy_node()
         shutdown()
     return 0
+
+
+def _no_stamp() -> None:
+    return None
+
+
+def _is_off(value: Any) -> bool:
+    """Tell whether an extension key is unset or holds its "off" value (0, empty)."""
+    if value is None:
+        return True
+    if isinstance(value, (int, float)):
+        return value == 0.0
+    return len(value) == 0
+
+
+def _model_params(values: Dict[str, Any]) -> Optional[Dict[str, Any]]:
+    """Return the flat model parameters (core keys + extensions that are on), None if unset."""
+    if any(values[key] is None for key in MODEL_KEYS):
+        return None
+    params = {key: values[key] for key in MODEL_KEYS}
+    for keys in EXTENSION_KEYS.values():
+        if not all(_is_off(values[key]) for key in keys):
+            params.update({key: values[key] for key in keys if values[key] is not None})
+    return params
+
+
+def _kind(model: Any) -> str:
+    """Name the extension of a model: none, creep, ..., or dead_time (not compensated)."""
+    if isinstance(model, MPIModel):
+        return 'none'
+    if isinstance(model, DeadTimeModel):
+        return 'dead_time (not compensated)'
+    return str(model.cause)
 
 
 def _ordered_limits(output_min: float, output_max: float) -> tuple:

@@ -262,8 +262,9 @@ def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str,
         Node that owns the client (it is spun on a private executor while waiting).
     target_node : str
         Fully qualified target name, e.g. ``/compensator``.
-    parameters : Mapping[str, sequence of float]
-        The ``model.*`` keys (as from ``MPIModel.to_params()``).
+    parameters : Mapping[str, sequence of float or float]
+        The ``model.*`` keys (as from ``MPIModel.to_params()``, or an extended model's
+        ``to_params()``: its scalar keys are sent as doubles).
     timeout : float
         Longest wait [s] for the service to appear, and again for the answer.
 
@@ -281,10 +282,8 @@ def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str,
                    f'{target_node} running with the same ROS_DOMAIN_ID? Nothing was pushed')
             raise ParameterPushError(msg)
         request = SetParametersAtomically.Request()
-        request.parameters = [
-            Parameter(name, Type.DOUBLE_ARRAY, [float(v) for v in values]).to_parameter_msg()
-            for name, values in parameters.items()
-        ]
+        request.parameters = [_typed(name, values).to_parameter_msg()
+                              for name, values in parameters.items()]
         future = client.call_async(request)
         executor = SingleThreadedExecutor(context=node.context)
         executor.add_node(node)
@@ -343,3 +342,10 @@ def main(args: Optional[List[str]] = None) -> int:
             node.destroy_node()
         shutdown()
     return status
+
+
+def _typed(name: str, value: Any) -> Parameter:
+    """Return a double (scalar) or double-array parameter."""
+    if isinstance(value, (int, float)):
+        return Parameter(name, Type.DOUBLE, float(value))
+    return Parameter(name, Type.DOUBLE_ARRAY, [float(v) for v in value])

@@ -21,7 +21,9 @@ Truth (``truth``, read-only)
     streamed). ``noise_std`` adds seeded Gaussian sensor noise to either truth.
 
 Excitation mode (``excitation.enabled:=true``)
-    The node drives itself with :func:`mpi_ros.excitation.identification_excitation`:
+    The node drives itself with :func:`mpi_ros.excitation.identification_excitation`
+    (or, with ``excitation.signal:=diagnostic``, the validation record of the diagnosis,
+    :func:`mpi_ros.diagnosis.signatures.diagnostic_excitation`):
     it publishes each sample's current on ``current_command`` and the plant's answer on
     ``displacement``, on the schedule's own time base (so the data do not depend on
     timer jitter). It subscribes to ``current_command`` only afterwards, so neither its
@@ -57,6 +59,7 @@ from .parameters import (
 )
 from .spinning import events_executor, shutdown, spin
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
+from ..diagnosis.signatures import diagnostic_excitation
 from ..errors import MPIError
 from ..excitation import identification_excitation
 from ..model import MPIModel
@@ -120,6 +123,18 @@ PARAMETERS = (
     ParameterSpec('excitation.bursts', Type.BOOL, True,
                   'Include high-frequency bursts (expose rate dependence) in the excitation',
                   read_only=True),
+    ParameterSpec('excitation.signal', Type.STRING, 'identification',
+                  'Excitation signal: identification (decaying loops, holds, bursts; '
+                  'excitation.duration long) or diagnostic (the validation record of '
+                  'mpi-ros diagnose: major loops, paired holds, bursts at 5-40 Hz; its '
+                  'length follows from excitation.repeats and excitation.hold_duration)',
+                  choices=('identification', 'diagnostic'), read_only=True),
+    ParameterSpec('excitation.hold_duration', Type.DOUBLE, 2.0,
+                  'Length of each constant-current hold of the excitation', 's',
+                  value_range=(0.0, 3600.0), read_only=True),
+    ParameterSpec('excitation.repeats', Type.INTEGER, 2,
+                  'excitation.signal:=diagnostic: number of loop-and-hold blocks',
+                  value_range=(1, 100), read_only=True),
     ParameterSpec('excitation.exit_when_done', Type.BOOL, True,
                   'Stop the node when the excitation is done (false: go on as a plant)',
                   read_only=True),
@@ -187,11 +202,7 @@ class PlantSimulatorNode(Node):
         self._excitation = None
         if values['excitation.enabled']:
             self._command_publisher = self.create_publisher(Float64, 'current_command', qos)
-            schedule_t, schedule_i = identification_excitation(
-                values['excitation.duration'], sample_rate=values['excitation.sample_rate'],
-                bias=values['excitation.bias'], amplitude=values['excitation.amplitude'],
-                seed=values['seed'], holds=values['excitation.holds'],
-                bursts=values['excitation.bursts'])
+            schedule_t, schedule_i = _excitation_schedule(values)
             self._excitation = (np.asarray(schedule_t, dtype=float),
                                 np.asarray(schedule_i, dtype=float))
             self._excitation_index = 0
@@ -199,8 +210,8 @@ class PlantSimulatorNode(Node):
             self._excitation_stamp = self._now()
             self._excitation_timer = self.create_timer(_EXCITATION_TICK_S, self._excite)
             self.get_logger().info(
-                f'excitation: {len(schedule_t)} samples over '
-                f'{values["excitation.duration"]:g} s')
+                f'{values["excitation.signal"]} excitation: {len(schedule_t)} samples over '
+                f'{schedule_t[-1] - schedule_t[0]:g} s')
         self._qos = qos
         self._subscription = None
         if self._excitation is None:
@@ -374,3 +385,15 @@ def main(args: Optional[List[str]] = None) -> int:
             node.destroy_node()
         shutdown()
     return 0
+
+
+def _excitation_schedule(values: Dict[str, Any]) -> tuple:
+    """Return the (time [s], current [A]) schedule of the excitation mode."""
+    common = {'sample_rate': values['excitation.sample_rate'],
+              'bias': values['excitation.bias'], 'amplitude': values['excitation.amplitude'],
+              'seed': values['seed'], 'hold_duration': values['excitation.hold_duration']}
+    if values['excitation.signal'] == 'diagnostic':
+        return diagnostic_excitation(repeats=values['excitation.repeats'], **common)
+    return identification_excitation(values['excitation.duration'],
+                                     holds=values['excitation.holds'],
+                                     bursts=values['excitation.bursts'], **common)

@@ -1,0 +1,259 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The compensator node with extended models (creep, rate dependence, thermal drift, dead time).
+
+In-process on a private context, like ``test_compensator_node.py``: parameter updates go
+through ``Node.set_parameters_atomically``, the function rclpy's parameter service calls.
+"""
+
+import math
+import time
+
+from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.extensions import compensator_from_params, ExtendedCompensator
+from mpi_ros.nodes.compensator import CompensatorNode
+from mpi_ros.nodes.parameters import MODEL_KEYS
+from mpi_ros.nodes.spinning import events_executor
+import numpy as np
+import pytest
+import rclpy
+from rclpy.parameter import Parameter
+from std_msgs.msg import Float64
+
+from .test_compensator_node import MODEL_A, OUTPUT_MAX, OUTPUT_MIN
+
+CREEP = {'model.creep.time_constants': [0.01, 0.1, 1.0],
+         'model.creep.weights': [0.05, 0.05, 0.1]}
+RATE = {'model.rate_dependence.time_constant': 0.005}
+THERMAL = {'model.thermal_drift.time_constant': 5.0, 'model.thermal_drift.weight': 0.02}
+DEAD = {'model.dead_time': 0.01}
+
+#: Desired displacements [m] (inside the operating range) and their times [s] at 1 kHz.
+DESIRED = 2.0e-5 + 1.2e-5 * np.sin(np.linspace(0.0, 12.0, 400))
+STAMPS = 100.0 + 1.0e-3 * np.arange(DESIRED.size)
+
+
+def typed(mapping):
+    """Return rclpy Parameters with explicit types (lists: double arrays)."""
+    out = []
+    for name, value in mapping.items():
+        if isinstance(value, list):
+            out.append(Parameter(name, Parameter.Type.DOUBLE_ARRAY, [float(v) for v in value]))
+        else:
+            out.append(Parameter(name, Parameter.Type.DOUBLE, float(value)))
+    return out
+
+
+def limits():
+    return typed({'output.min': OUTPUT_MIN, 'output.max': OUTPUT_MAX})
+
+
+@pytest.fixture
+def make_node(ros_context):
+    nodes = []
+
+    def make(overrides=()):
+        node = CompensatorNode(context=ros_context, parameter_overrides=list(overrides))
+        nodes.append(node)
+        return node
+
+    yield make
+    for node in nodes:
+        node.destroy_node()
+
+
+def run(node, desired=DESIRED, stamps=STAMPS):
+    return np.array([node.command(float(d), stamp=float(t)) for d, t in zip(desired, stamps)])
+
+
+def core(params):
+    comp = compensator_from_params(params, output_min=OUTPUT_MIN, output_max=OUTPUT_MAX,
+                                   sample_period=1e-3)
+    if isinstance(comp, ExtendedCompensator):
+        return np.array([comp.command(float(d), time=float(t))
+                         for d, t in zip(DESIRED, STAMPS)])
+    return np.array([comp.command(float(d)) for d in DESIRED])
+
+
+@pytest.mark.parametrize('extension', [CREEP, RATE, THERMAL], ids=['creep', 'rate', 'thermal'])
+def test_extended_set_is_accepted_and_used(make_node, extension):
+    node = make_node(limits() + typed(MODEL_A))
+    result = node.set_parameters_atomically(typed(dict(MODEL_A, **extension)))
+    assert result.successful, result.reason
+    assert isinstance(node.compensator, ExtendedCompensator)
+    assert node.model_version == 2
+    commands = run(node)
+    assert np.all(np.isfinite(commands))
+    assert np.all((commands >= OUTPUT_MIN) & (commands <= OUTPUT_MAX))
+    # The node computes what the core's ExtendedCompensator computes from the same
+    # inputs and times (the node's swap replays the same start, so exactly equal) ...
+    np.testing.assert_allclose(commands, core(dict(MODEL_A, **extension)), rtol=0, atol=1e-12)
+    # ... which is not the plain compensator's answer.
+    assert np.max(np.abs(commands - core(MODEL_A))) > 1e-3
+    assert node.counters['bad_time'] == 0
+    values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+    assert values['extension'] == next(iter(extension)).split('.')[1]
+    assert values['bad_time'] == '0'
+    assert len(values['slow_state'].split()) == node.compensator.slow_state.size
+
+
+def test_extended_model_from_the_params_file(make_node):
+    node = make_node(limits() + typed(dict(MODEL_A, **RATE)))
+    assert isinstance(node.compensator, ExtendedCompensator)
+    np.testing.assert_allclose(run(node), core(dict(MODEL_A, **RATE)), rtol=0, atol=1e-12)
+
+
+def test_extended_compensator_survives_extreme_input(make_node):
+    node = make_node(limits() + typed(dict(MODEL_A, **CREEP)))
+    for k, desired in enumerate((math.nan, math.inf, -math.inf, 1e300, -1e300, 1.0, 2e-5)):
+        current = node.command(desired, stamp=k * 1e-3)
+        assert math.isfinite(current) and OUTPUT_MIN <= current <= OUTPUT_MAX
+    node.command(2e-5, stamp=0.0)       # time going back: counted, nominal interval used
+    assert node.counters['bad_time'] == 1
+
+
+def _old_running(node, old_compensator, old_model):
+    assert node.compensator is old_compensator
+    assert node.compensator.model is old_model
+    assert node.model_version == 1
+
+
+BAD_EXTENSIONS = {
+    'negative creep weight': ('model.creep.weights',
+                              dict(CREEP, **{'model.creep.weights': [0.05, -0.1, 0.1]})),
+    'creep weights shorter': ('model.creep.weights',
+                              dict(CREEP, **{'model.creep.weights': [0.05, 0.1]})),
+    'zero creep time constant': ('model.creep.time_constants',
+                                 dict(CREEP, **{'model.creep.time_constants': [0.0, 0.1, 1.0]})),
+    'creep weights missing': ('model.creep.weights',
+                              {'model.creep.time_constants': [0.1, 1.0]}),
+    'negative rate time constant': ('model.rate_dependence.time_constant',
+                                    {'model.rate_dependence.time_constant': -0.005}),
+    'thermal time constant 0 with a weight': ('model.thermal_drift.time_constant',
+                                              {'model.thermal_drift.time_constant': 0.0,
+                                               'model.thermal_drift.weight': 0.02}),
+    'two extensions': ('creep, rate_dependence', dict(CREEP, **RATE)),
+}
+
+
+@pytest.mark.parametrize('case', sorted(BAD_EXTENSIONS))
+def test_bad_extension_is_rejected_and_old_model_kept(make_node, case):
+    key, bad = BAD_EXTENSIONS[case]
+    node = make_node(limits() + typed(MODEL_A))
+    old_compensator, old_model = node.compensator, node.compensator.model
+    before = node.command(2.0e-5)
+    result = node.set_parameters_atomically(typed(dict(MODEL_A, **bad)))
+    assert not result.successful
+    assert key in result.reason
+    _old_running(node, old_compensator, old_model)
+    assert node.command(2.0e-5) == pytest.approx(before, abs=1e-12)
+    # The same extension keys alone (on the running Gamma) are rejected as well.
+    result = node.set_parameters_atomically(typed(bad))
+    assert not result.successful and key in result.reason
+    _old_running(node, old_compensator, old_model)
+
+
+def test_integer_creep_array_is_rejected_naming_the_key(make_node):
+    node = make_node(limits() + typed(MODEL_A))
+    result = node.set_parameters_atomically(
+        typed(MODEL_A) + [Parameter('model.creep.time_constants', value=[1, 2])])
+    assert not result.successful and 'model.creep.time_constants' in result.reason
+    assert isinstance(node.compensator, FeedforwardCompensator)
+
+
+def test_extension_without_a_model_is_rejected(make_node):
+    node = make_node(limits())
+    result = node.set_parameters_atomically(typed(RATE))
+    assert not result.successful
+    assert 'model.rate_dependence.time_constant' in result.reason
+    assert node.compensator is None
+
+
+def test_plain_creep_plain_switching(make_node):
+    node = make_node(limits() + typed(MODEL_A))
+    run(node, DESIRED[:200], STAMPS[:200])
+    desired = float(DESIRED[200])
+    reference = node.compensator.state.copy()
+
+    # plain -> creep: an ExtendedCompensator taking over the operating point.
+    assert node.set_parameters_atomically(typed(dict(MODEL_A, **CREEP))).successful
+    assert isinstance(node.compensator, ExtendedCompensator)
+    np.testing.assert_allclose(node.compensator.state, reference, atol=1e-12)
+    assert node.counters['messages'] == 200                 # counters go on
+
+    # creep -> plain (the five core keys only): creep switched off, parameters say so.
+    assert node.set_parameters_atomically(typed(MODEL_A)).successful
+    assert isinstance(node.compensator, FeedforwardCompensator)
+    assert list(node.get_parameter('model.creep.weights').value) == []
+    assert node.model_version == 3
+    # No message in between: the round trip gives back the plain operating point.
+    np.testing.assert_allclose(node.compensator.state, reference, atol=1e-12)
+    plain_reference = make_node(limits() + typed(MODEL_A))
+    run(plain_reference, DESIRED[:200], STAMPS[:200])
+    assert node.command(desired) == pytest.approx(plain_reference.command(desired), abs=1e-12)
+
+    # plain -> creep -> creep (same kind): swap_model, bumpless.
+    assert node.set_parameters_atomically(typed(dict(MODEL_A, **CREEP))).successful
+    commands = run(node, DESIRED[201:300], STAMPS[201:300])
+    compensator = node.compensator
+    assert node.set_parameters_atomically(typed(dict(MODEL_A, **CREEP))).successful
+    assert node.compensator is compensator                  # swapped, not rebuilt
+    after = node.command(float(DESIRED[299]), stamp=float(STAMPS[299]) + 1e-6)
+    assert after == pytest.approx(commands[-1], abs=1e-6)
+    # creep -> rate: pushing another extension replaces the creep one.
+    assert node.set_parameters_atomically(typed(dict(MODEL_A, **RATE))).successful
+    assert node.compensator.model.cause == 'rate_dependence'
+    assert list(node.get_parameter('model.creep.time_constants').value) == []
+
+
+def test_dead_time_compensates_gamma_and_warns(make_node):
+    node = make_node(limits() + typed(MODEL_A))
+    result = node.set_parameters_atomically(typed(dict(MODEL_A, **DEAD)))
+    assert result.successful, result.reason
+    assert isinstance(node.compensator, FeedforwardCompensator)
+    values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+    assert values['extension'] == 'dead_time (not compensated)'
+    np.testing.assert_allclose(run(node), core(MODEL_A), rtol=0, atol=1e-12)
+    assert node.set_parameters_atomically(typed(MODEL_A)).successful
+    assert node.get_parameter('model.dead_time').value == 0.0
+
+
+def test_messages_through_the_events_executor(ros_context, make_node):
+    """The message path (callback with message info, drained queue) feeds the time stamps."""
+    node = make_node(limits() + typed(dict(MODEL_A, **RATE)))
+    helper = rclpy.create_node('desired_source', context=ros_context)
+    received = []
+    publisher = helper.create_publisher(Float64, 'desired_displacement', 1000)
+    helper.create_subscription(Float64, 'current_command', lambda m: received.append(m.data),
+                               1000)
+    executor = events_executor(ros_context)
+    executor.add_node(node)
+    executor.add_node(helper)
+    try:
+        deadline = time.monotonic() + 5.0
+        while publisher.get_subscription_count() < 1 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        for value in DESIRED[:100]:
+            publisher.publish(Float64(data=float(value)))
+            time.sleep(1e-3)
+            executor.spin_once(timeout_sec=0.0)
+        deadline = time.monotonic() + 5.0
+        while len(received) < 100 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        executor.shutdown()
+        helper.destroy_node()
+    assert len(received) == 100
+    assert np.all(np.isfinite(received))
+    assert np.all((np.array(received) >= OUTPUT_MIN) & (np.array(received) <= OUTPUT_MAX))
+    assert node.counters['bad_time'] == 0
+    assert node.counters['messages_out'] == 100
+
+
+def test_model_keys_declared_with_units(make_node):
+    node = make_node(limits())
+    for key in ('model.creep.time_constants', 'model.rate_dependence.time_constant',
+                'model.thermal_drift.time_constant', 'model.dead_time'):
+        assert '[s]' in node.describe_parameter(key).description
+    assert '[1/A]' in node.describe_parameter('model.thermal_drift.weight').description
+    assert all(node.has_parameter(key) for key in MODEL_KEYS)

@@ -1,0 +1,76 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""``mpi-ros diagnose`` options: ``--window`` and ``--excitation`` (exit codes via main)."""
+
+import json
+
+from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.cli import main
+from mpi_ros.diagnosis.signatures import diagnostic_excitation
+from mpi_ros.excitation import identification_excitation
+from mpi_ros.recordings import read_csv_table, write_csv_columns
+import numpy as np
+import pytest
+
+
+def test_excitation_is_written_as_csv(tmp_path):
+    out = tmp_path / 'excitation.csv'
+    assert main(['diagnose', '--excitation', str(out), '--seed', '3']) == 0
+    header, table = read_csv_table(out)
+    t, current = diagnostic_excitation(sample_rate=1000.0, seed=3)
+    assert header == ['time', 'current']
+    np.testing.assert_array_equal(table[:, 0], t)
+    np.testing.assert_array_equal(table[:, 1], current)
+
+
+def test_excitation_with_too_low_a_rate_fails(tmp_path, capsys):
+    out = tmp_path / 'excitation.csv'
+    assert main(['diagnose', '--excitation', str(out), '--excitation-rate', '100']) == 1
+    assert 'error: sample_rate' in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_usage_errors_exit_2(tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        main(['diagnose'])
+    assert exc.value.code == 2
+    with pytest.raises(SystemExit) as exc:
+        main(['diagnose', str(tmp_path / 'data.csv')])     # no --json/--report
+    assert exc.value.code == 2
+
+
+def _write(path, t, x, cfg, seed):
+    y = MagnetostrictiveActuator(cfg, seed=seed).simulate(t, x)
+    write_csv_columns(path, {'time': t, 'current': x, 'displacement': y})
+
+
+def test_window_diagnoses_only_the_window(tmp_path, capsys):
+    """DATA starts with 3 s of a saturated sensor; the window keeps the good part."""
+    cfg = ActuatorConfig(noise_std_m=2e-8, dead_time_s=0.01)
+    t, x = identification_excitation(20.0, sample_rate=1000.0, seed=1)
+    y = MagnetostrictiveActuator(cfg, seed=1).simulate(t, x)
+    t_bad = np.arange(3000) * 1e-3
+    x_bad = 1.0 + 0.5 * np.sin(2.0 * np.pi * t_bad)
+    write_csv_columns(tmp_path / 'data.csv', {
+        'time': np.concatenate([t_bad, t + 3.0]) + 5.0,           # need not start at 0
+        'current': np.concatenate([x_bad, x]),
+        'displacement': np.concatenate([np.full(3000, 4.0e-5), y])})
+    tv, xv = diagnostic_excitation(sample_rate=1000.0, seed=2, repeats=1, hold_duration=1.5)
+    _write(tmp_path / 'val.csv', tv, xv, cfg, 2)
+    common = ['--validate', str(tmp_path / 'val.csv'), '--input-column', 'current',
+              '--output-column', 'displacement', '--order', '8', '4',
+              '--report', str(tmp_path / 'report')]
+    argv = ['diagnose', str(tmp_path / 'data.csv'), '--window', '3', '23',
+            '--json', str(tmp_path / 'report.json'), *common]
+    assert main(argv) == 0
+    report = json.loads((tmp_path / 'report.json').read_text())
+    assert report['data']['samples'] == t.size
+    assert report['data']['source'].endswith('[3 s, 23 s]')
+    assert report['cause'] == 'dead_time'
+    assert capsys.readouterr().out.strip() == 'dead_time'
+
+    for window in (['10', '5'], ['100', '200']):
+        argv = ['diagnose', str(tmp_path / 'data.csv'), '--window', *window,
+                '--json', str(tmp_path / 'bad.json'), *common]
+        assert main(argv) == 1
+        assert 'error: --window' in capsys.readouterr().err
+    assert not (tmp_path / 'bad.json').exists()
