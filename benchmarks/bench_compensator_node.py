@@ -25,12 +25,12 @@ runs a short soak through it (``test/faults/test_soak.py``).
 
 import argparse
 import os
+from pathlib import Path
 import random
 import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
@@ -77,7 +77,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         ``(start_s, p50, p99, p999)`` in us), ``nonfinite`` and ``outside_limits``
         (command counts), ``command_range`` [A], ``rss_kib`` (list of ``(t_s, KiB)``),
         ``rss_growth_mib`` (from t=1 s to the end), ``compensator_exit``, ``cores``,
-        ``domain_id``, ``workdir``.
+        ``domain_id``, ``workdir``, ``processes_left`` (PIDs of started processes still
+        running at the end; empty).
 
     """
     import rclpy
@@ -147,6 +148,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         if receiver.poll() is None:
             receiver.kill()
             receiver.wait()
+    left = [p.pid for p in (comp.proc, receiver) if p.poll() is None]
     stamps = np.load(out)
     values = np.load(out.replace('.npy', '_values.npy'))
     n = stamps.size
@@ -160,7 +162,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'command_range': (float(values.min()), float(values.max())) if n else None,
         'latency_us': {}, 'windows': [], 'rss_kib': rss,
         'rss_growth_mib': (rss[-1][1] - rss[1][1]) / 1024 if len(rss) > 2 else None,
-        'compensator_exit': status, 'workdir': str(tmp),
+        'compensator_exit': status, 'workdir': str(tmp), 'processes_left': left,
     }
     if n:
         p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])

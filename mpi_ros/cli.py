@@ -64,10 +64,26 @@ def _read_data(path: str, args: argparse.Namespace):  # noqa: ANN202
     return read_signals(path, input_topic=args.input_topic, output_topic=args.output_topic)
 
 
+def _check_output(path: str | None, option: str) -> None:
+    """Fail before any work when an output file cannot be created."""
+    if path is None:
+        return
+    target = Path(path)
+    if not target.parent.is_dir():
+        msg = (f'{option} {target}: directory {target.parent} does not exist; create it '
+               'first (nothing was written)')
+        raise MPIError(msg)
+    if target.is_dir():
+        msg = f'{option} {target} is a directory; give a file name (nothing was written)'
+        raise MPIError(msg)
+
+
 def _cmd_identify(args: argparse.Namespace) -> int:
     from .identification import identify
     from .params import write_params_yaml
     from .recordings import atomic_write
+    _check_output(args.output, '--output')
+    _check_output(args.json, '--json')
     data = _read_data(args.data, args)
     order = _parse_order(args.order)
     _progress(f'identifying from {len(data.time)} samples of {args.data} '
@@ -81,14 +97,27 @@ def _cmd_identify(args: argparse.Namespace) -> int:
               f'{100 * result.nonlinearity_error:.2f} %, relative RMS error '
               f'{100 * result.rms_error:.3f} % ({result.solve_time:.2f} s)')
     summary = dict(result.summary(), source=str(args.data))
-    write_params_yaml(args.output, result.model.to_params(), node_name=args.node_name,
-                      header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
-                              f'order n={n}, l={l}; nonlinearity error (37) '
-                              f'{100 * result.nonlinearity_error:.2f} %'))
+    # Both files appear only when both are complete: each is written to a temporary
+    # file and renamed; a YAML this run created is removed again if the JSON fails.
+    created = not Path(args.output).exists()
+    try:
+        write_params_yaml(args.output, result.model.to_params(), node_name=args.node_name,
+                          header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
+                                  f'order n={n}, l={l}; nonlinearity error (37) '
+                                  f'{100 * result.nonlinearity_error:.2f} %'))
+    except OSError as err:
+        msg = f'cannot write --output {args.output}: {err}'
+        raise MPIError(msg) from err
+    if args.json:
+        try:
+            with atomic_write(args.json) as f:
+                json.dump(summary, f, indent=2)
+        except BaseException:
+            if created:
+                Path(args.output).unlink(missing_ok=True)
+            raise
     _progress(f'wrote {args.output}')
     if args.json:
-        with atomic_write(args.json) as f:
-            json.dump(summary, f, indent=2)
         _progress(f'wrote {args.json}')
     return 0
 

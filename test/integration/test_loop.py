@@ -7,8 +7,6 @@ Each test module runs on its own ``ROS_DOMAIN_ID`` (the ``ros_env`` fixture of
 started and stopped here, by PID.
 """
 
-import os
-
 from mpi_ros import identify, MPIModel
 from mpi_ros.compensation import FeedforwardCompensator, operating_range
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
