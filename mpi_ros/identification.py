@@ -191,6 +191,33 @@ def _check_excitation(x: FloatArray, y: FloatArray, n: int, l: int) -> None:  # 
         msg = ('the current is constant: a hysteresis model needs an excitation that moves'
                ' the input up and down over the operating range')
         raise IdentificationError(msg)
+    if n > 0:
+        # A play with threshold r only leaves its initial loading curve after an input
+        # reversal larger than 2 r: without one, H degenerates to a static map and the
+        # weights are not identifiable.
+        r_1 = float(np.max(np.abs(x))) / (n + 1)                                  # (28)
+        largest = _largest_reversal(x)
+        if largest <= 2.0 * r_1:
+            found = 'never reverses' if largest == 0.0 else (
+                f'reverses by at most {largest:.4g}')
+            msg = (f'too little excitation to identify order n={n}: the current {found}, but'
+                   f' the smallest play threshold r_H1 = {r_1:.4g} needs reversals larger than'
+                   f' {2 * r_1:.4g}; record an excitation with larger up-and-down sweeps'
+                   ' (minor loops), or lower n')
+            raise IdentificationError(msg)
+
+
+def _largest_reversal(x: FloatArray) -> float:
+    # Largest monotone excursion that follows a change of direction (turning point).
+    step = np.diff(x)
+    step = step[step != 0.0]
+    if step.size < 2:
+        return 0.0
+    turns = np.flatnonzero(np.sign(step[1:]) != np.sign(step[:-1])) + 1
+    if turns.size == 0:
+        return 0.0
+    levels = np.concatenate([[0.0], np.cumsum(step)])[np.concatenate([turns, [step.size]])]
+    return float(np.max(np.abs(np.diff(levels))))
 
 
 def generalized_error_gram(*blocks: FloatArray) -> FloatArray:

@@ -155,3 +155,13 @@ def test_summary_is_json_ready():
     data = json.loads(json.dumps(summary))
     assert data['order'] == [2, 1] and data['samples'] == 2001
     assert {'nonlinearity_error', 'rms_error'} <= set(data)
+
+
+@pytest.mark.parametrize('x, match', [
+    (np.linspace(0.0, 1.8, 2000), 'never reverses'),                         # a ramp
+    (1.0 + 1e-3 * np.sin(np.linspace(0, 60, 3000)), 'reverses by at most'),  # 1 mA wiggle
+])
+def test_too_little_excitation_for_the_order(x, match):
+    with pytest.raises(IdentificationError, match=f'too little excitation.*{match}'):
+        identify(x, 1e-5 * x ** 2, n=14, l=7)
+    identify(x, 1e-5 * x ** 2, n=0, l=2)              # a static map is still identifiable

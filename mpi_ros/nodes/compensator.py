@@ -60,8 +60,9 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64
 
 from .parameters import (
-    check_parameter, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS, MODEL_KEYS,
-    MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
+    check_parameter, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
+    harden_parameter_services, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
+    ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import events_executor, shutdown, spin
 from ..compensation import FeedforwardCompensator
@@ -155,6 +156,7 @@ class CompensatorNode(Node):
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         declare_parameters(self, PARAMETERS)
+        harden_parameter_services(self)
         self._declaring = False
         # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
         # Time object per message) or None: sample_period apart.

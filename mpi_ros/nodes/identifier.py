@@ -29,8 +29,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from .parameters import (
-    check_parameter, declare_parameters, MODEL_KEYS, ParameterRejected, ParameterSpec,
-    specs_by_name,
+    check_parameter, declare_parameters, harden_parameter_services, MODEL_KEYS,
+    ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import shutdown
 from .. import IdentificationResult, identify
@@ -125,6 +125,7 @@ class IdentifierNode(Node):
         super().__init__(node_name, **kwargs)
         self.add_on_set_parameters_callback(self._validate_parameters)
         declare_parameters(self, PARAMETERS)
+        harden_parameter_services(self)
 
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         try:

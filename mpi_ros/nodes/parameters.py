@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import math
 from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                SetParametersResult)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -25,6 +26,7 @@ from ..extensions.rate_dependence import RATE_TIME_CONSTANT
 from ..extensions.thermal_drift import THERMAL_TIME_CONSTANT, THERMAL_WEIGHT
 
 __all__ = [
+    'harden_parameter_services',
     'EXTENSION_OFF',
     'EXTENSION_PARAMETERS',
     'MODEL_KEYS',
@@ -326,3 +328,46 @@ def _plain(value: Any) -> Any:
     if value is None or isinstance(value, (bool, int, float, str)):
         return value
     return list(value)
+
+
+def harden_parameter_services(node: Node) -> None:
+    """
+    Answer undecodable ``set_parameters*`` requests with a refusal instead of dying.
+
+    rclpy's parameter service decodes each parameter message outside its ``try``: a
+    message with an unknown type (any process on the domain can send one) raises
+    ``ValueError`` out of the executor and ends the node.  The wrapped callbacks decode
+    the whole request first; if any parameter cannot be decoded, every parameter of the
+    request is refused with a reason and nothing is applied (``set_parameters`` would
+    otherwise apply the ones before the bad one).
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Node whose parameter services to harden (call after the node is created).
+
+    """
+    for service in node.services:
+        name = service.srv_name.rsplit('/', 1)[-1]
+        if name not in ('set_parameters', 'set_parameters_atomically'):
+            continue
+        service.callback = _refusing_undecodable(service.callback, name)
+
+
+def _refusing_undecodable(callback: Any, name: str) -> Any:
+    def guarded(request: Any, response: Any) -> Any:
+        for i, message in enumerate(request.parameters):
+            try:
+                Parameter.from_parameter_msg(message)
+            except (TypeError, ValueError) as err:
+                reason = (f'parameter {message.name!r} (item {i}) cannot be decoded: {err};'
+                          ' the whole request was refused, nothing changed')
+                refused = SetParametersResult(successful=False, reason=reason)
+                if name == 'set_parameters':
+                    response.results = [refused for _ in request.parameters]
+                else:
+                    response.result = refused
+                return response
+        return callback(request, response)
+
+    return guarded

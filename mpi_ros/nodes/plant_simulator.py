@@ -54,8 +54,8 @@ from rclpy.task import Future
 from std_msgs.msg import Float64
 
 from .parameters import (
-    check_parameter, declare_parameters, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
-    ParameterRejected, ParameterSpec, specs_by_name,
+    check_parameter, declare_parameters, harden_parameter_services, MODEL_KEYS,
+    MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import events_executor, shutdown, spin
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
@@ -176,6 +176,7 @@ class PlantSimulatorNode(Node):
         super().__init__(node_name, **kwargs)
         self.add_on_set_parameters_callback(self._validate_parameters)
         declare_parameters(self, PARAMETERS)
+        harden_parameter_services(self)
         values = parameter_values(self, list(_SPECS))
         self._values = values
         self._rng = np.random.default_rng(values['seed'])

@@ -139,9 +139,6 @@ def test_identify_bad_input_fails_cleanly(tmp_path, capsys, name, make, needle):
     assert [p.name for p in data_dir.iterdir() if p.name.startswith('.')] == []
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    'known gap: identify() checks sample count and a constant input, but not reversals; '
-    'a monotone ramp (no hysteresis loop) fits order 14,7 without an error'))
 def test_identify_refuses_data_without_a_reversal(tmp_path, capsys):
     t = np.arange(2000) / 200.0
     current = 0.2 + 1.6 * t / t[-1]                       # one ramp up: no loop at all

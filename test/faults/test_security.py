@@ -175,9 +175,6 @@ def test_no_parameter_service_accepts_an_unsafe_change(nodes, driver, bags):
                                rtol=0, atol=1e-12)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    'known bug: rclpy.parameter_service calls Parameter.from_parameter_msg outside its '
-    'try, so a ValueError escapes the executor and ends the node (docs/reliability.md)'))
 @pytest.mark.parametrize('service', ['set_parameters', 'set_parameters_atomically'])
 def test_malformed_parameter_message_does_not_end_the_node(nodes, driver, bags, service):
     _, params_a, yaml_a = bags['a']
