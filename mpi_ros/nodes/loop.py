@@ -16,6 +16,8 @@ import sys
 import time
 from typing import Any, Callable, Optional
 
+import numpy as np
+import numpy.typing as npt
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -178,6 +180,50 @@ class LoopDriver(Node):
             self.wait_for(lambda: self.displacement is not None,
                           'the plant simulator to answer', timeout)
         return float(self.displacement)
+
+    def exchange_paced(self, publisher: Any, values: npt.ArrayLike, times: npt.ArrayLike, *,
+                       timeout: float = 5.0) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Publish ``values[k]`` at ``times[k]`` in real time, each in lock step.
+
+        The plant simulator and the compensator time a message by their steady clock at
+        its arrival, so creep or an eddy-current lag see the real command rate only if
+        the samples are sent on schedule: sample ``k`` is published when ``times[k] -
+        times[0]`` seconds have passed since the first one (or at once, if the previous
+        answer came later), then its answer is awaited as in :meth:`exchange`.
+
+        Parameters
+        ----------
+        publisher : rclpy.publisher.Publisher
+            ``current_pub`` or ``desired_pub``.
+        values : array_like of float, shape (N,)
+            Currents [A] or desired displacements [m].
+        times : array_like of float, shape (N,)
+            Schedule [s], non-decreasing.
+        timeout : float
+            Longest wait for each answer [s].
+
+        Returns
+        -------
+        sent : ndarray of float, shape (N,)
+            Time of each publication [s] on the schedule's time base (``sent - times`` is
+            how late each sample went out).
+        displacement : ndarray of float, shape (N,)
+            Measured displacement each sample caused [m].
+
+        """
+        value_array = np.asarray(values, dtype=np.float64)
+        schedule = np.asarray(times, dtype=np.float64)
+        sent = np.empty(value_array.size)
+        displacement = np.empty(value_array.size)
+        start = time.monotonic() - float(schedule[0]) if schedule.size else 0.0
+        for k in range(value_array.size):
+            wait = start + float(schedule[k]) - time.monotonic()
+            if wait > 0.0:
+                time.sleep(wait)
+            sent[k] = time.monotonic() - start
+            displacement[k] = self.exchange(publisher, float(value_array[k]), timeout)
+        return sent, displacement
 
     def destroy_node(self) -> None:
         """Shut the private executor down, then destroy the node."""
