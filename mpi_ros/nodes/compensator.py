@@ -44,16 +44,12 @@ nobody asked for.
 """
 
 import math
-import sys
 import time
 from typing import Any, Dict, List, Optional, Union
 import warnings
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
-import rclpy
-from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -64,7 +60,7 @@ from .parameters import (
     harden_parameter_services, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
     ParameterRejected, ParameterSpec, specs_by_name,
 )
-from .spinning import events_executor, shutdown, spin
+from .spinning import run_node_main
 from ..compensation import FeedforwardCompensator
 from ..errors import MPIError, MPIWarning
 from ..extensions import (
@@ -481,23 +477,7 @@ def main(args: Optional[List[str]] = None) -> int:
         Exit status: 0 on shutdown, 1 when the configured model or limits are invalid.
 
     """
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = CompensatorNode()
-        executor = events_executor(node.context)
-        executor.add_node(node)
-        spin(executor, node.context)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (MPIError, ParameterRejected, InvalidParameterTypeException,
-            InvalidParameterValueException) as err:
-        print(f'error: compensator: {err}', file=sys.stderr, flush=True)
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        shutdown()
+    return run_node_main(CompensatorNode, 'compensator', args)
     return 0
 
 

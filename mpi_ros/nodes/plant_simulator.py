@@ -38,15 +38,11 @@ Recording (``record.path``)
 
 from dataclasses import fields, replace
 import math
-import sys
 import time
 from typing import Any, Dict, List, Optional
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
-import rclpy
-from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -57,10 +53,9 @@ from .parameters import (
     check_parameter, declare_parameters, harden_parameter_services, MODEL_KEYS,
     MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
 )
-from .spinning import events_executor, shutdown, spin
+from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
 from ..diagnosis.signatures import diagnostic_excitation
-from ..errors import MPIError
 from ..excitation import identification_excitation
 from ..model import MPIModel
 from ..recordings import BagRecorder
@@ -368,24 +363,9 @@ def main(args: Optional[List[str]] = None) -> int:
         0 on shutdown or after the excitation; 1 when the truth cannot be built.
 
     """
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = PlantSimulatorNode()
-        executor = events_executor(node.context)
-        executor.add_node(node)
-        spin(executor, node.context, until=node.finished if node.exits_when_done else None)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (MPIError, ParameterRejected, InvalidParameterTypeException,
-            InvalidParameterValueException) as err:
-        print(f'error: plant_simulator: {err}', file=sys.stderr, flush=True)
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        shutdown()
-    return 0
+    return run_node_main(
+        PlantSimulatorNode, 'plant_simulator', args,
+        until=lambda node: node.finished if node.exits_when_done else None)
 
 
 def _excitation_schedule(values: Dict[str, Any]) -> tuple:

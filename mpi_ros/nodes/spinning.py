@@ -14,16 +14,18 @@ handler thread got there in between (about 1 run in 10 here). :func:`shutdown` t
 exactly that case.
 """
 
-from typing import Optional
+import sys
+from typing import Any, Callable, List, Optional
 
 import rclpy
 from rclpy.context import Context
-from rclpy.executors import Executor
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.task import Future
 
-__all__ = ['events_executor', 'shutdown', 'spin']
+__all__ = ['events_executor', 'run_node_main', 'shutdown', 'spin']
 
 #: Longest time one spin_once waits for work [s]; bounds the reaction to shutdown.
 SPIN_PERIOD_S = 0.1
@@ -82,3 +84,48 @@ def shutdown(context: Optional[Context] = None) -> None:
         # The signal-handler thread shut it down between ok() and rcl_shutdown; the
         # second call sees it shut down and only does rclpy's bookkeeping.
         rclpy.try_shutdown(context=context)
+
+
+def run_node_main(make_node: Callable[[], Any], label: str, args: Optional[List[str]], *,
+                  until: Optional[Callable[[Any], Optional[Future]]] = None) -> int:
+    """
+    Run one node the Jazzy way: init, build, spin, and always destroy and shut down.
+
+    Parameters
+    ----------
+    make_node : callable
+        Builds the node (after ``rclpy.init``).
+    label : str
+        Node name used in the ``error: <label>: ...`` line.
+    args : list of str, optional
+        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
+    until : callable, optional
+        Given the node, returns a future whose completion ends the spin (or None).
+
+    Returns
+    -------
+    int
+        0 on shutdown (Ctrl-C, external shutdown, ``until`` done); 1 when the node
+        cannot be configured (invalid parameters), with one ``error:`` line on stderr.
+
+    """
+    from ..errors import MPIError
+    from .parameters import ParameterRejected
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = make_node()
+        executor = events_executor(node.context)
+        executor.add_node(node)
+        spin(executor, node.context, until=None if until is None else until(node))
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (MPIError, ParameterRejected, InvalidParameterTypeException,
+            InvalidParameterValueException) as err:
+        print(f'error: {label}: {err}', file=sys.stderr, flush=True)
+        return 1
+    finally:
+        if node is not None:
+            node.destroy_node()
+        shutdown()
+    return 0
