@@ -61,8 +61,7 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
     import rclpy
 
-    from .compensation import operating_range
-    from .excitation import identification_excitation, tracking_trajectory
+    from .excitation import identification_excitation
     from .identification import identify
     from .metrics import control_error
     from .nodes.identifier import push_model_parameters
@@ -116,12 +115,7 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
                       f'{100 * fit.nonlinearity_error:5.2f} %')
         # 4: track with each compensator.
         final = models[ORDERS[-1]]
-        lo, hi = operating_range(final, args.output_min, args.output_max)
-        span = hi - lo
-        t_track, desired = tracking_trajectory(args.track_duration,
-                                               sample_rate=args.sample_rate,
-                                               low=lo + 0.1 * span, high=hi - 0.1 * span)
-        lead = np.linspace(0.0, desired[0], int(args.sample_rate))   # 1 s from rest
+        t_track, desired, lead = _desired_trajectory(final, args)
         desired_all = np.concatenate([lead, desired])
         runs = [('linear map (enabled:=false)', final, False)] + [
             (f'MPI n={n}, l={l}', models[(n, l)], True) for n, l in ORDERS[1:]]
@@ -164,8 +158,7 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
     import rclpy
 
-    from .compensation import operating_range
-    from .excitation import identification_excitation, tracking_trajectory
+    from .excitation import identification_excitation
     from .extensions import fit_creep, fit_rate_dependence
     from .identification import identify
     from .metrics import control_error, nonlinearity_error
@@ -242,12 +235,7 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
             _progress(f'[demo] identified {row["model"]:8s} n={n} l={l}: nonlinearity error '
                       f'(37) {100 * row["nonlinearity_error"]:5.2f} %')
         # Track the same trajectory with each compensator, in real time.
-        lo, hi = operating_range(plain, args.output_min, args.output_max)
-        span = hi - lo
-        t_track, desired = tracking_trajectory(args.track_duration,
-                                               sample_rate=args.sample_rate,
-                                               low=lo + 0.1 * span, high=hi - 0.1 * span)
-        lead = np.linspace(0.0, desired[0], int(args.sample_rate))   # 1 s from rest
+        t_track, desired, lead = _desired_trajectory(plain, args)
         desired_all = np.concatenate([lead, desired])
         t_all = np.arange(desired_all.size) / args.sample_rate
         runs = [(f'plain MPI n={n}, l={l}', plain.to_params()),
@@ -329,6 +317,34 @@ def _report_effect(out: Path, t: np.ndarray, desired: np.ndarray,
     (out / 'results.json').write_text(json.dumps(results, indent=2))
     np.savez(out / 'tracking.npz', time=t, desired=desired,
              **{f'measured_{k}': v for k, v in enumerate(traces.values())})
+
+
+def _desired_trajectory(model: Any, args: argparse.Namespace) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Return the tracking trajectory inside the model's operating range and its lead-in.
+
+    Parameters
+    ----------
+    model : MPIModel
+        Forward model whose displacement range (for the safe current range) is used.
+    args : argparse.Namespace
+        The demo options (``track_duration``, ``sample_rate``, ``output_min/max``).
+
+    Returns
+    -------
+    t_track, desired, lead : ndarray of float
+        Trajectory time [s] and desired displacement [m] (within the middle 80 % of the
+        range), and a 1 s ramp from rest (0 m) to its first value.
+
+    """
+    from .compensation import operating_range
+    from .excitation import tracking_trajectory
+    lo, hi = operating_range(model, args.output_min, args.output_max)
+    span = hi - lo
+    t_track, desired = tracking_trajectory(args.track_duration, sample_rate=args.sample_rate,
+                                           low=lo + 0.1 * span, high=hi - 0.1 * span)
+    return t_track, desired, np.linspace(0.0, desired[0], int(args.sample_rate))
 
 
 def _report(out: Path, data: Any, models: dict, t: np.ndarray, desired: np.ndarray,
