@@ -30,7 +30,7 @@ Robustness choices (documented in the README):
 
 from dataclasses import dataclass, field
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -49,7 +49,7 @@ from .superposition import PISuperpositionOperator
 __all__ = [
     'IdentificationResult', 'identify', 'select_order', 'hysteresis_thresholds',
     'inverse_superposition_thresholds', 'fit_generalized_error', 'generalized_error_gram',
-    'DEFAULT_ORDERS', 'ScaledDesign', 'scaled_design',
+    'DEFAULT_ORDERS', 'ScaledDesign', 'scaled_design', 'identify_weights',
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -455,15 +455,56 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int  # noqa: E741
     return ScaledDesign(x_scale, y_scale, r_h, r_s_inv, c)
 
 
+def identify_weights(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
+                     epsilon: float = 1e-6,
+                     extra_columns: Callable[[FloatArray], FloatArray] | None = None,
+                     extra_lower: FloatArray | None = None) -> tuple[
+                         ScaledDesign, FloatArray, FloatArray, FloatArray, Any]:
+    """
+    Identify the weights of (34)-(36) on a record, optionally with extra regressors.
+
+    Parameters
+    ----------
+    x, y : ndarray of float, shape (N,)
+        Input [A] and output [m].
+    n, l : int
+        Model orders.
+    epsilon : float
+        Bound of (8)/(19), scaled units.
+    extra_columns : callable, optional
+        Given the scaled input ``x / ||x||_inf``, returns extra regressors of shape
+        (N, k) that enter the generalised error beside H's plays (e.g. creep operators).
+    extra_lower : ndarray of float, shape (k,), optional
+        Lower bounds of the extra weights (default 0).
+
+    Returns
+    -------
+    design : ScaledDesign
+        Scales and thresholds; ``design.model(w_h, w_s_inv)`` gives Gamma in SI units.
+    w_h, w_s_inv, w_extra : ndarray of float
+        The weights (scaled units).
+    info : object
+        OSQP's info structure.
+
+    """
+    design = scaled_design(x, y, n, l)
+    xs, ys = x / design.x_scale, y / design.y_scale
+    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
+    if extra_columns is None:
+        gram = _mpi_gram(xs, ys, r_h, r_s_inv)                                  # (34)
+    else:
+        plays, _ = play_operator(xs, r_h)
+        gram = generalized_error_gram(plays, -dead_zone_operator(ys, r_s_inv),
+                                      extra_columns(xs))                        # (34)
+    w_h, w_s_inv, w_extra, info = fit_generalized_error(
+        gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,    # (36), scaled
+        superposition_center=design.center, epsilon=epsilon, extra_lower=extra_lower)
+    return design, w_h, w_s_inv, w_extra, info
+
+
 def _fit(x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
          epsilon: float) -> tuple[MPIModel, Any]:
-    design = scaled_design(x, y, n, l)
-    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
-    gram = _mpi_gram(x / design.x_scale, y / design.y_scale, r_h, r_s_inv)      # (34)
-    equality = 1.0 - r_h                                                        # (36), scaled
-    w_h, w_s_inv, _, info = fit_generalized_error(
-        gram, equality, n_hysteresis=n + 1, n_superposition=r_s_inv.size,
-        superposition_center=design.center, epsilon=epsilon)
+    design, w_h, w_s_inv, _, info = identify_weights(x, y, n, l, epsilon=epsilon)
     return design.model(w_h, w_s_inv), info
 
 

@@ -32,11 +32,9 @@ import numpy.typing as npt
 
 from ._common import check_series, vector_parameter
 from ._signals import lag_bank
-from ..deadzone import dead_zone_operator
 from ..errors import ModelError
-from ..identification import fit_generalized_error, generalized_error_gram, scaled_design
+from ..identification import identify_weights
 from ..model import MPIModel
-from ..play import play_operator
 
 __all__ = ['CreepModel', 'creep_time_constants', 'fit_creep', 'CREEP_TIME_CONSTANTS',
            'CREEP_WEIGHTS']
@@ -198,13 +196,6 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     taus = (creep_time_constants(t) if time_constants is None
             else np.asarray(time_constants, dtype=np.float64))
     n, l = order  # noqa: E741
-    design = scaled_design(x, y, n, l)
-    xs, ys = x / design.x_scale, y / design.y_scale
-    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
-    plays, _ = play_operator(xs, r_h)
-    creep = lag_bank(t, xs, taus)
-    gram = generalized_error_gram(plays, -dead_zone_operator(ys, r_s_inv), creep)   # (34)
-    w_h, w_s_inv, w_c, _ = fit_generalized_error(
-        gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,
-        superposition_center=design.center, epsilon=epsilon)
+    design, w_h, w_s_inv, w_c, _ = identify_weights(
+        x, y, n, l, epsilon=epsilon, extra_columns=lambda xs: lag_bank(t, xs, taus))
     return CreepModel(design.model(w_h, w_s_inv), taus, w_c)

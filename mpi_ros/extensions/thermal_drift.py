@@ -27,10 +27,8 @@ import numpy.typing as npt
 
 from ._common import check_series, scalar_parameter, search_scalar
 from ._signals import first_order_lag
-from ..deadzone import dead_zone_operator
-from ..identification import fit_generalized_error, generalized_error_gram, scaled_design
+from ..identification import identify_weights
 from ..model import MPIModel
-from ..play import play_operator
 
 __all__ = ['ThermalDriftModel', 'fit_thermal_drift', 'THERMAL_TIME_CONSTANT',
            'THERMAL_WEIGHT']
@@ -112,15 +110,9 @@ class ThermalDriftModel:
 
 def _fit_at(t: FloatArray, x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
             tau: float, epsilon: float) -> tuple[ThermalDriftModel, float]:
-    design = scaled_design(x, y, n, l)
-    xs, ys = x / design.x_scale, y / design.y_scale
-    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
-    plays, _ = play_operator(xs, r_h)
-    state = first_order_lag(t, xs * xs, tau)
-    gram = generalized_error_gram(plays, -dead_zone_operator(ys, r_s_inv), state[:, None])
-    w_h, w_s_inv, w_t, _ = fit_generalized_error(
-        gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,
-        superposition_center=design.center, epsilon=epsilon,
+    design, w_h, w_s_inv, w_t, _ = identify_weights(
+        x, y, n, l, epsilon=epsilon,
+        extra_columns=lambda xs: first_order_lag(t, xs * xs, tau)[:, None],
         extra_lower=np.array([-np.inf]))
     model = ThermalDriftModel(design.model(w_h, w_s_inv), tau, float(w_t[0]) / design.x_scale)
     error = float(np.mean((model.simulate(t, x) - y) ** 2))
