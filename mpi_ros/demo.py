@@ -56,6 +56,50 @@ def _progress(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
+class _DemoLoop:
+    """Starts and stops the demo's node processes (by PID) around one driver."""
+
+    def __init__(self, driver: Any, out: Path, processes: list, plant_args: list[str],
+                 args: argparse.Namespace) -> None:
+        self.driver, self.out, self.processes = driver, out, processes
+        self.plant_args, self.args = plant_args, args
+
+    def start_plant(self) -> Any:
+        """Start a plant simulator process and wait until it subscribes."""
+        from .nodes.loop import NodeProcess
+        plant = NodeProcess('plant-simulator', self.plant_args,
+                            self.out / 'plant_simulator.log')
+        self.processes.append(plant)
+        self.driver.wait_for(lambda: self.driver.current_pub.get_subscription_count() > 0,
+                             'the plant simulator to start', 60.0)
+        return plant
+
+    def start_compensated(self, params: dict, compensator_args: list[str],
+                          first: float) -> tuple[Any, Any]:
+        """Start a fresh plant and compensator, push ``params``, handshake with ``first``."""
+        from .nodes.identifier import push_model_parameters
+        from .nodes.loop import NodeProcess
+        plant = self.start_plant()
+        comp = NodeProcess('compensator',
+                           ['-p', f'output.min:={self.args.output_min!r}',
+                            '-p', f'output.max:={self.args.output_max!r}', *compensator_args],
+                           self.out / 'compensator.log')
+        self.processes.append(comp)
+        driver = self.driver
+        with driver.detached():            # the push spins the node on its own executor
+            push_model_parameters(driver, '/compensator', params, timeout=60.0)
+        driver.wait_for(lambda: driver.desired_pub.get_subscription_count() > 0,
+                        'the compensator to subscribe', 30.0)
+        driver.handshake(driver.desired_pub, first)
+        return comp, plant
+
+    def stop(self, *started: Any) -> None:
+        """Stop the given processes and forget them."""
+        for proc in started:
+            proc.stop()
+            self.processes.remove(proc)
+
+
 def _run(args: argparse.Namespace) -> dict[str, Any]:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
@@ -64,7 +108,6 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
     from .excitation import identification_excitation
     from .identification import identify
     from .metrics import control_error
-    from .nodes.identifier import push_model_parameters
     from .nodes.loop import LoopDriver, NodeProcess
     from .recordings import BagRecorder, read_bag_signals
 
@@ -78,16 +121,11 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
         driver = LoopDriver('mpi_ros_demo')
         plant_args = ['-p', f'noise_std:={args.noise_std!r}', '-p', f'seed:={args.seed}']
 
-        def start_plant() -> NodeProcess:
-            plant = NodeProcess('plant-simulator', plant_args, out / 'plant_simulator.log')
-            processes.append(plant)
-            driver.wait_for(lambda: driver.current_pub.get_subscription_count() > 0,
-                            'the plant simulator to start', 60.0)
-            return plant
+        loop = _DemoLoop(driver, out, processes, plant_args, args)
 
         # 1-2: record the identification bag.
         _progress(f'[demo] ROS_DOMAIN_ID={args.domain_id}, output in {out}')
-        plant = start_plant()
+        plant = loop.start_plant()
         t, current = identification_excitation(args.duration, sample_rate=args.sample_rate,
                                                seed=args.seed, holds=False, bursts=False)
         bag = out / 'identification_bag'
@@ -121,22 +159,10 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
             (f'MPI n={n}, l={l}', models[(n, l)], True) for n, l in ORDERS[1:]]
         traces = {}
         for label, model, enabled in runs:
-            plant = start_plant()
-            comp_args = ['-p', f'output.min:={args.output_min!r}',
-                         '-p', f'output.max:={args.output_max!r}',
-                         '-p', f'enabled:={str(enabled).lower()}']
-            comp = NodeProcess('compensator', comp_args, out / 'compensator.log')
-            processes.append(comp)
-            with driver.detached():            # the push spins the node on its own executor
-                push_model_parameters(driver, '/compensator', model.to_params(), timeout=60.0)
-            driver.wait_for(lambda: driver.desired_pub.get_subscription_count() > 0,
-                            'the compensator to subscribe', 30.0)
-            driver.handshake(driver.desired_pub, desired_all[0])
+            started_here = loop.start_compensated(
+                model.to_params(), ['-p', f'enabled:={str(enabled).lower()}'], desired_all[0])
             measured = np.array([driver.exchange(driver.desired_pub, v) for v in desired_all])
-            comp.stop()
-            plant.stop()
-            processes.remove(comp)
-            processes.remove(plant)
+            loop.stop(*started_here)
             tracked = slice(lead.size, None)
             err = control_error(desired_all[tracked], measured[tracked])
             traces[label] = measured
@@ -162,7 +188,6 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
     from .extensions import fit_creep, fit_rate_dependence
     from .identification import identify
     from .metrics import control_error, nonlinearity_error
-    from .nodes.identifier import push_model_parameters
     from .nodes.loop import LoopDriver, NodeProcess
     from .recordings import BagRecorder, read_bag_signals
 
@@ -187,12 +212,7 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
         for key, value in strength.items():
             plant_args += ['-p', f'{key}:={value!r}']
 
-        def start_plant() -> NodeProcess:
-            plant = NodeProcess('plant-simulator', plant_args, out / 'plant_simulator.log')
-            processes.append(plant)
-            driver.wait_for(lambda: driver.current_pub.get_subscription_count() > 0,
-                            'the plant simulator to start', 60.0)
-            return plant
+        loop = _DemoLoop(driver, out, processes, plant_args, args)
 
         def lateness(what: str, sent: np.ndarray, schedule: np.ndarray) -> None:
             late = sent - (schedule - schedule[0])
@@ -202,7 +222,7 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
         # Record the identification bag in real time.
         _progress(f'[demo] ROS_DOMAIN_ID={args.domain_id}, effect {args.effect} '
                   f'({", ".join(f"{k}={v:g}" for k, v in strength.items())}), output in {out}')
-        plant = start_plant()
+        plant = loop.start_plant()
         t, current = identification_excitation(args.duration, sample_rate=args.sample_rate,
                                                seed=args.seed, holds=True, bursts=True)
         bag = out / 'identification_bag'
@@ -242,23 +262,12 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
                 (f'extended MPI + {args.effect}', params)]
         traces = {}
         for label, model_params in runs:
-            plant = start_plant()
-            comp_args = ['-p', f'output.min:={args.output_min!r}',
-                         '-p', f'output.max:={args.output_max!r}',
-                         '-p', f'sample_period:={1.0 / args.sample_rate!r}']
-            comp = NodeProcess('compensator', comp_args, out / 'compensator.log')
-            processes.append(comp)
-            with driver.detached():            # the push spins the node on its own executor
-                push_model_parameters(driver, '/compensator', model_params, timeout=60.0)
-            driver.wait_for(lambda: driver.desired_pub.get_subscription_count() > 0,
-                            'the compensator to subscribe', 30.0)
-            driver.handshake(driver.desired_pub, desired_all[0])
+            started_here = loop.start_compensated(
+                model_params, ['-p', f'sample_period:={1.0 / args.sample_rate!r}'],
+                desired_all[0])
             sent, measured = driver.exchange_paced(driver.desired_pub, desired_all, t_all,
                                                    timeout=_REPLY_TIMEOUT)
-            comp.stop()
-            plant.stop()
-            processes.remove(comp)
-            processes.remove(plant)
+            loop.stop(*started_here)
             lateness(label, sent, t_all)
             tracked = slice(lead.size, None)
             err = control_error(desired_all[tracked], measured[tracked])
