@@ -54,6 +54,29 @@ def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
     return current, raw
 
 
+def _warm_up(kernel: tuple, s_c: float, output_min: float, output_max: float) -> None:
+    """
+    Run the compiled steps once on copies of the play states.
+
+    The first real command then does not pay numba's dispatch (about 7 ms on first use,
+    2 us afterwards).
+
+    Parameters
+    ----------
+    kernel : tuple
+        The compensator's kernel arrays (left unchanged: the play states are copied).
+    s_c : float
+        A displacement inside the operating range [m].
+    output_min, output_max : float
+        Current limits [A].
+
+    """
+    r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si = kernel
+    _compensate_step(s_c, output_min, output_max, r_h, w_h, z_h.copy(), r_hi, w_hi,
+                     z_i.copy(), r_si, w_si)
+    _hysteresis_step(output_min, r_h, w_h, z_h.copy())
+
+
 def screen_desired(desired: object, counters: dict[str, int],
                    displacement_range: tuple[float, float]) -> float | None:
     """
@@ -227,6 +250,7 @@ class FeedforwardCompensator:
                         np.ascontiguousarray(h_inv.weights), np.empty_like(z_h),
                         np.ascontiguousarray(s_inv.thresholds),
                         np.ascontiguousarray(s_inv.weights))
+        _warm_up(self._kernel, lo, self.output_min, self.output_max)
         self.model = model
         self.displacement_range = (lo, hi)
         self.linear_map = linear

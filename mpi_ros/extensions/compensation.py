@@ -149,6 +149,11 @@ class ExtendedCompensator:
         self.model = model
         self.displacement_range = operating_range(gamma, self.output_min, self.output_max)
         self.linear_map = best_linear_map(gamma, self.output_min, self.output_max)
+        # Run the compiled steps once on copies: the first real command does not pay
+        # numba's dispatch (milliseconds on first use).
+        r_h, w_h, z_h, r_si, w_si = self._kernel
+        v = _superposition_value(self.displacement_range[0], r_si, w_si)
+        _hysteresis_step(_inverse_value(v, r_h, w_h, 0.0, z_h), r_h, w_h, z_h.copy())
 
     def swap_model(self, model: InvertibleModel) -> None:
         """
