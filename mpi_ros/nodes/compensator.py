@@ -52,9 +52,9 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64
 
+from .loop import loop_qos
 from .parameters import (
     check_parameter, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
     harden_parameter_services, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
@@ -102,8 +102,14 @@ PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
         'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0)),
     ParameterSpec(
         'qos_depth', Type.INTEGER, 1000,
-        'History depth (reliable, keep-last) of desired_displacement and current_command',
+        'History depth (keep-last) of desired_displacement and current_command',
         '', value_range=(1, 100000), read_only=True),
+    ParameterSpec(
+        'qos_reliability', Type.STRING, 'reliable',
+        'Reliability of desired_displacement and current_command: reliable (nothing lost) '
+        'or best_effort (less work per message at high rates; must match the peers: a '
+        'best_effort publisher does not reach a reliable subscription)',
+        choices=('reliable', 'best_effort'), read_only=True),
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -160,9 +166,8 @@ class CompensatorNode(Node):
                        else _no_stamp)
         self._configure_from_declared()
 
-        depth = self.get_parameter('qos_depth').value
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
-                         reliability=ReliabilityPolicy.RELIABLE)
+        qos = loop_qos(self.get_parameter('qos_depth').value,
+                       self.get_parameter('qos_reliability').value)
         self._command = Float64()
         self._publisher = self.create_publisher(Float64, 'current_command', qos)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)

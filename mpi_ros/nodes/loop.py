@@ -25,13 +25,36 @@ from std_msgs.msg import Float64
 
 from ..errors import MPIError
 
-__all__ = ['NodeProcess', 'LoopDriver', 'loop_qos']
+__all__ = ['NodeProcess', 'LoopDriver', 'loop_qos', 'RELIABILITY']
 
 
-def loop_qos(depth: int = 1000) -> QoSProfile:
-    """Return the QoS of the loop topics (reliable, keep-last ``depth``), as the nodes use."""
+#: ``qos_reliability`` parameter value -> rclpy policy.
+RELIABILITY = {'reliable': ReliabilityPolicy.RELIABLE,
+               'best_effort': ReliabilityPolicy.BEST_EFFORT}
+
+
+def loop_qos(depth: int = 1000, reliability: str = 'reliable') -> QoSProfile:
+    """
+    Return the QoS of the loop topics (keep-last ``depth``), as the nodes build it.
+
+    Parameters
+    ----------
+    depth : int
+        History depth.
+    reliability : str
+        ``reliable`` (default: nothing lost) or ``best_effort`` (a reliable Fast DDS
+        writer wakes its event thread on every sample; at 10 kHz that is measurable, see
+        docs/reliability.md).  A best-effort publisher does not match a reliable
+        subscription.
+
+    Returns
+    -------
+    rclpy.qos.QoSProfile
+        Keep-last ``depth``, volatile, with the given reliability.
+
+    """
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
-                      reliability=ReliabilityPolicy.RELIABLE)
+                      reliability=RELIABILITY[reliability])
 
 
 class NodeProcess:

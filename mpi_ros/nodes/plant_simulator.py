@@ -45,10 +45,10 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from std_msgs.msg import Float64
 
+from .loop import loop_qos
 from .parameters import (
     check_parameter, declare_parameters, harden_parameter_services, MODEL_KEYS,
     MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
@@ -139,8 +139,13 @@ PARAMETERS = (
     ParameterSpec('record.storage', Type.STRING, 'sqlite3', 'rosbag2 storage plugin',
                   choices=('sqlite3', 'mcap'), read_only=True),
     ParameterSpec('qos_depth', Type.INTEGER, 1000,
-                  'History depth (reliable, keep-last) of current_command and displacement',
+                  'History depth (keep-last) of current_command and displacement',
                   value_range=(1, 100000), read_only=True),
+    ParameterSpec('qos_reliability', Type.STRING, 'reliable',
+                  'Reliability of current_command and displacement: reliable (nothing lost)'
+                  ' or best_effort (less work per message at high rates; must match the '
+                  'peers: a best_effort publisher does not reach a reliable subscription)',
+                  choices=('reliable', 'best_effort'), read_only=True),
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -188,9 +193,7 @@ class PlantSimulatorNode(Node):
                                          storage=values['record.storage'])
             self._recorder.open()
 
-        depth = values['qos_depth']
-        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
-                         reliability=ReliabilityPolicy.RELIABLE)
+        qos = loop_qos(values['qos_depth'], values['qos_reliability'])
         self._displacement = Float64()
         self._command = Float64()
         self._publisher = self.create_publisher(Float64, 'displacement', qos)

@@ -21,6 +21,7 @@ import rclpy
 from rclpy.exceptions import InvalidParameterValueException, ParameterNotDeclaredException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
+from rclpy.qos import ReliabilityPolicy
 
 R_H, W_H, Z_H0, R_S, W_S = MODEL_KEYS
 
@@ -278,6 +279,21 @@ def test_bad_params_file_refuses_to_start(make_node, override, key):
 def test_unordered_limits_in_params_file_refuse_to_start(make_node):
     with pytest.raises(ParameterRejected, match='output.min must be below output.max'):
         make_node([Parameter('output.min', value=1.0), Parameter('output.max', value=0.5)])
+
+
+@pytest.mark.parametrize('reliability, policy', [
+    ('reliable', ReliabilityPolicy.RELIABLE), ('best_effort', ReliabilityPolicy.BEST_EFFORT)])
+def test_qos_reliability_sets_both_loop_endpoints(make_node, reliability, policy):
+    node = make_node([Parameter('qos_reliability', value=reliability)])
+    publishers = node.get_publishers_info_by_topic('current_command')
+    subscriptions = node.get_subscriptions_info_by_topic('desired_displacement')
+    assert [info.qos_profile.reliability for info in publishers + subscriptions] == [policy] * 2
+
+
+def test_unknown_qos_reliability_refuses_to_start(make_node):
+    with pytest.raises((InvalidParameterValueException, ParameterRejected),
+                       match='qos_reliability'):
+        make_node([Parameter('qos_reliability', value='sometimes')])
 
 
 def test_push_through_the_parameter_service(ros_context, configured):
