@@ -17,7 +17,14 @@ Targets: 10,000 messages/s for 10 s, zero drops, p99 <= 1 ms (ROS package issue)
 10 minutes at 10,000/s without drops, memory growth or latency drift (reliability issue:
 ``--duration 600``).
 
-Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]``
+Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]
+[--reliability reliable|best_effort] [--pin]``
+
+``--reliability`` sets the QoS of all three endpoints (a reliable Fast DDS writer wakes its
+event thread on every sample to restart its heartbeat timer: about 10,000 extra wake-ups
+per second in the sender and in the compensator).  ``--pin`` gives the compensator (all
+its threads) the last CPU and this process and the receiver the others, so that the load
+generator does not preempt the node under test.  The figures are in docs/reliability.md.
 
 The core is importable (``run_benchmark`` returns the numbers as a dict); the test suite
 runs a short soak through it (``test/faults/test_soak.py``).
@@ -49,7 +56,8 @@ BENCH_MODEL = {
 
 def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                   output_max: float = 2.0, window: float = 10.0,
-                  workdir: Optional[Path] = None) -> dict[str, Any]:
+                  workdir: Optional[Path] = None, qos_depth: int = 10000,
+                  reliability: str = 'reliable', pin: bool = False) -> dict[str, Any]:
     """
     Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
@@ -67,7 +75,15 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     window : float
         Length [s] of the windows of the latency drift statistics.
     workdir : Path, optional
-        Directory for logs and the receiver's data (default: a new temporary one).
+        Directory for logs, the receiver's data and ``latency_us.npy`` (every message's
+        latency, in order; default: a new temporary directory).
+    qos_depth : int
+        Keep-last depth of the three endpoints.
+    reliability : str
+        ``reliable`` or ``best_effort``, for the three endpoints.
+    pin : bool
+        Run the compensator on the last CPU only and the sender and receiver on the
+        others (needs at least 2 CPUs).
 
     Returns
     -------
@@ -78,7 +94,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         (command counts), ``command_range`` [A], ``rss_kib`` (list of ``(t_s, KiB)``),
         ``rss_growth_mib`` (from t=1 s to the end), ``compensator_exit``, ``cores``,
         ``domain_id``, ``workdir``, ``processes_left`` (PIDs of started processes still
-        running at the end; empty).
+        running at the end; empty), ``cpu_percent`` (``compensator``, ``sender``,
+        ``receiver``: CPU time over the load, % of one core), ``qos_depth``,
+        ``reliability``, ``pinned``.
 
     """
     import rclpy
@@ -93,17 +111,31 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     tmp = Path(tempfile.mkdtemp(prefix='mpi_ros_bench_')) if workdir is None else Path(workdir)
     params = tmp / 'params.yaml'
     write_params_yaml(params, dict(model.to_params(), **{
-        'qos_depth': 10000, 'output.min': output_min, 'output.max': output_max}))
+        'qos_depth': qos_depth, 'qos_reliability': reliability,
+        'output.min': output_min, 'output.max': output_max}))
+    cores = sorted(os.sched_getaffinity(0))
+    if pin and len(cores) < 2:
+        msg = f'--pin needs at least 2 CPUs; this process may use {cores}'
+        raise RuntimeError(msg)
+    node_cpus, load_cpus = set(cores[-1:]), set(cores[:-1])
     comp = NodeProcess('compensator', ['--params-file', str(params), '-p',
                                        'diagnostics_period:=5.0'], tmp / 'compensator.log')
     out = str(tmp / 'received.npy')
     receiver = subprocess.Popen(
         [sys.executable, __file__, '--role', 'receiver', '--out', out, '--count', str(count),
-         '--duration', str(duration + 60.0)], env=dict(os.environ))
+         '--duration', str(duration + 60.0), '--qos-depth', str(qos_depth),
+         '--reliability', reliability], env=dict(os.environ))
+    if pin:
+        # Right after the start, before rclpy creates any thread: every later thread
+        # (DDS receive and event threads) inherits the affinity.
+        _pin(comp.pid, node_cpus)
+        _pin(receiver.pid, load_cpus)
+        _pin(os.getpid(), load_cpus)
     context = rclpy.Context()
     rclpy.init(context=context)
     node = rclpy.create_node('bench_sender', context=context)
-    pub = node.create_publisher(Float64, 'desired_displacement', loop_qos(10000))
+    pub = node.create_publisher(Float64, 'desired_displacement',
+                                loop_qos(qos_depth, reliability))
     try:
         deadline = time.monotonic() + 60.0
         while (pub.get_subscription_count() < 1 or not Path(out + '.ready').exists()
@@ -121,6 +153,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         rss = []
         period_ns = int(1e9 / rate)
         msg = Float64()
+        cpu_start = {name: _cpu_seconds(pid) for name, pid in
+                     (('compensator', comp.pid), ('sender', os.getpid()),
+                      ('receiver', receiver.pid))}
         start = time.monotonic_ns()
         next_rss = start
         k = 0
@@ -139,6 +174,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                 next_rss += 1_000_000_000
             time.sleep(0.0002)
         elapsed = (time.monotonic_ns() - start) / 1e9
+        cpu_percent = {name: 100.0 * (_cpu_seconds(pid) - cpu_start[name]) / elapsed
+                       for name, pid in (('compensator', comp.pid), ('sender', os.getpid()),
+                                         ('receiver', receiver.pid))}
         receiver.wait(timeout=duration + 120.0)
         rss.append((elapsed, _rss_kib(comp.pid)))
     finally:
@@ -153,6 +191,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     values = np.load(out.replace('.npy', '_values.npy'))
     n = stamps.size
     latency_us = (stamps - sent[:n]) / 1e3
+    np.save(tmp / 'latency_us.npy', latency_us)
     results: dict[str, Any] = {
         'cores': os.cpu_count(), 'domain_id': os.environ.get('ROS_DOMAIN_ID'),
         'rate': rate, 'duration': duration, 'sent': count, 'received': n,
@@ -163,6 +202,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'latency_us': {}, 'windows': [], 'rss_kib': rss,
         'rss_growth_mib': (rss[-1][1] - rss[1][1]) / 1024 if len(rss) > 2 else None,
         'compensator_exit': status, 'workdir': str(tmp), 'processes_left': left,
+        'cpu_percent': cpu_percent, 'qos_depth': qos_depth, 'reliability': reliability,
+        'pinned': pin,
     }
     if n:
         p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
@@ -191,7 +232,10 @@ def format_results(results: dict[str, Any]) -> str:
 
     """
     r = results
-    lines = [f'machine: {r["cores"]} cores; ROS_DOMAIN_ID {r["domain_id"]}',
+    pinning = ('compensator pinned to its own CPU' if r['pinned']
+               else 'no CPU pinning')
+    lines = [f'machine: {r["cores"]} cores; ROS_DOMAIN_ID {r["domain_id"]}; QoS '
+             f'{r["reliability"]}, depth {r["qos_depth"]}; {pinning}',
              f'sent {r["sent"]} desired values in {r["elapsed"]:.2f} s '
              f'({r["achieved_rate"]:,.0f}/s), received {r["received"]} commands, '
              f'drops {r["drops"]}',
@@ -211,6 +255,8 @@ def format_results(results: dict[str, Any]) -> str:
     if r['rss_growth_mib'] is not None:
         lines.append(f'compensator RSS growth: {r["rss_growth_mib"]:+.1f} MiB '
                      f'(from t={rss[1][0]:.0f} s to the end)')
+    lines.append('CPU over the load [% of one core]: ' + ', '.join(
+        f'{name} {value:.0f}' for name, value in r['cpu_percent'].items()))
     lines.append(f'compensator exit status: {r["compensator_exit"]}')
     return '\n'.join(lines)
 
@@ -220,47 +266,62 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument('--rate', type=float, default=10000.0, help='messages per second')
     parser.add_argument('--duration', type=float, default=10.0, help='seconds of load')
+    parser.add_argument('--reliability', choices=('reliable', 'best_effort'),
+                        default='reliable', help='QoS reliability of all endpoints')
+    parser.add_argument('--qos-depth', type=int, default=10000,
+                        help='keep-last depth of all endpoints')
+    parser.add_argument('--pin', action='store_true',
+                        help='compensator on the last CPU, sender and receiver on the others')
     parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
     parser.add_argument('--out', default='', help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.role == 'receiver':
-        _receiver(args.out, args.count, args.duration)
+        _receiver(args.out, args.count, args.duration, args.qos_depth, args.reliability)
         return
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
-    print(format_results(run_benchmark(args.rate, args.duration)), flush=True)
+    print(format_results(run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
+                                       reliability=args.reliability, pin=args.pin)),
+          flush=True)
 
 
-def _receiver(out: str, count: int, timeout: float) -> None:
+def _receiver(out: str, count: int, timeout: float, qos_depth: int,
+              reliability: str) -> None:
+    import struct
+
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
     from std_msgs.msg import Float64
 
     from mpi_ros.nodes.loop import loop_qos
+    from mpi_ros.nodes.spinning import events_executor
     rclpy.init()
     node = rclpy.create_node('bench_receiver')
     stamps = np.zeros(count, dtype=np.int64)
     values = np.zeros(count)
     received = [0]
 
-    def on_command(msg: Float64) -> None:
-        # Take every queued message in this one callback: rclpy's per-spin cost would
-        # otherwise make the receiver, not the compensator, the bottleneck.
+    little, big = struct.Struct('<d').unpack_from, struct.Struct('>d').unpack_from
+
+    def on_command(data: bytes) -> None:
+        # Serialized messages (CDR: 4-byte encapsulation header, then the double; byte 1
+        # says little-endian), no Float64 objects, and every queued message taken in this
+        # one callback: the measuring process stays far lighter than the node it measures.
+        take = subscription.handle.take_message
         while True:
             k = received[0]
             if k < count:
                 stamps[k] = time.monotonic_ns()
-                values[k] = msg.data
+                values[k] = (little if data[1] == 1 else big)(data, 4)[0]
             received[0] = k + 1
-            taken = subscription.handle.take_message(Float64, False)
+            taken = take(Float64, True)
             if taken is None:
                 break
-            msg = taken[0]
+            data = taken[0]
 
     subscription = node.create_subscription(Float64, 'current_command', on_command,
-                                            loop_qos(10000))
-    executor = SingleThreadedExecutor()
+                                            loop_qos(qos_depth, reliability), raw=True)
+    executor = events_executor()
     executor.add_node(node)
     Path(out + '.ready').touch()
     deadline = time.monotonic() + timeout
@@ -271,6 +332,24 @@ def _receiver(out: str, count: int, timeout: float) -> None:
     np.save(out, stamps[:n])
     node.destroy_node()
     rclpy.try_shutdown()
+
+
+def _pin(pid: int, cpus: set) -> None:
+    """Restrict every thread of process ``pid`` (and the threads it starts) to ``cpus``."""
+    for task in Path(f'/proc/{pid}/task').iterdir():
+        try:
+            os.sched_setaffinity(int(task.name), cpus)
+        except OSError:                                  # the thread has just ended
+            pass
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU time [s] of process ``pid`` so far (0 when it is gone)."""
+    try:
+        fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 def _rss_kib(pid: int) -> int:
