@@ -14,8 +14,10 @@ from mpi_ros.recordings import read_bag_signals
 import numpy as np
 import pytest
 import rclpy
+from rclpy.exceptions import InvalidParameterValueException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
+from rclpy.qos import ReliabilityPolicy
 from std_msgs.msg import Float64
 
 MODEL = {
@@ -84,6 +86,21 @@ def test_parameters_are_read_only(make_plant):
     plant = make_plant()
     result = plant.set_parameters([Parameter('noise_std', value=1.0e-6)])[0]
     assert not result.successful and 'noise_std' in result.reason
+
+
+@pytest.mark.parametrize('reliability, policy', [
+    ('reliable', ReliabilityPolicy.RELIABLE), ('best_effort', ReliabilityPolicy.BEST_EFFORT)])
+def test_qos_reliability_sets_the_loop_endpoints(make_plant, reliability, policy):
+    plant = make_plant(qos_reliability=reliability)
+    endpoints = (plant.get_publishers_info_by_topic('displacement')
+                 + plant.get_subscriptions_info_by_topic('current_command'))
+    assert [info.qos_profile.reliability for info in endpoints] == [policy] * 2
+
+
+def test_unknown_qos_reliability_refuses_to_start(make_plant):
+    with pytest.raises((InvalidParameterValueException, ParameterRejected),
+                       match='qos_reliability'):
+        make_plant(qos_reliability='sometimes')
 
 
 def test_one_displacement_per_finite_command(ros_context, make_plant):
