@@ -56,9 +56,9 @@ from std_msgs.msg import Float64
 
 from .loop import loop_qos
 from .parameters import (
-    check_parameter, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
-    harden_parameter_services, MODEL_KEYS, MODEL_PARAMETERS, parameter_values,
-    ParameterRejected, ParameterSpec, specs_by_name,
+    check_parameters, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
+    harden_parameter_services, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS,
+    parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import run_node_main
 from ..compensation import FeedforwardCompensator
@@ -100,16 +100,7 @@ PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
     ParameterSpec(
         'diagnostics_period', Type.DOUBLE, 1.0,
         'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0)),
-    ParameterSpec(
-        'qos_depth', Type.INTEGER, 1000,
-        'History depth (keep-last) of desired_displacement and current_command',
-        '', value_range=(1, 100000), read_only=True),
-    ParameterSpec(
-        'qos_reliability', Type.STRING, 'reliable',
-        'Reliability of desired_displacement and current_command: reliable (nothing lost) '
-        'or best_effort (less work per message at high rates; must match the peers: a '
-        'best_effort publisher does not reach a reliable subscription)',
-        choices=('reliable', 'best_effort'), read_only=True),
+    *loop_qos_parameters('desired_displacement and current_command'),
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -278,12 +269,7 @@ class CompensatorNode(Node):
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         """Check only: type, range, whole model and limits; keep the candidate for apply."""
         try:
-            for parameter in parameters:
-                spec = _SPECS.get(parameter.name)
-                if spec is None:
-                    msg = f'{parameter.name} is not a parameter of this node'
-                    raise ParameterRejected(msg)
-                check_parameter(spec, parameter, allow_unset=self._declaring)
+            check_parameters(_SPECS, parameters, allow_unset=self._declaring)
             if self._declaring:
                 # One key at a time, the others not declared yet: cross-key checks
                 # run once all keys are declared (_configure_from_declared).

@@ -29,7 +29,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from .parameters import (
-    check_parameter, declare_parameters, harden_parameter_services, MODEL_KEYS,
+    check_parameters, declare_parameters, harden_parameter_services, MODEL_KEYS,
     ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import shutdown
@@ -129,12 +129,8 @@ class IdentifierNode(Node):
 
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         try:
+            check_parameters(_SPECS, parameters)
             for parameter in parameters:
-                spec = _SPECS.get(parameter.name)
-                if spec is None:
-                    msg = f'{parameter.name} is not a parameter of this node'
-                    raise ParameterRejected(msg)
-                check_parameter(spec, parameter)
                 if parameter.name == 'order':
                     parse_order(parameter.value)
         except (ParameterRejected, MPIError) as err:

@@ -20,6 +20,7 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
+from .loop import RELIABILITY
 from ..extensions.creep import CREEP_TIME_CONSTANTS, CREEP_WEIGHTS
 from ..extensions.dead_time import DEAD_TIME
 from ..extensions.rate_dependence import RATE_TIME_CONSTANT
@@ -34,7 +35,9 @@ __all__ = [
     'ParameterSpec',
     'ParameterRejected',
     'check_parameter',
+    'check_parameters',
     'declare_parameters',
+    'loop_qos_parameters',
     'parameter_values',
     'specs_by_name',
 ]
@@ -201,6 +204,33 @@ EXTENSION_OFF: Mapping[str, Any] = {
 }
 
 
+def loop_qos_parameters(topics: str) -> Tuple[ParameterSpec, ParameterSpec]:
+    """
+    Return the ``qos_depth`` and ``qos_reliability`` specs of a node's loop topics.
+
+    Parameters
+    ----------
+    topics : str
+        The topics they apply to, for the descriptions (e.g. ``'a and b'``).
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        Both read-only; the node builds its QoS with :func:`mpi_ros.nodes.loop.loop_qos`.
+
+    """
+    return (
+        ParameterSpec('qos_depth', Type.INTEGER, 1000,
+                      f'History depth (keep-last) of {topics}',
+                      value_range=(1, 100000), read_only=True),
+        ParameterSpec('qos_reliability', Type.STRING, 'reliable',
+                      f'Reliability of {topics}: reliable (nothing lost) or best_effort '
+                      '(less work per message at high rates; must match the peers: a '
+                      'best_effort publisher does not reach a reliable subscription)',
+                      choices=tuple(RELIABILITY), read_only=True),
+    )
+
+
 def declare_parameters(node: Node, specs: Iterable[ParameterSpec]) -> None:
     """
     Declare every spec on ``node`` with its descriptor.
@@ -270,6 +300,34 @@ def check_parameter(spec: ParameterSpec, parameter: Parameter, *,
     if spec.choices and value not in spec.choices:
         msg = (f'{spec.name} must be one of {", ".join(spec.choices)}; found {value!r}')
         raise ParameterRejected(msg)
+
+
+def check_parameters(specs: Mapping[str, ParameterSpec], parameters: Iterable[Parameter], *,
+                     allow_unset: bool = False) -> None:
+    """
+    Check every incoming parameter against its spec; an undeclared name is rejected too.
+
+    Parameters
+    ----------
+    specs : mapping of str to ParameterSpec
+        The node's specs by name (:func:`specs_by_name`).
+    parameters : iterable of rclpy.parameter.Parameter
+        Incoming values.
+    allow_unset : bool
+        Accept unset values (see :func:`check_parameter`).
+
+    Raises
+    ------
+    ParameterRejected
+        At the first parameter that fails, naming it.
+
+    """
+    for parameter in parameters:
+        spec = specs.get(parameter.name)
+        if spec is None:
+            msg = f'{parameter.name} is not a parameter of this node'
+            raise ParameterRejected(msg)
+        check_parameter(spec, parameter, allow_unset=allow_unset)
 
 
 def parameter_values(node: Node, names: Sequence[str],

@@ -50,8 +50,9 @@ from std_msgs.msg import Float64
 
 from .loop import loop_qos
 from .parameters import (
-    check_parameter, declare_parameters, harden_parameter_services, MODEL_KEYS,
-    MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
+    check_parameters, declare_parameters, harden_parameter_services, loop_qos_parameters,
+    MODEL_KEYS, MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec,
+    specs_by_name,
 )
 from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
@@ -138,14 +139,7 @@ PARAMETERS = (
                   '(empty: no recording)', read_only=True),
     ParameterSpec('record.storage', Type.STRING, 'sqlite3', 'rosbag2 storage plugin',
                   choices=('sqlite3', 'mcap'), read_only=True),
-    ParameterSpec('qos_depth', Type.INTEGER, 1000,
-                  'History depth (keep-last) of current_command and displacement',
-                  value_range=(1, 100000), read_only=True),
-    ParameterSpec('qos_reliability', Type.STRING, 'reliable',
-                  'Reliability of current_command and displacement: reliable (nothing lost)'
-                  ' or best_effort (less work per message at high rates; must match the '
-                  'peers: a best_effort publisher does not reach a reliable subscription)',
-                  choices=('reliable', 'best_effort'), read_only=True),
+    *loop_qos_parameters('current_command and displacement'),
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -326,12 +320,7 @@ class PlantSimulatorNode(Node):
     # -- parameters --------------------------------------------------------------------
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         try:
-            for parameter in parameters:
-                spec = _SPECS.get(parameter.name)
-                if spec is None:
-                    msg = f'{parameter.name} is not a parameter of this node'
-                    raise ParameterRejected(msg)
-                check_parameter(spec, parameter, allow_unset=True)
+            check_parameters(_SPECS, parameters, allow_unset=True)
         except ParameterRejected as err:
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
