@@ -10,8 +10,12 @@ import numpy.typing as npt
 from scipy.optimize import minimize_scalar
 
 from ..errors import DataError, ModelError
+from ..identification import identify
+from ..metrics import relative_rms_error
+from ..model import MPIModel
 
-__all__ = ['check_series', 'scalar_parameter', 'vector_parameter', 'search_scalar']
+__all__ = ['check_series', 'fit_gamma', 'lag_search_limits', 'scalar_parameter', 'search_fit',
+           'vector_parameter']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -86,15 +90,17 @@ def vector_parameter(mapping: Mapping[str, Any], key: str, *, minimum: float = 0
     return out
 
 
-def search_scalar(objective: Callable[[float], float], grid: FloatArray, *,
-                  refine: int = 8) -> tuple[float, float]:
+def search_fit(fit: Callable[[float], tuple[Any, float]], grid: FloatArray, *,
+               refine: int = 8) -> tuple[float, Any, float]:
     """
-    Minimise a 1-D objective: a grid scan, then a bounded search between the neighbours.
+    Minimise a 1-D fit error: a grid scan, then a bounded search between the neighbours.
+
+    Every trial's fit is kept, so the winner is returned without fitting it again.
 
     Parameters
     ----------
-    objective : callable float -> float
-        The function to minimise.
+    fit : callable float -> (result, error)
+        Fits at one trial value and returns the fit and its error (to minimise).
     grid : ndarray of float, shape (k,)
         Ascending trial values; the refinement runs in log scale if all are > 0.
     refine : int
@@ -102,21 +108,78 @@ def search_scalar(objective: Callable[[float], float], grid: FloatArray, *,
 
     Returns
     -------
-    best, value : float
-        Minimiser and minimum found.
+    best, result, error : float, object, float
+        Minimiser, its fit and the minimum found.
 
     """
+    fits: dict[float, Any] = {}
+
+    def objective(value: float) -> float:
+        fits[value], error = fit(value)
+        return error
+
     values = np.array([objective(float(g)) for g in grid])
     i = int(np.argmin(values))
     best, best_value = float(grid[i]), float(values[i])
-    if refine <= 0 or grid.size < 3:
-        return best, best_value
-    lo, hi = float(grid[max(i - 1, 0)]), float(grid[min(i + 1, grid.size - 1)])
-    use_log = lo > 0.0
-    a, b = (math.log(lo), math.log(hi)) if use_log else (lo, hi)
-    res = minimize_scalar(lambda v: objective(math.exp(v) if use_log else v), bounds=(a, b),
-                          method='bounded', options={'maxiter': refine, 'xatol': 1e-3})
-    if float(res.fun) < best_value:
-        best = float(math.exp(res.x) if use_log else res.x)
-        best_value = float(res.fun)
-    return best, best_value
+    if refine > 0 and grid.size >= 3:
+        lo, hi = float(grid[max(i - 1, 0)]), float(grid[min(i + 1, grid.size - 1)])
+        use_log = lo > 0.0
+        a, b = (math.log(lo), math.log(hi)) if use_log else (lo, hi)
+        res = minimize_scalar(lambda v: objective(math.exp(v) if use_log else v),
+                              bounds=(a, b), method='bounded',
+                              options={'maxiter': refine, 'xatol': 1e-3})
+        if float(res.fun) < best_value:
+            best = float(math.exp(res.x) if use_log else res.x)
+            best_value = float(res.fun)
+    if best not in fits:             # the optimiser's minimiser is one of its trials
+        fits[best], best_value = fit(best)
+    return best, fits[best], best_value
+
+
+def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, int],
+              epsilon: float) -> tuple[MPIModel, float]:
+    """
+    Identify Gamma on a (possibly transformed) current and return it with its error.
+
+    Parameters
+    ----------
+    current : ndarray of float, shape (N,)
+        Input of Gamma [A] (e.g. the delayed or lagged coil current).
+    displacement : ndarray of float, shape (N,)
+        Measured displacement [m].
+    order : (int, int)
+        ``(n, l)`` of Gamma.
+    epsilon : float
+        Bound of (8)/(19).
+
+    Returns
+    -------
+    model, error : MPIModel, float
+        The fit and its relative RMS error on the given data.
+
+    """
+    n, l = order  # noqa: E741
+    model = identify(current, displacement, n=n, l=l, epsilon=epsilon).model
+    return model, relative_rms_error(model.simulate(current), displacement)
+
+
+def lag_search_limits(time: FloatArray) -> tuple[float, float]:
+    """
+    Return the median sample interval [s] and the longest lag [s] worth trying.
+
+    The longest lag is the smaller of 200 sample intervals and 5 % of the record, and at
+    least 2 intervals.
+
+    Parameters
+    ----------
+    time : ndarray of float, shape (N,)
+        Sample times [s], increasing.
+
+    Returns
+    -------
+    dt, longest : float
+        Median interval and longest trial lag [s].
+
+    """
+    dt = float(np.median(np.diff(time)))
+    return dt, max(min(200.0 * dt, 0.05 * float(time[-1] - time[0])), 2.0 * dt)

@@ -18,10 +18,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, scalar_parameter, search_scalar
+from ._common import check_series, fit_gamma, lag_search_limits, scalar_parameter, search_fit
 from ._signals import delay
-from ..identification import identify
-from ..metrics import relative_rms_error
 from ..model import MPIModel
 
 __all__ = ['DeadTimeModel', 'fit_dead_time', 'DEAD_TIME']
@@ -114,15 +112,7 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
 
     """
     t, x, y = check_series(time, current, displacement)
-    n, l = order  # noqa: E741
-    dt = float(np.median(np.diff(t)))
-    hi = max(min(200.0 * dt, 0.05 * float(t[-1] - t[0])), 2.0 * dt)
-
-    def objective(lag: float) -> float:
-        xd = delay(t, x, lag)
-        return relative_rms_error(identify(xd, y, n=n, l=l, epsilon=epsilon).model.simulate(
-            xd), y)
-
-    lag, _ = search_scalar(objective, np.concatenate([[0.0], np.geomspace(dt, hi, 10)]))
-    xd = delay(t, x, lag)
-    return DeadTimeModel(identify(xd, y, n=n, l=l, epsilon=epsilon).model, lag)
+    dt, longest = lag_search_limits(t)
+    lag, model, _ = search_fit(lambda v: fit_gamma(delay(t, x, v), y, order, epsilon),
+                               np.concatenate([[0.0], np.geomspace(dt, longest, 10)]))
+    return DeadTimeModel(model, lag)

@@ -19,10 +19,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, scalar_parameter, search_scalar
+from ._common import check_series, fit_gamma, lag_search_limits, scalar_parameter, search_fit
 from ._signals import first_order_lag
-from ..identification import identify
-from ..metrics import relative_rms_error
 from ..model import MPIModel
 
 __all__ = ['RateDependentModel', 'fit_rate_dependence', 'RATE_TIME_CONSTANT']
@@ -116,19 +114,11 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
 
     """
     t, x, y = check_series(time, current, displacement)
-    n, l = order  # noqa: E741
-    dt = float(np.median(np.diff(t)))
-    hi = max(min(200.0 * dt, 0.05 * float(t[-1] - t[0])), 2.0 * dt)
-    grid = np.geomspace(0.5 * dt, hi, 10)
-
-    def objective(tau: float) -> float:
-        xe = first_order_lag(t, x, tau)
-        return relative_rms_error(identify(xe, y, n=n, l=l, epsilon=epsilon).model.simulate(
-            xe), y)
-
-    tau, _ = search_scalar(objective, grid)
-    base = identify(x, y, n=n, l=l, epsilon=epsilon)
-    if relative_rms_error(base.model.simulate(x), y) <= objective(tau):
-        return RateDependentModel(base.model, 0.0)
-    xe = first_order_lag(t, x, tau)
-    return RateDependentModel(identify(xe, y, n=n, l=l, epsilon=epsilon).model, tau)
+    dt, longest = lag_search_limits(t)
+    tau, model, error = search_fit(
+        lambda v: fit_gamma(first_order_lag(t, x, v), y, order, epsilon),
+        np.geomspace(0.5 * dt, longest, 10))
+    base, base_error = fit_gamma(x, y, order, epsilon)
+    if base_error <= error:
+        return RateDependentModel(base, 0.0)
+    return RateDependentModel(model, tau)

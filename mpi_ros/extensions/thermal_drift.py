@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, scalar_parameter, search_scalar
+from ._common import check_series, scalar_parameter, search_fit
 from ._signals import first_order_lag
 from ..identification import identify_weights
 from ..model import MPIModel
@@ -147,6 +147,6 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
     t, x, y = check_series(time, current, displacement)
     n, l = order  # noqa: E741
     duration = float(t[-1] - t[0])
-    tau, _ = search_scalar(lambda v: _fit_at(t, x, y, n, l, v, epsilon)[1],
-                           np.geomspace(duration / 20.0, 5.0 * duration, 5), refine=4)
-    return _fit_at(t, x, y, n, l, tau, epsilon)[0]
+    _, model, _ = search_fit(lambda v: _fit_at(t, x, y, n, l, v, epsilon),
+                             np.geomspace(duration / 20.0, 5.0 * duration, 5), refine=4)
+    return model
