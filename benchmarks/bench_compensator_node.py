@@ -153,9 +153,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         rss = []
         period_ns = int(1e9 / rate)
         msg = Float64()
-        cpu_start = {name: _cpu_seconds(pid) for name, pid in
-                     (('compensator', comp.pid), ('sender', os.getpid()),
-                      ('receiver', receiver.pid))}
+        pids = {'compensator': comp.pid, 'sender': os.getpid(), 'receiver': receiver.pid}
+        cpu_start = {name: _cpu_seconds(pid) for name, pid in pids.items()}
         start = time.monotonic_ns()
         next_rss = start
         k = 0
@@ -175,8 +174,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
             time.sleep(0.0002)
         elapsed = (time.monotonic_ns() - start) / 1e9
         cpu_percent = {name: 100.0 * (_cpu_seconds(pid) - cpu_start[name]) / elapsed
-                       for name, pid in (('compensator', comp.pid), ('sender', os.getpid()),
-                                         ('receiver', receiver.pid))}
+                       for name, pid in pids.items()}
         receiver.wait(timeout=duration + 120.0)
         rss.append((elapsed, _rss_kib(comp.pid)))
     finally:
