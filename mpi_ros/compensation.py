@@ -35,7 +35,9 @@ FloatArray = npt.NDArray[np.float64]
 
 @numba.njit(cache=True, nogil=True)
 def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
-                     r_s_inv, w_s_inv):  # pragma: no cover - compiled
+                     r_s_inv, w_s_inv, point):  # pragma: no cover - compiled
+    # point = (x0, y0, sign), the operating point: x = x0 + H'[S'[sign (s_c - y0)]].
+    x0 = point[0]
     # (14): inverse play state from the forward play state.
     n1 = w_h.shape[0]
     tail = 0.0
@@ -43,14 +45,14 @@ def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
     for i in range(n1 - 1, -1, -1):
         z_inv[i] = cum[i] * z_h[i] + tail
         tail += w_h[i] * z_h[i]
-    raw = _hysteresis_step(_superposition_value(s_c, r_s_inv, w_s_inv),
-                           r_h_inv, w_h_inv, z_inv)          # (27)
+    raw = x0 + _hysteresis_step(_superposition_value(point[2] * (s_c - point[1]), r_s_inv,
+                                                     w_s_inv), r_h_inv, w_h_inv, z_inv)  # (27)
     current = raw
     if current < lo:
         current = lo
     elif current > hi:
         current = hi
-    _hysteresis_step(current, r_h, w_h, z_h)                # forward plays, applied current
+    _hysteresis_step(current - x0, r_h, w_h, z_h)           # forward plays, applied current
     return current, raw
 
 
@@ -71,10 +73,10 @@ def _warm_up(kernel: tuple, s_c: float, output_min: float, output_max: float) ->
         Current limits [A].
 
     """
-    r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si = kernel
+    r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point = kernel
     _compensate_step(s_c, output_min, output_max, r_h, w_h, z_h.copy(), r_hi, w_hi,
-                     z_i.copy(), r_si, w_si)
-    _hysteresis_step(output_min, r_h, w_h, z_h.copy())
+                     z_i.copy(), r_si, w_si, point)
+    _hysteresis_step(output_min - point[0], r_h, w_h, z_h.copy())
 
 
 def screen_desired(desired: object, counters: dict[str, int],
@@ -139,9 +141,11 @@ class LinearMap:
 
 
 def _major_loop(current_min: float, current_max: float, points: int = 401) -> FloatArray:
+    # From the initial states (the rest at x0) to current_min, up, down, up: a play's
+    # output depends only on the extremes of a monotone path, so the jump to current_min
+    # equals a ramp there.
     up = np.linspace(current_min, current_max, points)
-    return np.concatenate([np.linspace(0.0, current_min, 50)[:-1] if current_min > 0 else [],
-                           up, up[::-1], up])
+    return np.concatenate([up, up[::-1], up])
 
 
 def operating_range(model: MPIModel, current_min: float,
@@ -163,7 +167,7 @@ def operating_range(model: MPIModel, current_min: float,
 
     """
     s = model.simulate(_major_loop(current_min, current_max))
-    return float(np.min(s[49:])), float(np.max(s[49:]))
+    return float(np.min(s)), float(np.max(s))
 
 
 def best_linear_map(model: MPIModel, current_min: float, current_max: float) -> LinearMap:
@@ -184,9 +188,7 @@ def best_linear_map(model: MPIModel, current_min: float, current_max: float) -> 
 
     """
     x = _major_loop(current_min, current_max)
-    s = model.simulate(x)
-    keep = slice(49 if current_min > 0 else 0, None)
-    gain, offset = np.polyfit(s[keep], x[keep], 1)
+    gain, offset = np.polyfit(model.simulate(x), x, 1)
     return LinearMap(float(gain), float(offset))
 
 
@@ -241,7 +243,7 @@ class FeedforwardCompensator:
         h, s_inv, h_inv = model.hysteresis, inverse.superposition, inverse.hysteresis
         z_h = np.array(h.initial_states, dtype=np.float64)
         if replay and len(self.memory):
-            _, z_h = h.apply(self.memory.points, z_h)
+            _, z_h = model.hysteresis_output(self.memory.points, z_h)
         lo, hi = operating_range(model, self.output_min, self.output_max)
         linear = best_linear_map(model, self.output_min, self.output_max)
         # One assignment of a tuple: the step never sees half of an old and a new model.
@@ -249,7 +251,9 @@ class FeedforwardCompensator:
                         z_h, np.ascontiguousarray(h_inv.thresholds),
                         np.ascontiguousarray(h_inv.weights), np.empty_like(z_h),
                         np.ascontiguousarray(s_inv.thresholds),
-                        np.ascontiguousarray(s_inv.weights))
+                        np.ascontiguousarray(s_inv.weights),
+                        np.array([model.input_offset, model.output_offset,
+                                  float(model.output_sign)]))
         _warm_up(self._kernel, lo, self.output_min, self.output_max)
         self.model = model
         self.displacement_range = (lo, hi)
@@ -304,14 +308,14 @@ class FeedforwardCompensator:
         s_c = screen_desired(desired, c, self.displacement_range)
         if s_c is None:
             return self.last_command
-        r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si = self._kernel
+        r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point = self._kernel
         if self.enabled:
             current, raw = _compensate_step(s_c, self.output_min, self.output_max, r_h, w_h,
-                                            z_h, r_hi, w_hi, z_i, r_si, w_si)
+                                            z_h, r_hi, w_hi, z_i, r_si, w_si, point)
         else:
             raw = self.linear_map(s_c)
             current = min(max(raw, self.output_min), self.output_max)
-            _hysteresis_step(current, r_h, w_h, z_h)
+            _hysteresis_step(current - point[0], r_h, w_h, z_h)
         if current != raw:
             c['clamped'] += 1
         self.memory.push(current)

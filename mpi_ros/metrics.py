@@ -3,6 +3,14 @@
 Error measures: nonlinearity error (37), control error (38), relative RMS error.
 
 All return fractions (0.026 means 2.6 %).
+
+(37) and (38) as printed divide by ``max|s|``: meaningful when the displacement is
+measured from the actuator's rest, as in the paper.  A rig's sensor has an arbitrary
+zero (an interferometer reading -123...-74 units), which makes them arbitrary too.
+:func:`range_error` and :func:`rms_range_error` divide by the measured output's range
+instead: they do not depend on the sensor's zero or sign, and equal (37) when the
+output starts at 0.  The identification, the order selection and the refusal checks
+use them.
 """
 
 import numpy as np
@@ -10,7 +18,8 @@ import numpy.typing as npt
 
 from .errors import DataError
 
-__all__ = ['nonlinearity_error', 'control_error', 'relative_rms_error']
+__all__ = ['nonlinearity_error', 'control_error', 'relative_rms_error', 'range_error',
+           'rms_range_error']
 
 
 def _pair(a: npt.ArrayLike, b: npt.ArrayLike, names: tuple[str, str]) -> tuple[
@@ -92,3 +101,61 @@ def relative_rms_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> 
     """
     g, s = _pair(model_output, measured, ('model_output', 'measured'))
     return float(np.sqrt(np.mean((g - s) ** 2)) / np.sqrt(np.mean(s ** 2)))
+
+
+def _output_range(measured: npt.NDArray[np.float64]) -> float:
+    span = float(np.max(measured) - np.min(measured))
+    if not span > 0.0:
+        msg = 'measured is constant: an error relative to its range is undefined'
+        raise DataError(msg)
+    return span
+
+
+def range_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> float:
+    """
+    Largest error over the measured output's range: ``max|Gamma[x] - s| / (max s - min s)``.
+
+    (37) with the range in place of ``max|Gamma[x]|``: equal to it when the output starts
+    at 0, and independent of the sensor's zero and sign.
+
+    Parameters
+    ----------
+    model_output : array_like of float, shape (N,)
+        Simulated output [m].
+    measured : array_like of float, shape (N,)
+        Measured output [m].
+
+    Returns
+    -------
+    float
+        The error as a fraction.
+
+    Examples
+    --------
+    >>> round(range_error([1.0, 2.0], [1.1, 2.0]), 12)
+    0.111111111111
+
+    """
+    g, s = _pair(model_output, measured, ('model_output', 'measured'))
+    return float(np.max(np.abs(g - s)) / _output_range(s))
+
+
+def rms_range_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> float:
+    """
+    RMS error over the measured output's range: ``rms(Gamma[x] - s) / (max s - min s)``.
+
+    Parameters
+    ----------
+    model_output : array_like of float, shape (N,)
+        Simulated output [m].
+    measured : array_like of float, shape (N,)
+        Measured output [m].
+
+    Returns
+    -------
+    float
+        The error as a fraction; independent of the sensor's zero and sign.
+
+    """
+    g, s = _pair(model_output, measured, ('model_output', 'measured'))
+    return float(np.sqrt(np.mean((g - s) ** 2)) / _output_range(s))

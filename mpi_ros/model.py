@@ -11,6 +11,16 @@ operator in the opposite order.  :class:`MPIModel` represents both; the flag
 
 Units: the forward model maps current (A) to displacement (m), H maps A to
 A (its weights are dimensionless), S maps A to m.  The inverse maps m to A.
+
+Operating point (not in the paper, whose actuator rests at the origin): a rig's
+sensor has an arbitrary zero ``y0``, its drive a bias ``x0``, and some sensors fall
+as the actuator extends (``sign = -1``).  The model is
+
+``y = y0 + sign * S[H[x - x0]]``  and its inverse  ``x = x0 + H'[S'[sign * (y - y0)]]``,
+
+still exact and closed-form: the offsets and the sign are affine maps around the
+operator pair.  H's plays and their initial states live in the shifted input
+``x - x0``.
 """
 
 from collections.abc import Mapping
@@ -58,17 +68,21 @@ def _superposition_value(x, r_s, w_s):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _mpi_step(x, r_h, w_h, z, r_s, w_s, inverse):  # pragma: no cover - compiled
+def _mpi_step(x, r_h, w_h, z, r_s, w_s, inverse, affine):  # pragma: no cover - compiled
+    # affine = (a, b, c, d): the operators see a + b x, the output is c + d * result.
+    u = affine[0] + affine[1] * x
     if inverse:                                             # (27): H' o S'
-        return _hysteresis_step(_superposition_value(x, r_s, w_s), r_h, w_h, z)
-    return _superposition_value(_hysteresis_step(x, r_h, w_h, z), r_s, w_s)   # (26)
+        out = _hysteresis_step(_superposition_value(u, r_s, w_s), r_h, w_h, z)
+    else:
+        out = _superposition_value(_hysteresis_step(u, r_h, w_h, z), r_s, w_s)   # (26)
+    return affine[2] + affine[3] * out
 
 
 @numba.njit(cache=True, nogil=True)
-def _mpi_batch(x, r_h, w_h, z, r_s, w_s, inverse):  # pragma: no cover - compiled
+def _mpi_batch(x, r_h, w_h, z, r_s, w_s, inverse, affine):  # pragma: no cover - compiled
     out = np.empty(x.shape[0])
     for k in range(x.shape[0]):
-        out[k] = _mpi_step(x[k], r_h, w_h, z, r_s, w_s, inverse)
+        out[k] = _mpi_step(x[k], r_h, w_h, z, r_s, w_s, inverse, affine)
     return out
 
 
@@ -86,6 +100,14 @@ class MPIModel:
     is_inverse : bool
         False: ``Gamma = S o H`` maps current [A] to displacement [m].
         True: ``Gamma^-1 = H^-1 o S^-1`` maps displacement [m] to current [A].
+    input_offset : float
+        ``x0`` [A]: the plays see ``x - x0`` (``model.input_offset``).
+    output_offset : float
+        ``y0`` [m]: added to the output of S (``model.output_offset``).
+    output_sign : int
+        +1, or -1 for a sensor that falls as the actuator extends (``model.output_sign``).
+        The forward model is ``y0 + sign * S[H[x - x0]]``; an inverse model keeps the
+        forward model's operating point and computes ``x0 + H'[S'[sign * (y - y0)]]``.
 
     Examples
     --------
@@ -105,6 +127,18 @@ class MPIModel:
     hysteresis: PIHysteresisOperator
     superposition: PISuperpositionOperator
     is_inverse: bool = False
+    input_offset: float = 0.0
+    output_offset: float = 0.0
+    output_sign: int = 1
+
+    def __post_init__(self) -> None:
+        """Check the operating point (finite offsets, sign +1 or -1)."""
+        x0, y0, sign = _params.check_operating_point({
+            _params.INPUT_OFFSET: self.input_offset, _params.OUTPUT_OFFSET: self.output_offset,
+            _params.OUTPUT_SIGN: self.output_sign})
+        object.__setattr__(self, 'input_offset', x0)
+        object.__setattr__(self, 'output_offset', y0)
+        object.__setattr__(self, 'output_sign', sign)
 
     # -- construction -------------------------------------------------------------------
     @classmethod
@@ -117,7 +151,9 @@ class MPIModel:
         mapping : Mapping[str, sequence of float]
             The keys ``model.hysteresis.thresholds``, ``model.hysteresis.weights``,
             ``model.hysteresis.initial_states``, ``model.superposition.thresholds``
-            and ``model.superposition.weights`` (SI units; extra keys ignored).
+            and ``model.superposition.weights`` (SI units; extra keys ignored), and
+            optionally the operating point ``model.input_offset`` [A],
+            ``model.output_offset`` [m], ``model.output_sign`` (default 0, 0, +1).
 
         Returns
         -------
@@ -131,13 +167,15 @@ class MPIModel:
 
         """
         p = _params.check_model_parameters(mapping)
+        x0, y0, sign = _params.check_operating_point(mapping)
         return cls(PIHysteresisOperator(p[_params.HYSTERESIS_THRESHOLDS],
                                         p[_params.HYSTERESIS_WEIGHTS],
                                         p[_params.HYSTERESIS_INITIAL_STATES]),
                    PISuperpositionOperator(p[_params.SUPERPOSITION_THRESHOLDS],
-                                           p[_params.SUPERPOSITION_WEIGHTS]))
+                                           p[_params.SUPERPOSITION_WEIGHTS]),
+                   input_offset=x0, output_offset=y0, output_sign=sign)
 
-    def to_params(self) -> dict[str, list[float]]:
+    def to_params(self) -> dict[str, Any]:
         """
         Return the parameter form of the forward model (SI units).
 
@@ -146,8 +184,8 @@ class MPIModel:
 
         Returns
         -------
-        dict[str, list of float]
-            The five ``model.*`` keys.
+        dict[str, list of float or float or int]
+            The five ``model.*`` arrays and the three operating point keys.
 
         """
         forward = self.inverse() if self.is_inverse else self
@@ -158,7 +196,36 @@ class MPIModel:
             _params.HYSTERESIS_INITIAL_STATES: [float(v) for v in h.initial_states],
             _params.SUPERPOSITION_THRESHOLDS: [float(v) for v in s.thresholds],
             _params.SUPERPOSITION_WEIGHTS: [float(v) for v in s.weights],
+            _params.INPUT_OFFSET: float(self.input_offset),
+            _params.OUTPUT_OFFSET: float(self.output_offset),
+            _params.OUTPUT_SIGN: int(self.output_sign),
         }
+
+    def with_operating_point(self, *, input_offset: float | None = None,
+                             output_offset: float | None = None,
+                             output_sign: int | None = None) -> 'MPIModel':
+        """
+        Return the same operators at another operating point (unchanged where not given).
+
+        Parameters
+        ----------
+        input_offset : float, optional
+            ``x0`` [A].
+        output_offset : float, optional
+            ``y0`` [m] (e.g. a validation run's own sensor zero).
+        output_sign : int, optional
+            +1 or -1.
+
+        Returns
+        -------
+        MPIModel
+            A new model; ``self`` is unchanged.
+
+        """
+        return MPIModel(self.hysteresis, self.superposition, self.is_inverse,
+                        self.input_offset if input_offset is None else input_offset,
+                        self.output_offset if output_offset is None else output_offset,
+                        self.output_sign if output_sign is None else output_sign)
 
     # -- properties ---------------------------------------------------------------------
     @property
@@ -185,9 +252,59 @@ class MPIModel:
         """
         return MPIModel(invert_hysteresis(self.hysteresis),
                         invert_superposition(self.superposition),
-                        not self.is_inverse)
+                        not self.is_inverse, self.input_offset, self.output_offset,
+                        self.output_sign)
+
+    # -- operating point ------------------------------------------------------------------
+    def hysteresis_output(self, current: npt.ArrayLike,
+                          state: npt.ArrayLike | None = None) -> tuple[FloatArray, FloatArray]:
+        """
+        Return ``H[x - x0]`` [A] of a forward model and the end state of its plays.
+
+        Parameters
+        ----------
+        current : array_like of float, shape (N,)
+            Current ``x`` [A].
+        state : array_like of float, shape (n+1,), optional
+            Play outputs before the first sample (in ``x - x0``); initial states by default.
+
+        Returns
+        -------
+        v : ndarray of float, shape (N,)
+            H's output [A].
+        state_end : ndarray of float, shape (n+1,)
+            Play outputs after the last sample.
+
+        """
+        x = np.asarray(current, dtype=np.float64).reshape(-1)
+        return self.hysteresis.apply(x - self.input_offset, state)
+
+    def output(self, hysteresis_output: npt.ArrayLike) -> FloatArray:
+        """
+        Return ``y0 + sign * S[v]`` [m] of a forward model for H-output values ``v`` [A].
+
+        Parameters
+        ----------
+        hysteresis_output : array_like of float, shape (N,)
+            ``v``, e.g. from :meth:`hysteresis_output` (plus extension terms).
+
+        Returns
+        -------
+        ndarray of float, shape (N,)
+            Displacement [m].
+
+        """
+        return self.output_offset + self.output_sign * self.superposition.apply(
+            hysteresis_output)
 
     # -- evaluation ---------------------------------------------------------------------
+    def _affine(self) -> FloatArray:
+        # (a, b, c, d): the operators see a + b * input, the result is c + d * output.
+        x0, y0, sign = self.input_offset, self.output_offset, float(self.output_sign)
+        if self.is_inverse:
+            return np.array([-sign * y0, sign, x0, 1.0])
+        return np.array([-x0, 1.0, y0, sign])
+
     def _kernel_args(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         h, s = self.hysteresis, self.superposition
         return (np.ascontiguousarray(h.thresholds), np.ascontiguousarray(h.weights),
@@ -203,8 +320,8 @@ class MPIModel:
         x : array_like of float, shape (N,)
             Input: current [A] (forward) or desired displacement [m] (inverse).
         state : array_like of float, shape (n+1,), optional
-            Play outputs before the first sample [A]; the model's initial states
-            by default.
+            Play outputs before the first sample [A] (in the shifted input ``x - x0``);
+            the model's initial states by default.
 
         Returns
         -------
@@ -218,7 +335,7 @@ class MPIModel:
         z = np.array(self.hysteresis.initial_states if state is None else state,
                      dtype=np.float64)
         x_arr = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
-        y = _mpi_batch(x_arr, r_h, w_h, z, r_s, w_s, self.is_inverse)
+        y = _mpi_batch(x_arr, r_h, w_h, z, r_s, w_s, self.is_inverse, self._affine())
         return y, z
 
     def simulate(self, x: npt.ArrayLike) -> FloatArray:
@@ -263,6 +380,7 @@ class MPIStream:
         self.model = model
         self._args = model._kernel_args()
         self._inverse = model.is_inverse
+        self._affine = model._affine()
         self._z = np.empty(model.hysteresis.thresholds.size)
         self.reset(state)
 
@@ -294,4 +412,5 @@ class MPIStream:
 
         """
         r_h, w_h, r_s, w_s = self._args
-        return float(_mpi_step(float(x), r_h, w_h, self._z, r_s, w_s, self._inverse))
+        return float(_mpi_step(float(x), r_h, w_h, self._z, r_s, w_s, self._inverse,
+                               self._affine))

@@ -8,7 +8,16 @@ The forward model Gamma = S o H is stored in SI units (A, m) under
 - ``model.hysteresis.weights`` (w_H, dimensionless),
 - ``model.hysteresis.initial_states`` (z_H0, A),
 - ``model.superposition.thresholds`` (r_S, ascending with exactly one 0, A),
-- ``model.superposition.weights`` (w_S, m/A).
+- ``model.superposition.weights`` (w_S, m/A),
+
+and its operating point (optional; not in the paper, whose actuator rests at the origin):
+
+- ``model.input_offset`` (x0, A, default 0.0): the input at which H's plays are centred,
+- ``model.output_offset`` (y0, m, default 0.0): the sensor reading the model adds,
+- ``model.output_sign`` (+1 or -1, default +1): -1 for a sensor that falls as the
+  actuator extends,
+
+so that ``y = y0 + sign * S[H[x - x0]]``.
 
 :func:`check_model_parameters` validates such a mapping completely (lengths,
 ordering, finiteness, the constraints (8) and (19)) and names the offending key.
@@ -29,8 +38,9 @@ from .errors import DataError, ModelError
 
 __all__ = [
     'HYSTERESIS_THRESHOLDS', 'HYSTERESIS_WEIGHTS', 'HYSTERESIS_INITIAL_STATES',
-    'SUPERPOSITION_THRESHOLDS', 'SUPERPOSITION_WEIGHTS', 'MODEL_KEYS',
-    'check_model_parameters', 'write_params_yaml', 'read_params_yaml', 'flatten_parameters',
+    'SUPERPOSITION_THRESHOLDS', 'SUPERPOSITION_WEIGHTS', 'MODEL_KEYS', 'INPUT_OFFSET',
+    'OUTPUT_OFFSET', 'OUTPUT_SIGN', 'OPERATING_POINT_KEYS', 'OPERATING_POINT_DEFAULTS',
+    'check_model_parameters', 'check_operating_point', 'write_params_yaml', 'read_params_yaml', 'flatten_parameters',
 ]
 
 HYSTERESIS_THRESHOLDS = 'model.hysteresis.thresholds'
@@ -40,6 +50,13 @@ SUPERPOSITION_THRESHOLDS = 'model.superposition.thresholds'
 SUPERPOSITION_WEIGHTS = 'model.superposition.weights'
 MODEL_KEYS = (HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS, HYSTERESIS_INITIAL_STATES,
               SUPERPOSITION_THRESHOLDS, SUPERPOSITION_WEIGHTS)
+INPUT_OFFSET = 'model.input_offset'
+OUTPUT_OFFSET = 'model.output_offset'
+OUTPUT_SIGN = 'model.output_sign'
+#: The operating point: optional keys, these defaults when absent (the paper's origin).
+OPERATING_POINT_KEYS = (INPUT_OFFSET, OUTPUT_OFFSET, OUTPUT_SIGN)
+OPERATING_POINT_DEFAULTS: dict[str, float | int] = {INPUT_OFFSET: 0.0, OUTPUT_OFFSET: 0.0,
+                                                    OUTPUT_SIGN: 1}
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -80,9 +97,56 @@ def _strictly_ascending(arr: FloatArray, key: str) -> None:
         raise ModelError(msg)
 
 
+def _scalar(mapping: Mapping[str, Any], key: str) -> float:
+    value = mapping.get(key)
+    if value is None:
+        return float(OPERATING_POINT_DEFAULTS[key])
+    number = isinstance(value, (int, float, np.floating, np.integer))
+    if isinstance(value, bool) or not number:
+        msg = f'{key} must be a number; found {type(value).__name__} {value!r}'
+        raise ModelError(msg)
+    if not math.isfinite(float(value)):
+        msg = f'{key} must be finite; found {float(value)}'
+        raise ModelError(msg)
+    return float(value)
+
+
+def check_operating_point(mapping: Mapping[str, Any]) -> tuple[float, float, int]:
+    """
+    Validate the operating point keys (absent or None: the defaults).
+
+    Parameters
+    ----------
+    mapping : Mapping[str, Any]
+        Flat parameters; ``model.input_offset`` [A], ``model.output_offset`` [m] and
+        ``model.output_sign`` (+1 or -1) are read, other keys ignored.
+
+    Returns
+    -------
+    (float, float, int)
+        ``(x0, y0, sign)``.
+
+    Raises
+    ------
+    ModelError
+        Naming the key.
+
+    """
+    x0 = _scalar(mapping, INPUT_OFFSET)
+    y0 = _scalar(mapping, OUTPUT_OFFSET)
+    sign = _scalar(mapping, OUTPUT_SIGN)
+    if sign not in (1.0, -1.0):
+        msg = (f'{OUTPUT_SIGN} must be 1 (the sensor rises as the actuator extends) or -1'
+               f' (it falls); found {sign:g}')
+        raise ModelError(msg)
+    return x0, y0, int(sign)
+
+
 def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
     """
     Validate the parameter form of a forward MPI model and return its arrays.
+
+    The operating point keys are checked by :func:`check_operating_point`.
 
     Parameters
     ----------

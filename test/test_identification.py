@@ -4,8 +4,8 @@
 from mpi_ros import IdentificationError, identify, MPIModel
 from mpi_ros.errors import DataError
 from mpi_ros.hysteresis import PIHysteresisOperator
-from mpi_ros.identification import (hysteresis_thresholds, inverse_superposition_thresholds,
-                                    select_order)
+from mpi_ros.identification import (fit_model, hysteresis_thresholds,
+                                    inverse_superposition_thresholds, select_order)
 from mpi_ros.inverse import invert_superposition
 from mpi_ros.params import check_model_parameters
 from mpi_ros.superposition import PISuperpositionOperator
@@ -45,7 +45,8 @@ def test_recovers_noise_free_mpi_model(n, l):  # noqa: E741
     x = _excitation()
     truth = _mpi_truth_on_paper_thresholds(x, n, l, rng)
     y = truth.simulate(x)
-    result = identify(x, y, n=n, l=l)
+    # The paper's design places the thresholds exactly where the truth has them.
+    result = identify(x, y, n=n, l=l, anchor='origin')
     assert result.nonlinearity_error <= 1e-6
     np.testing.assert_allclose(result.model.hysteresis.weights, truth.hysteresis.weights,
                                atol=1e-5)
@@ -67,18 +68,34 @@ def test_scale_invariance(factor):
 
 
 @pytest.mark.parametrize('seed', range(8))
-def test_result_always_satisfies_invertibility_constraints(seed):
-    # Arbitrary noisy, even non-hysteretic data: the QP still returns an invertible model.
+@pytest.mark.parametrize('anchor', ['operating_point', 'origin'])
+def test_result_always_satisfies_invertibility_constraints(seed, anchor):
+    # Arbitrary noisy, even non-hysteretic data: the QP still returns an invertible model
+    # (identify() refuses such data, see test_refuses_output_not_monotone_in_input).
     rng = np.random.default_rng(seed)
     x = 1.0 + 0.8 * np.sin(np.cumsum(rng.uniform(0.0, 0.2, 3000)))
     y = rng.normal(0.0, 1.0, x.size) * 1e-6 + 1e-5 * np.sin(5 * x) ** 2
-    result = identify(x, y, n=int(rng.integers(0, 15)), l=int(rng.integers(0, 8)))
-    params = result.model.to_params()
+    model, _, _ = fit_model(x, y, int(rng.integers(0, 15)), int(rng.integers(0, 8)),
+                            anchor=anchor)
+    params = model.to_params()
     check_model_parameters(params)                       # (8), (19), ordering, finiteness
-    assert result.model.hysteresis.satisfies_constraints()
-    assert result.model.superposition.satisfies_constraints()
-    s = result.model.simulate(x)
-    np.testing.assert_allclose(result.model.inverse().simulate(s), x, atol=1e-9)
+    assert model.hysteresis.satisfies_constraints()
+    assert model.superposition.satisfies_constraints()
+    s = model.simulate(x)
+    np.testing.assert_allclose(model.inverse().simulate(s), x, atol=1e-9)
+
+
+def test_refuses_output_not_monotone_in_input():
+    rng = np.random.default_rng(0)
+    x = 1.0 + 0.8 * np.sin(np.cumsum(rng.uniform(0.0, 0.2, 3000)))
+    y = rng.normal(0.0, 1.0, x.size) * 1e-6 + 1e-5 * np.sin(5 * x) ** 2
+    with pytest.raises(IdentificationError, match='not monotone in the input'):
+        identify(x, y, n=4, l=2)
+    # A butterfly loop (ferroelectric switching): displacement ~ |x|.
+    t = np.linspace(0.0, 4.0, 4000)
+    x = np.sin(2 * np.pi * t)
+    with pytest.raises(IdentificationError, match='butterfly'):
+        identify(x, np.abs(x) + 0.1 * np.cos(2 * np.pi * t), n=4, l=2)
 
 
 def test_biased_current_and_positive_displacement_si_units():
@@ -87,9 +104,12 @@ def test_biased_current_and_positive_displacement_si_units():
     x = np.concatenate([np.linspace(0.0, 1.0, 400), 1.0 + 0.8 * np.sin(t) * np.exp(-t / 30)])
     h = PIHysteresisOperator([0.0, 0.3, 0.6], [1.0, 0.4, 0.2])
     y = 2e-5 * h.apply(x)[0] ** 1.3
-    result = identify(x, y, n=6, l=3)
+    result = identify(x, y, n=6, l=3, anchor='origin')
     assert result.model.superposition.thresholds[0] == 0.0   # output never negative: no branch
     assert result.nonlinearity_error < 0.05
+    centred = identify(x, y, n=6, l=3)                       # both branches around y0
+    assert centred.model.superposition.thresholds[0] < 0.0
+    assert centred.rms_error <= result.rms_error
 
 
 def test_error_table_falls_and_saturates_on_non_mpi_truth():
@@ -113,7 +133,8 @@ def test_auto_order_returns_table_and_stops():
     x = _excitation(6001, 12.0)
     truth = _mpi_truth_on_paper_thresholds(x, 4, 2, rng)
     y = truth.simulate(x) * (1 + rng.normal(0, 1e-3, x.size))
-    result = identify(x, y, order='auto')
+    # The truth lies on the paper's thresholds: (4, 2) represents it exactly there.
+    result = identify(x, y, order='auto', anchor='origin')
     table = result.order_table
     assert [(r['n'], r['l']) for r in table][:3] == [(0, 0), (2, 1), (4, 2)]
     assert len(table) < 11                               # saturation stopped the search
@@ -121,7 +142,7 @@ def test_auto_order_returns_table_and_stops():
     best = min(r['nonlinearity_error'] for r in table)
     chosen = next(r for r in table if (r['n'], r['l']) == result.order)
     assert chosen['nonlinearity_error'] <= 1.05 * best
-    order, table2 = select_order(x, y)
+    order, table2 = select_order(x, y, anchor='origin')
     assert order == result.order and table2 == table
 
 
@@ -162,6 +183,15 @@ def test_summary_is_json_ready():
     (1.0 + 1e-3 * np.sin(np.linspace(0, 60, 3000)), 'reverses by at most'),  # 1 mA wiggle
 ])
 def test_too_little_excitation_for_the_order(x, match):
+    # Relative to the origin (the paper's design) a 1 mA wiggle around 1 A is too small;
+    # relative to its own range (the default design) it is a full sweep.
     with pytest.raises(IdentificationError, match=f'too little excitation.*{match}'):
-        identify(x, 1e-5 * x ** 2, n=14, l=7)
-    identify(x, 1e-5 * x ** 2, n=0, l=2)              # a static map is still identifiable
+        identify(x, 1e-5 * x ** 2, n=14, l=7, anchor='origin')
+    if match == 'never reverses':                           # a static map is identifiable
+        identify(x, 1e-5 * x ** 2, n=0, l=2, anchor='origin')
+    if match == 'never reverses':
+        with pytest.raises(IdentificationError, match='too little excitation.*never reverses'):
+            identify(x, 1e-5 * x ** 2, n=14, l=7)
+    else:
+        result = identify(x, 1e-5 * x ** 2, n=14, l=7)
+        assert result.rms_error <= result.linear_rms_error

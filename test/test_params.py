@@ -30,7 +30,9 @@ def _with(**changes):
 def test_valid_parameters_load():
     model = MPIModel.from_params(VALID)
     assert (model.n, model.l) == (2, 1)
-    assert model.to_params() == VALID
+    # The parameter form is the five arrays plus the operating point (defaults: origin).
+    assert model.to_params() == {**VALID, 'model.input_offset': 0.0,
+                                 'model.output_offset': 0.0, 'model.output_sign': 1}
 
 
 @pytest.mark.parametrize('params, match', [

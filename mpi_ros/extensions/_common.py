@@ -10,7 +10,7 @@ import numpy.typing as npt
 from scipy.optimize import minimize_scalar
 
 from ..errors import DataError, ModelError
-from ..identification import identify
+from ..identification import fit_model
 from ..metrics import relative_rms_error
 from ..model import MPIModel
 
@@ -159,8 +159,9 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
 
     """
     n, l = order  # noqa: E741
-    model = identify(current, displacement, n=n, l=l, epsilon=epsilon).model
-    return model, relative_rms_error(model.simulate(current), displacement)
+    model, design, _ = fit_model(current, displacement, n, l, epsilon=epsilon)
+    keep = slice(design.burn_in, None)
+    return model, relative_rms_error(model.simulate(current)[keep], displacement[keep])
 
 
 def lag_search_limits(time: FloatArray) -> tuple[float, float]:

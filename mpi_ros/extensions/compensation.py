@@ -133,7 +133,7 @@ class ExtendedCompensator:
         h = gamma.hysteresis
         z_h = np.array(h.initial_states, dtype=np.float64)
         if replay and len(self.memory):
-            _, z_h = h.apply(self.memory.points, z_h)
+            _, z_h = gamma.hysteresis_output(self.memory.points, z_h)
         if isinstance(model, CreepModel):
             taus = np.asarray(model.time_constants, dtype=np.float64)
             if self._slow.size != taus.size:
@@ -146,13 +146,15 @@ class ExtendedCompensator:
         self._kernel = (np.ascontiguousarray(h.thresholds), np.ascontiguousarray(h.weights),
                         z_h, np.ascontiguousarray(inverse.superposition.thresholds),
                         np.ascontiguousarray(inverse.superposition.weights))
+        # Operating point: x = x0 + H'[S'[sign (s_c - y0)] - ...], plays see x - x0.
+        self._point = (gamma.input_offset, gamma.output_offset, float(gamma.output_sign))
         self.model = model
         self.displacement_range = operating_range(gamma, self.output_min, self.output_max)
         self.linear_map = best_linear_map(gamma, self.output_min, self.output_max)
         # Run the compiled steps once on copies: the first real command does not pay
         # numba's dispatch (milliseconds on first use).
         r_h, w_h, z_h, r_si, w_si = self._kernel
-        v = _superposition_value(self.displacement_range[0], r_si, w_si)
+        v = _superposition_value(0.0, r_si, w_si)
         _hysteresis_step(_inverse_value(v, r_h, w_h, 0.0, z_h), r_h, w_h, z_h.copy())
 
     def swap_model(self, model: InvertibleModel) -> None:
@@ -223,6 +225,8 @@ class ExtendedCompensator:
             return self.last_command
         h = self._interval(time)
         r_h, w_h, z_h, r_si, w_si = self._kernel
+        x0, y0, sign = self._point
+        v_c = _superposition_value(sign * (s_c - y0), r_si, w_si)      # S'[...] (27)
         model = self.model
         x_prev = self.last_command
         if isinstance(model, CreepModel):
@@ -234,10 +238,10 @@ class ExtendedCompensator:
             else:
                 b, p = np.ones(self._slow.size), np.zeros(self._slow.size)
             beta = float(np.dot(model.weights, b))
-            offset = float(np.dot(model.weights, p))
+            # The lags see x - x0: c_rel = c - x0 (a lag of a constant is the constant).
+            offset = float(np.dot(model.weights, p - x0 * (1.0 - b)))
             if self.enabled:
-                raw = _inverse_value(_superposition_value(s_c, r_si, w_si) - offset,
-                                     r_h, w_h, beta, z_h)
+                raw = x0 + _inverse_value(v_c - offset, r_h, w_h, beta, z_h)
             else:
                 raw = self.linear_map(s_c)
             current = min(max(raw, self.output_min), self.output_max)
@@ -250,8 +254,7 @@ class ExtendedCompensator:
                 a, b = 0.0, 1.0
             xe_prev = float(self._slow[0])
             if self.enabled:
-                target = _inverse_value(_superposition_value(s_c, r_si, w_si), r_h, w_h,
-                                        0.0, z_h)
+                target = x0 + _inverse_value(v_c, r_h, w_h, 0.0, z_h)
                 raw = x_prev + (target - a * xe_prev - (1.0 - a) * x_prev) / b
                 if not self._started:
                     raw = target
@@ -268,16 +271,17 @@ class ExtendedCompensator:
             else:
                 thermal = None
             if self.enabled:
-                v = _superposition_value(s_c, r_si, w_si)
+                v = v_c
                 if thermal is not None:
-                    raw = _inverse_value(v - model.weight * thermal, r_h, w_h, 0.0, z_h)
+                    raw = x0 + _inverse_value(v - model.weight * thermal, r_h, w_h, 0.0, z_h)
                 else:
                     # First sample: the state starts at x_0^2 (steady state); a few
                     # fixed-point sweeps x <- H'[v - w_T x^2] (a contraction for the small
                     # w_T a drift has) settle it.
                     raw = x_prev
                     for _ in range(8):
-                        raw = _inverse_value(v - model.weight * raw * raw, r_h, w_h, 0.0, z_h)
+                        raw = x0 + _inverse_value(v - model.weight * raw * raw, r_h, w_h,
+                                                  0.0, z_h)
             else:
                 raw = self.linear_map(s_c)
             current = min(max(raw, self.output_min), self.output_max)
@@ -287,7 +291,7 @@ class ExtendedCompensator:
             raw = current = x_prev
         if current != raw:
             c['clamped'] += 1
-        _hysteresis_step(material, r_h, w_h, z_h)
+        _hysteresis_step(material - x0, r_h, w_h, z_h)
         self.memory.push(material)
         self._started = True
         self.last_command = current

@@ -2,7 +2,7 @@
 """
 Creep extension: Kuhnen-style linear creep operators added to the hysteresis operator.
 
-The extended operator is ``s = S[ H[x] + sum_j w_Cj C_j[x] ]`` where each creep operator
+The extended operator is ``s = y0 + sign S[ H[x - x0] + sum_j w_Cj C_j[x - x0] ]`` where each creep operator
 ``C_j`` is a first-order lag ``tau_j dc_j/dt = x - c_j`` of the input (see
 :mod:`mpi_ros.extensions._signals`) and the time constants ``tau_j`` are spaced
 logarithmically over the record's time scales.  After a step of the input the lags
@@ -107,9 +107,9 @@ class CreepModel:
         return params
 
     def creep_term(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
-        """Return ``sum_j w_Cj C_j[x]`` [A] (lags start in steady state at the first sample)."""
+        """Return ``sum_j w_Cj C_j[x - x0]`` [A] (lags start in steady state at the first sample)."""
         t, x = check_series(time, current)
-        return lag_bank(t, x, self.time_constants) @ self.weights
+        return lag_bank(t, x - self.model.input_offset, self.time_constants) @ self.weights
 
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """
@@ -129,8 +129,8 @@ class CreepModel:
 
         """
         t, x = check_series(time, current)
-        h, _ = self.model.hysteresis.apply(x)
-        return self.model.superposition.apply(h + self.creep_term(t, x))
+        h, _ = self.model.hysteresis_output(x)
+        return self.model.output(h + self.creep_term(t, x))
 
 
 def creep_time_constants(time: npt.ArrayLike, *, per_decade: float = 2.0,
@@ -196,6 +196,9 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     taus = (creep_time_constants(t) if time_constants is None
             else np.asarray(time_constants, dtype=np.float64))
     n, l = order  # noqa: E741
-    design, w_h, w_s_inv, w_c, _ = identify_weights(
-        x, y, n, l, epsilon=epsilon, extra_columns=lambda xs: lag_bank(t, xs, taus))
-    return CreepModel(design.model(w_h, w_s_inv), taus, w_c)
+    design, w_h, w_s_inv, w_c, constant, _ = identify_weights(
+        x, y, n, l, epsilon=epsilon,
+        extra_columns=lambda d: lag_bank(t, d.scaled_input(x), taus))
+    # The lags shift with the input like the plays: the constant moves x0 by c / (sum w).
+    return CreepModel(design.model(w_h, w_s_inv, constant, shift_weight=float(np.sum(w_c))),
+                      taus, w_c)

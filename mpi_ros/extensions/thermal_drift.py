@@ -104,17 +104,19 @@ class ThermalDriftModel:
 
         """
         t, x = check_series(time, current)
-        h, _ = self.model.hysteresis.apply(x)
-        return self.model.superposition.apply(h + self.weight * self.thermal_state(t, x))
+        h, _ = self.model.hysteresis_output(x)
+        return self.model.output(h + self.weight * self.thermal_state(t, x))
 
 
 def _fit_at(t: FloatArray, x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
             tau: float, epsilon: float) -> tuple[ThermalDriftModel, float]:
-    design, w_h, w_s_inv, w_t, _ = identify_weights(
+    # The heating follows the absolute current (I^2), not the offset one.
+    design, w_h, w_s_inv, w_t, constant, _ = identify_weights(
         x, y, n, l, epsilon=epsilon,
-        extra_columns=lambda xs: first_order_lag(t, xs * xs, tau)[:, None],
+        extra_columns=lambda d: first_order_lag(t, (x / d.x_scale) ** 2, tau)[:, None],
         extra_lower=np.array([-np.inf]))
-    model = ThermalDriftModel(design.model(w_h, w_s_inv), tau, float(w_t[0]) / design.x_scale)
+    model = ThermalDriftModel(design.model(w_h, w_s_inv, constant), tau,
+                              float(w_t[0]) / design.x_scale)
     error = float(np.mean((model.simulate(t, x) - y) ** 2))
     return model, error
 
