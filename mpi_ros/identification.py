@@ -26,9 +26,10 @@ Real records (documented in docs/design.md, "Identification on real records"):
   straight-line fit), and (29)-(31) place S' thresholds on both sides.  A constant term
   ``c`` in the generalised error, ``E = w_H^T H[x - x0] - w'_S^T S'[v] + c``, keeps the
   QP convex (it is eliminated exactly: the columns' covariance replaces their Gram
-  matrix, and ``c = -mean(columns) . w``); since ``H[u] + c = H[u + c / sum w_H]`` once the plays' states are set by
-  the data, it is an exact shift of the input offset.  The result is invariant to a
-  constant added to the displacement or the current and to the output's sign.
+  matrix, and ``c = -mean(columns) . w``); since ``H[u] + c = H[u + c / sum w_H]``
+  once the plays' states are set by the data, it is an exact shift of the input offset.
+  The result is invariant to a constant added to the displacement or the current and
+  to the output's sign.
   ``anchor='origin'`` is the paper's design as printed (for data that start at rest at
   the origin).
 - **Unknown start state.** The plays start at the centre (``z = 0``), which is almost
@@ -37,7 +38,8 @@ Real records (documented in docs/design.md, "Identification on real records"):
   range of ``2 r``, and so does the actuator (any hysteresis with that property) once
   the input has visited both extremes of the record; the generalised error is
   therefore minimised only over the samples after the input first covered its range
-  (99 %): the fit uses only what the data determine, not the initial loading curve.  The returned model's initial states are the centre (0).
+  (99 %): the fit uses only what the data determine, not the initial loading curve.
+  The returned model's initial states are the centre (0).
 - The data are scaled internally; all thresholds follow the data, so results do not
   depend on units.
 - A branch of S' the output never reaches (the output stays on one side of

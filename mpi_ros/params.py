@@ -40,7 +40,8 @@ __all__ = [
     'HYSTERESIS_THRESHOLDS', 'HYSTERESIS_WEIGHTS', 'HYSTERESIS_INITIAL_STATES',
     'SUPERPOSITION_THRESHOLDS', 'SUPERPOSITION_WEIGHTS', 'MODEL_KEYS', 'INPUT_OFFSET',
     'OUTPUT_OFFSET', 'OUTPUT_SIGN', 'OPERATING_POINT_KEYS', 'OPERATING_POINT_DEFAULTS',
-    'check_model_parameters', 'check_operating_point', 'write_params_yaml', 'read_params_yaml', 'flatten_parameters',
+    'check_model_parameters', 'check_operating_point', 'write_params_yaml', 'read_params_yaml',
+    'flatten_parameters',
 ]
 
 HYSTERESIS_THRESHOLDS = 'model.hysteresis.thresholds'

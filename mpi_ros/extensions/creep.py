@@ -2,8 +2,8 @@
 """
 Creep extension: Kuhnen-style linear creep operators added to the hysteresis operator.
 
-The extended operator is ``s = y0 + sign S[ H[x - x0] + sum_j w_Cj C_j[x - x0] ]`` where each creep operator
-``C_j`` is a first-order lag ``tau_j dc_j/dt = x - c_j`` of the input (see
+The extended operator is ``s = y0 + sign S[H[x - x0] + sum_j w_Cj C_j[x - x0]]`` where each
+creep operator ``C_j`` is a first-order lag ``tau_j dc_j/dt = x - c_j`` of the input (see
 :mod:`mpi_ros.extensions._signals`) and the time constants ``tau_j`` are spaced
 logarithmically over the record's time scales.  After a step of the input the lags
 settle one after the other, which gives the ``log t``-like creep of the output.
@@ -107,7 +107,7 @@ class CreepModel:
         return params
 
     def creep_term(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
-        """Return ``sum_j w_Cj C_j[x - x0]`` [A] (lags start in steady state at the first sample)."""
+        """Return ``sum_j w_Cj C_j[x - x0]`` [A] (lags start in steady state at sample 0)."""
         t, x = check_series(time, current)
         return lag_bank(t, x - self.model.input_offset, self.time_constants) @ self.weights
 
