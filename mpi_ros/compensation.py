@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .errors import ModelError
+from .inverse import hysteresis_inverse_states
 from .memory import TurningPointMemory
 from .model import _hysteresis_step, _superposition_value, MPIModel
 
@@ -38,13 +39,7 @@ def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
                      r_s_inv, w_s_inv, point):  # pragma: no cover - compiled
     # point = (x0, y0, sign), the operating point: x = x0 + H'[S'[sign (s_c - y0)]].
     x0 = point[0]
-    # (14): inverse play state from the forward play state.
-    n1 = w_h.shape[0]
-    tail = 0.0
-    cum = np.cumsum(w_h)
-    for i in range(n1 - 1, -1, -1):
-        z_inv[i] = cum[i] * z_h[i] + tail
-        tail += w_h[i] * z_h[i]
+    hysteresis_inverse_states(w_h, z_h, z_inv)              # (14): from the forward state
     raw = x0 + _hysteresis_step(_superposition_value(point[2] * (s_c - point[1]), r_s_inv,
                                                      w_s_inv), r_h_inv, w_h_inv, z_inv)  # (27)
     current = raw

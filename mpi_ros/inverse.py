@@ -19,6 +19,7 @@ The laws are involutions: applying them to the inverse gives back the
 original operator (checked in ``test/test_inverse.py``).
 """
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
@@ -29,9 +30,62 @@ __all__ = [
     'invert_hysteresis_thresholds', 'invert_hysteresis_weights',
     'invert_hysteresis_initial_states', 'invert_superposition_thresholds',
     'invert_superposition_weights', 'invert_hysteresis', 'invert_superposition',
+    'hysteresis_inverse_laws', 'hysteresis_inverse_states',
 ]
 
 FloatArray = npt.NDArray[np.float64]
+
+
+@numba.njit(cache=True, nogil=True)
+def hysteresis_inverse_laws(r, w, r_out, w_out):  # pragma: no cover - compiled
+    """
+    Threshold law (12) and weight law (13), into ``r_out`` and ``w_out``.
+
+    The one implementation of (12)-(13): :func:`invert_hysteresis`, the superposition
+    laws (22)-(25) (the same sums per branch) and the extended compensators' per-step
+    inverse call it.
+
+    Parameters
+    ----------
+    r, w : ndarray of float, shape (n+1,)
+        Thresholds and weights of H (every cumulative weight sum positive).
+    r_out, w_out : ndarray of float, shape (n+1,)
+        Receive ``r'_H`` and ``w'_H``.
+
+    """
+    cumulative = 0.0
+    partial = 0.0
+    for i in range(w.shape[0]):
+        previous = cumulative
+        cumulative += w[i]                                   # w_0 + ... + w_i
+        partial += w[i] * r[i]
+        r_out[i] = cumulative * r[i] - partial               # (12)
+        w_out[i] = 1.0 / w[0] if i == 0 else -w[i] / (cumulative * previous)   # (13)
+
+
+@numba.njit(cache=True, nogil=True)
+def hysteresis_inverse_states(w, z, out):  # pragma: no cover - compiled
+    """
+    Initial-state law (14), into ``out``: ``z'_i = (w_0+...+w_i) z_i + sum_{j>i} w_j z_j``.
+
+    The one implementation of (14): :func:`invert_hysteresis_initial_states` and the
+    compensators (which map the forward play state to the inverse one every step) call it.
+
+    Parameters
+    ----------
+    w : ndarray of float, shape (n+1,)
+        Weights of H.
+    z : ndarray of float, shape (n+1,)
+        Play outputs of H.
+    out : ndarray of float, shape (n+1,)
+        Receives the play outputs of H^-1.
+
+    """
+    cumulative = np.cumsum(w)
+    tail = 0.0
+    for i in range(w.shape[0] - 1, -1, -1):
+        out[i] = cumulative[i] * z[i] + tail
+        tail += w[i] * z[i]
 
 
 def invert_hysteresis_thresholds(thresholds: npt.ArrayLike,
@@ -52,10 +106,11 @@ def invert_hysteresis_thresholds(thresholds: npt.ArrayLike,
         ``r'_H`` of H^-1.
 
     """
-    r = np.asarray(thresholds, dtype=np.float64)
-    w = np.asarray(weights, dtype=np.float64)
-    diffs = r[:, None] - r[None, :]                         # r_Hi - r_Hj
-    return np.sum(np.tril(diffs) * w[None, :], axis=1)      # (12)
+    r = np.ascontiguousarray(thresholds, dtype=np.float64)
+    w = np.ascontiguousarray(weights, dtype=np.float64)
+    r_out, w_out = np.empty_like(r), np.empty_like(w)
+    hysteresis_inverse_laws(r, w, r_out, w_out)             # (12)
+    return r_out
 
 
 def invert_hysteresis_weights(weights: npt.ArrayLike) -> FloatArray:
@@ -73,12 +128,10 @@ def invert_hysteresis_weights(weights: npt.ArrayLike) -> FloatArray:
         ``w'_H`` of H^-1.
 
     """
-    w = np.asarray(weights, dtype=np.float64)
-    cumulative = np.cumsum(w)                               # w_H0 + ... + w_Hi
-    out = np.empty_like(w)
-    out[0] = 1.0 / w[0]                                     # (13), i = 0
-    out[1:] = -w[1:] / (cumulative[1:] * cumulative[:-1])  # (13), i = 1..n
-    return out
+    w = np.ascontiguousarray(weights, dtype=np.float64)
+    r_out, w_out = np.empty_like(w), np.empty_like(w)
+    hysteresis_inverse_laws(np.zeros_like(w), w, r_out, w_out)   # (13)
+    return w_out
 
 
 def invert_hysteresis_initial_states(initial_states: npt.ArrayLike,
@@ -103,17 +156,20 @@ def invert_hysteresis_initial_states(initial_states: npt.ArrayLike,
         Play outputs ``z'_H0`` of H^-1 [A].
 
     """
-    z = np.asarray(initial_states, dtype=np.float64)
-    w = np.asarray(weights, dtype=np.float64)
-    wz = w * z
-    tail = np.concatenate([np.cumsum(wz[::-1])[::-1][1:], [0.0]])   # sum_{j>i} w_j z_j
-    return np.cumsum(w) * z + tail                                  # (14)
+    z = np.ascontiguousarray(initial_states, dtype=np.float64)
+    w = np.ascontiguousarray(weights, dtype=np.float64)
+    out = np.empty_like(z)
+    hysteresis_inverse_states(w, z, out)                    # (14)
+    return out
 
 
 def _branch_laws(r: FloatArray, w: FloatArray) -> tuple[FloatArray, FloatArray]:
-    # One branch ordered outwards from the zero threshold: (22)-(23) or (24)-(25).
-    r_new = invert_hysteresis_thresholds(r, w)
-    w_new = invert_hysteresis_weights(w)
+    # One branch ordered outwards from the zero threshold: (22)-(23) or (24)-(25) are
+    # the sums (12)-(13) over the branch.
+    r = np.ascontiguousarray(r, dtype=np.float64)
+    w = np.ascontiguousarray(w, dtype=np.float64)
+    r_new, w_new = np.empty_like(r), np.empty_like(w)
+    hysteresis_inverse_laws(r, w, r_new, w_new)
     return r_new, w_new
 
 
@@ -167,8 +223,8 @@ def invert_superposition_weights(thresholds: npt.ArrayLike,
     w = np.asarray(weights, dtype=np.float64)
     c = int(np.flatnonzero(r == 0.0)[0])
     out = np.empty_like(w)
-    out[c:] = invert_hysteresis_weights(w[c:])                      # (23)
-    out[:c + 1] = invert_hysteresis_weights(w[:c + 1][::-1])[::-1]  # (25)
+    out[c:] = _branch_laws(r[c:], w[c:])[1]                             # (23)
+    out[:c + 1] = _branch_laws(r[:c + 1][::-1], w[:c + 1][::-1])[1][::-1]   # (25)
     return out
 
 

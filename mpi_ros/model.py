@@ -35,6 +35,7 @@ from . import params as _params
 from .deadzone import _dead_zone
 from .hysteresis import PIHysteresisOperator
 from .inverse import invert_hysteresis, invert_superposition
+from .play import play_clamp
 from .superposition import PISuperpositionOperator
 
 __all__ = ['MPIModel', 'MPIStream']
@@ -47,15 +48,8 @@ def _hysteresis_step(x, r_h, w_h, z):  # pragma: no cover - compiled
     # Play operators (4) then the weighted sum (5).
     acc = 0.0
     for i in range(r_h.shape[0]):
-        lo = x - r_h[i]
-        hi = x + r_h[i]
-        zi = z[i]
-        if zi < lo:
-            zi = lo
-        elif zi > hi:
-            zi = hi
-        z[i] = zi
-        acc += w_h[i] * zi
+        z[i] = play_clamp(x, r_h[i], z[i])
+        acc += w_h[i] * z[i]
     return acc
 
 

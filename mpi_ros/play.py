@@ -16,9 +16,41 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['play_operator', 'PlayOperatorStream', 'play_step']
+__all__ = ['play_operator', 'PlayOperatorStream', 'play_step', 'play_clamp']
 
 FloatArray = npt.NDArray[np.float64]
+
+
+@numba.njit(cache=True, nogil=True, inline='always')
+def play_clamp(x, r, z):  # pragma: no cover - compiled
+    """
+    Return one play operator's new output (2)-(4): ``max(x - r, min(x + r, z))``.
+
+    The one implementation of the play rule: the batch and streaming plays, H (5), the
+    MPI kernels and the compensators all call it.
+
+    Parameters
+    ----------
+    x : float
+        Input sample.
+    r : float
+        Threshold ``r >= 0``.
+    z : float
+        Output before the sample.
+
+    Returns
+    -------
+    float
+        Output after the sample.
+
+    """
+    lo = x - r
+    if z < lo:
+        return lo
+    hi = x + r
+    if z > hi:
+        return hi
+    return z
 
 
 @numba.njit(cache=True, nogil=True)
@@ -29,15 +61,8 @@ def _play_batch(x, r, z):  # pragma: no cover - compiled
     for k in range(n_samples):
         xk = x[k]
         for i in range(m):
-            lo = xk - r[i]
-            hi = xk + r[i]
-            zi = z[i]
-            if zi < lo:
-                zi = lo
-            elif zi > hi:
-                zi = hi
-            z[i] = zi
-            out[k, i] = zi
+            z[i] = play_clamp(xk, r[i], z[i])
+            out[k, i] = z[i]
     return out
 
 
@@ -57,12 +82,7 @@ def play_step(x, r, z):  # pragma: no cover - compiled
 
     """
     for i in range(r.shape[0]):
-        lo = x - r[i]
-        hi = x + r[i]
-        if z[i] < lo:
-            z[i] = lo
-        elif z[i] > hi:
-            z[i] = hi
+        z[i] = play_clamp(x, r[i], z[i])
 
 
 def play_operator(x: npt.ArrayLike, thresholds: npt.ArrayLike,

@@ -44,6 +44,7 @@ from .thermal_drift import ThermalDriftModel
 from ..compensation import (best_linear_map, FeedforwardCompensator, operating_range,
                             screen_desired)
 from ..errors import ModelError, MPIWarning
+from ..inverse import hysteresis_inverse_laws, hysteresis_inverse_states
 from ..memory import TurningPointMemory
 from ..model import _hysteresis_step, _superposition_value, MPIModel
 
@@ -59,19 +60,11 @@ def _inverse_value(v, r_h, w_h, beta, z_h):  # pragma: no cover - compiled
     n1 = w_h.shape[0]
     w = w_h.copy()
     w[0] += beta
-    cum = np.cumsum(w)
     r_inv = np.empty(n1)
     w_inv = np.empty(n1)
     z_inv = np.empty(n1)
-    partial = 0.0
-    for i in range(n1):
-        partial += w[i] * r_h[i]
-        r_inv[i] = cum[i] * r_h[i] - partial                       # (12)
-        w_inv[i] = 1.0 / w[0] if i == 0 else -w[i] / (cum[i] * cum[i - 1])   # (13)
-    tail = 0.0
-    for i in range(n1 - 1, -1, -1):
-        z_inv[i] = cum[i] * z_h[i] + tail                          # (14)
-        tail += w[i] * z_h[i]
+    hysteresis_inverse_laws(r_h, w, r_inv, w_inv)                  # (12)-(13)
+    hysteresis_inverse_states(w, z_h, z_inv)                       # (14)
     return _hysteresis_step(v, r_inv, w_inv, z_inv)
 
 
