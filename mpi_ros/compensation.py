@@ -14,22 +14,33 @@ initial-state law (14) at every step.  Hence
   gives the new inverse state (bumpless swap);
 - non-finite input never reaches the output: the last command is held and
   the case is counted.
+
+One class, :class:`Compensator`, serves every model: a plain MPI model (one compiled
+step) or an extended model whose effect plugs in its exact per-step inverse
+(:class:`InverseStep`, e.g. :class:`mpi_ros.extensions.creep.CreepInverse`).  It owns the
+limits, the screening, the counters, the turning-point memory and the bumpless handover
+between models of any kind (:meth:`Compensator.install`); a node only translates
+messages and parameters.  :class:`FeedforwardCompensator` and
+:class:`ExtendedCompensator` are its plain and extended constructors.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 import math
+from typing import Any, Protocol
 
 import numba
 import numpy as np
 import numpy.typing as npt
 
 from .errors import ModelError
-from .inverse import hysteresis_inverse_states
+from .inverse import hysteresis_inverse_laws, hysteresis_inverse_states
 from .memory import TurningPointMemory
 from .model import _hysteresis_step, _superposition_value, MPIModel
 
-__all__ = ['FeedforwardCompensator', 'LinearMap', 'best_linear_map', 'operating_range',
-           'screen_desired']
+__all__ = ['Compensator', 'ExtendedCompensator', 'FeedforwardCompensator', 'InverseStep',
+           'gamma_of', 'inverse_step_of', 'kind_of', 'LinearMap', 'best_linear_map',
+           'operating_range', 'screen_desired']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -49,6 +60,20 @@ def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
         current = hi
     _hysteresis_step(current - x0, r_h, w_h, z_h)           # forward plays, applied current
     return current, raw
+
+
+@numba.njit(cache=True, nogil=True)
+def _inverse_value(v, r_h, w_h, beta, z_h):  # pragma: no cover - compiled
+    # H~ = H with w_H0 + beta; inverse by (12)-(13), its state by (14); z_h is not changed.
+    n1 = w_h.shape[0]
+    w = w_h.copy()
+    w[0] += beta
+    r_inv = np.empty(n1)
+    w_inv = np.empty(n1)
+    z_inv = np.empty(n1)
+    hysteresis_inverse_laws(r_h, w, r_inv, w_inv)                  # (12)-(13)
+    hysteresis_inverse_states(w, z_h, z_inv)                       # (14)
+    return _hysteresis_step(v, r_inv, w_inv, z_inv)
 
 
 def _warm_up(kernel: tuple, s_c: float, output_min: float, output_max: float) -> None:
@@ -72,6 +97,7 @@ def _warm_up(kernel: tuple, s_c: float, output_min: float, output_max: float) ->
     _compensate_step(s_c, output_min, output_max, r_h, w_h, z_h.copy(), r_hi, w_hi,
                      z_i.copy(), r_si, w_si, point)
     _hysteresis_step(output_min - point[0], r_h, w_h, z_h.copy())
+    _inverse_value(_superposition_value(0.0, r_si, w_si), r_h, w_h, 0.0, z_h)
 
 
 def screen_desired(desired: object, counters: dict[str, int],
@@ -187,39 +213,105 @@ def best_linear_map(model: MPIModel, current_min: float, current_max: float) -> 
     return LinearMap(float(gain), float(offset))
 
 
-class FeedforwardCompensator:
+class InverseStep(Protocol):
     """
-    Streaming inverse compensator ``current = clamp(Gamma^-1[s_c])`` with safe swaps.
+    An effect's exact per-step inverse, plugged into :class:`Compensator`.
+
+    Per command the compensator calls ``prepare`` (the lag coefficients from the interval
+    and the previous command), ``invert`` (the current for the step output ``v`` of S',
+    through ``inverse(v, beta)`` = ``x0 + H~'[v]`` with ``H~`` = H whose first weight is
+    raised by ``beta``, by (12)-(14)), then ``advance`` with the applied (clamped) current,
+    which returns what the material (H) sees.  ``state`` holds the effect's slow states.
+    """
+
+    state: FloatArray
+
+    def start(self, current: float) -> None:
+        """Settle the slow states at a steady ``current`` [A]."""
+
+    def carry(self, other: object) -> bool:
+        """Take over another step's slow states when compatible; tell whether it did."""
+
+    def prepare(self, previous: float, interval: float, started: bool) -> None:
+        """Fix this step's coefficients."""
+
+    def invert(self, v: float, previous: float, started: bool,
+               inverse: Callable[[float, float], float]) -> float:
+        """Return the current [A] whose step output is ``v``."""
+
+    def advance(self, current: float, previous: float, started: bool) -> float:
+        """Update the slow states with the applied current; return the material's input."""
+
+
+def gamma_of(model: Any) -> MPIModel:
+    """Return the forward Gamma of a plain or extended model (``model.model``)."""
+    gamma = model if isinstance(model, MPIModel) else model.model
+    return gamma.inverse() if gamma.is_inverse else gamma
+
+
+def inverse_step_of(model: Any) -> 'InverseStep | None':
+    """Return an extended model's per-step inverse, or None (plain, or not invertible)."""
+    make = getattr(model, 'inverse_step', None)
+    return None if make is None else make()
+
+
+def kind_of(model: Any) -> str:
+    """Name a model's effect: ``none``, its cause, or ``dead_time (not compensated)``."""
+    if isinstance(model, MPIModel):
+        return 'none'
+    if inverse_step_of(model) is None:
+        return f'{model.cause} (not compensated)'
+    return str(model.cause)
+
+
+class Compensator:
+    """
+    The streaming inverse compensator ``current = clamp(Gamma^-1[s_c])``, for every model.
+
+    One class owns the safe current range, the screening of the desired values, the
+    counters, the turning-point memory and the bumpless handover between models of any
+    kind: a plain MPI model (no effect: one compiled step), or an extended model whose
+    effect plugs in its exact per-step inverse (:class:`InverseStep`).  A model whose effect
+    cannot be inverted causally (dead time) is compensated through its Gamma alone.
 
     Parameters
     ----------
-    model : MPIModel
-        The forward model Gamma (the inverse is computed here by (12)-(14), (22)-(25)).
+    model : MPIModel or extended model
+        Forward model (the inverse is computed here by (12)-(14), (22)-(25)).
     output_min, output_max : float
         Safe current range [A]; every output lies inside it.
     enabled : bool
-        False: output the best linear map instead of Gamma^-1 (for comparison).
+        False: output the best linear map of Gamma instead (for comparison).
+    sample_period : float
+        Interval [s] assumed between two commands when :meth:`command` gets no ``time``
+        (effects with lags only).
 
     Attributes
     ----------
     counters : dict[str, int]
-        ``messages``, ``nonfinite_input``, ``out_of_range`` (desired outside the
-        model's operating range), ``clamped``.
+        ``messages``, ``nonfinite_input``, ``out_of_range`` (desired outside the model's
+        operating range), ``clamped``, ``bad_time`` (time stamps that did not increase).
     version : int
-        Incremented by every accepted model swap.
+        Incremented by every accepted model.
 
     """
 
-    def __init__(self, model: MPIModel, *, output_min: float, output_max: float,
-                 enabled: bool = True) -> None:
+    def __init__(self, model: Any, *, output_min: float, output_max: float,
+                 enabled: bool = True, sample_period: float = 1e-3) -> None:
         self._check_limits(output_min, output_max)
+        _check_sample_period(sample_period)
         self.output_min = float(output_min)
         self.output_max = float(output_max)
         self.enabled = bool(enabled)
-        self.counters = {'messages': 0, 'nonfinite_input': 0, 'out_of_range': 0, 'clamped': 0}
+        self.sample_period = float(sample_period)
+        self.counters = {'messages': 0, 'nonfinite_input': 0, 'out_of_range': 0,
+                         'clamped': 0, 'bad_time': 0}
         self.version = 0
         self.memory = TurningPointMemory()
         self.last_command = float(np.clip(0.0, self.output_min, self.output_max))
+        self._last_time: float | None = None
+        self._started = False
+        self._step: InverseStep | None = None
         self._install(model, replay=False)
         self.version = 1
 
@@ -231,60 +323,75 @@ class FeedforwardCompensator:
                    f' {output_max}')
             raise ModelError(msg)
 
-    def _install(self, model: MPIModel, *, replay: bool) -> None:
-        if model.is_inverse:
-            model = model.inverse()
-        inverse = model.inverse()
-        h, s_inv, h_inv = model.hysteresis, inverse.superposition, inverse.hysteresis
+    def _install(self, model: Any, *, replay: bool) -> None:
+        gamma = gamma_of(model)
+        step = inverse_step_of(model)
+        if step is not None and not step.carry(self._step):
+            step.start(self.last_command)
+        inverse = gamma.inverse()
+        h, s_inv, h_inv = gamma.hysteresis, inverse.superposition, inverse.hysteresis
         z_h = np.array(h.initial_states, dtype=np.float64)
         if replay and len(self.memory):
-            _, z_h = model.hysteresis_output(self.memory.points, z_h)
-        lo, hi = operating_range(model, self.output_min, self.output_max)
-        linear = best_linear_map(model, self.output_min, self.output_max)
+            _, z_h = gamma.hysteresis_output(self.memory.points, z_h)
+        lo, hi = operating_range(gamma, self.output_min, self.output_max)
+        linear = best_linear_map(gamma, self.output_min, self.output_max)
         # One assignment of a tuple: the step never sees half of an old and a new model.
         self._kernel = (np.ascontiguousarray(h.thresholds), np.ascontiguousarray(h.weights),
                         z_h, np.ascontiguousarray(h_inv.thresholds),
                         np.ascontiguousarray(h_inv.weights), np.empty_like(z_h),
                         np.ascontiguousarray(s_inv.thresholds),
                         np.ascontiguousarray(s_inv.weights),
-                        np.array([model.input_offset, model.output_offset,
-                                  float(model.output_sign)]))
+                        np.array([gamma.input_offset, gamma.output_offset,
+                                  float(gamma.output_sign)]))
         _warm_up(self._kernel, lo, self.output_min, self.output_max)
+        self._step = step
         self.model = model
+        self.gamma = gamma
         self.displacement_range = (lo, hi)
         self.linear_map = linear
 
-    def swap_model(self, model: MPIModel) -> None:
+    def install(self, model: Any) -> None:
         """
-        Switch to a new model bumplessly.
+        Switch to a new model of any kind, bumplessly.
 
-        The new forward play state is the replay of the commanded current's
-        turning points through the new H; the inverse state follows by (14), so
-        the next command differs from the old one only by what the new model
-        itself implies at this operating point.
+        The new forward play state is the replay of the applied current's turning points
+        through the new H (the inverse state follows by (14)); an effect of the same kind
+        keeps its slow states, a new one starts them settled at the last command.  The
+        counters go on.
 
         Parameters
         ----------
-        model : MPIModel
+        model : MPIModel or extended model
             The new (validated) forward model.
 
         """
         self._install(model, replay=True)
         self.version += 1
 
+    @property
+    def kind(self) -> str:
+        """Name the installed model's effect: ``none``, a cause, or ``... (not compensated)``."""
+        return kind_of(self.model)
+
     def set_limits(self, output_min: float, output_max: float) -> None:
         """Change the safe current range [A] (validated; the model is kept)."""
         self._check_limits(output_min, output_max)
         self.output_min, self.output_max = float(output_min), float(output_max)
-        self.displacement_range = operating_range(self.model, self.output_min, self.output_max)
-        self.linear_map = best_linear_map(self.model, self.output_min, self.output_max)
+        self.displacement_range = operating_range(self.gamma, self.output_min,
+                                                  self.output_max)
+        self.linear_map = best_linear_map(self.gamma, self.output_min, self.output_max)
 
     @property
     def state(self) -> FloatArray:
         """Forward play state ``z_H`` [A] at the operating point (a copy)."""
         return self._kernel[2].copy()
 
-    def command(self, desired: float) -> float:
+    @property
+    def slow_state(self) -> FloatArray:
+        """Return the effect's slow states (creep lags [A], lagged current [A], thermal [A^2])."""
+        return np.zeros(0) if self._step is None else self._step.state.copy()
+
+    def command(self, desired: float, *, time: float | None = None) -> float:
         """
         Return the current command [A] for a desired displacement [m].
 
@@ -292,6 +399,10 @@ class FeedforwardCompensator:
         ----------
         desired : float
             Desired displacement ``s_c`` [m].
+        time : float, optional
+            Time stamp [s] of this command; the interval to the previous one drives an
+            effect's lags.  Without it (or when it does not increase) ``sample_period``
+            is used.
 
         Returns
         -------
@@ -304,15 +415,138 @@ class FeedforwardCompensator:
         if s_c is None:
             return self.last_command
         r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point = self._kernel
-        if self.enabled:
-            current, raw = _compensate_step(s_c, self.output_min, self.output_max, r_h, w_h,
-                                            z_h, r_hi, w_hi, z_i, r_si, w_si, point)
+        step = self._step
+        if step is None:
+            if self.enabled:
+                current, raw = _compensate_step(s_c, self.output_min, self.output_max, r_h,
+                                                w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point)
+            else:
+                raw = self.linear_map(s_c)
+                current = min(max(raw, self.output_min), self.output_max)
+                _hysteresis_step(current - point[0], r_h, w_h, z_h)
+            material = current
         else:
-            raw = self.linear_map(s_c)
+            interval = self._interval(time)
+            x0, y0, sign = float(point[0]), float(point[1]), float(point[2])
+            previous, started = self.last_command, self._started
+            step.prepare(previous, interval, started)
+            if self.enabled:
+                v = _superposition_value(sign * (s_c - y0), r_si, w_si)     # S' (27)
+
+                def inverse(value: float, beta: float) -> float:
+                    return x0 + _inverse_value(value, r_h, w_h, beta, z_h)
+
+                raw = step.invert(v, previous, started, inverse)
+            else:
+                raw = self.linear_map(s_c)
+            if not math.isfinite(raw):
+                raw = previous
             current = min(max(raw, self.output_min), self.output_max)
-            _hysteresis_step(current - point[0], r_h, w_h, z_h)
+            material = step.advance(current, previous, started)
+            _hysteresis_step(material - x0, r_h, w_h, z_h)
+            self._started = True
         if current != raw:
             c['clamped'] += 1
-        self.memory.push(current)
+        self.memory.push(material)
         self.last_command = current
         return current
+
+    def _interval(self, time: float | None) -> float:
+        if time is None:
+            return self.sample_period
+        t = float(time)
+        last, self._last_time = self._last_time, t
+        if last is None:
+            return self.sample_period
+        if not (math.isfinite(t) and t > last):
+            self.counters['bad_time'] += 1
+            self._last_time = last
+            return self.sample_period
+        return t - last
+
+
+class FeedforwardCompensator(Compensator):
+    """
+    The :class:`Compensator` of a plain MPI model (Fig. 10 of the paper).
+
+    Parameters
+    ----------
+    model : MPIModel
+        The forward model Gamma.
+    output_min, output_max : float
+        Safe current range [A]; every output lies inside it.
+    enabled : bool
+        False: output the best linear map instead of Gamma^-1 (for comparison).
+
+    """
+
+    def __init__(self, model: MPIModel, *, output_min: float, output_max: float,
+                 enabled: bool = True) -> None:
+        super().__init__(model, output_min=output_min, output_max=output_max,
+                         enabled=enabled)
+
+    def swap_model(self, model: MPIModel) -> None:
+        """
+        Switch to a new plain model bumplessly (see :meth:`Compensator.install`).
+
+        Parameters
+        ----------
+        model : MPIModel
+            The new (validated) forward model.
+
+        """
+        self.install(model)
+
+
+class ExtendedCompensator(Compensator):
+    """
+    The :class:`Compensator` of a creep, rate-dependence or thermal-drift model.
+
+    Parameters
+    ----------
+    model : extended model
+        A model whose effect has an exact per-step inverse (``inverse_step()``).
+    output_min, output_max : float
+        Safe current range [A]; every output lies inside it.
+    enabled : bool
+        False: output the best linear map of Gamma instead (for comparison).
+    sample_period : float
+        Interval [s] assumed between two commands when :meth:`command` gets no ``time``.
+
+    """
+
+    def __init__(self, model: Any, *, output_min: float, output_max: float,
+                 enabled: bool = True, sample_period: float = 1e-3) -> None:
+        if inverse_step_of(model) is None:
+            msg = (f'ExtendedCompensator needs a creep, rate_dependence or thermal_drift model;'
+                   f' found {type(model).__name__}; use compensator_from_params')
+            raise ModelError(msg)
+        super().__init__(model, output_min=output_min, output_max=output_max,
+                         enabled=enabled, sample_period=sample_period)
+
+    def swap_model(self, model: Any) -> None:
+        """
+        Switch to a new extended model of the same kind, bumplessly.
+
+        Parameters
+        ----------
+        model : extended model
+            The new model; of the same extension as the current one.
+
+        Raises
+        ------
+        ModelError
+            When the extension differs (use :meth:`Compensator.install`).
+
+        """
+        if type(model) is not type(self.model):
+            msg = (f'swap_model needs a {type(self.model).__name__}; found'
+                   f' {type(model).__name__}; use install() to change the kind of model')
+            raise ModelError(msg)
+        self.install(model)
+
+
+def _check_sample_period(sample_period: float) -> None:
+    if not (math.isfinite(sample_period) and sample_period > 0.0):
+        msg = f'sample_period must be finite and > 0 [s]; found {sample_period!r}'
+        raise ModelError(msg)

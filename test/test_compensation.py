@@ -149,3 +149,31 @@ def test_extreme_finite_input_gives_clamped_finite_command(desired):
     current = comp.command(desired)
     assert np.isfinite(current) and current == (1.8 if desired > 0 else 0.2)
     assert np.all(np.isfinite(comp.state))
+
+
+def test_one_compensator_installs_every_kind_bumplessly():
+    # One Compensator serves plain and extended models; install() switches kinds, keeps
+    # the counters and the turning-point memory, and stays exact for the new model.
+    from mpi_ros.compensation import Compensator
+    from mpi_ros.extensions import CreepModel, RateDependentModel
+    rng = np.random.default_rng(11)
+    gamma = random_model(rng, n=6, l=3, initial_history=False)
+    x = 0.5 + 0.4 * np.sin(np.linspace(0.0, 12.0, 400))
+    lo, hi = gamma.simulate(x).min(), gamma.simulate(x).max()
+    desired = lo + (hi - lo) * (0.5 + 0.4 * np.sin(np.linspace(0.0, 9.0, 300)))
+    comp = Compensator(gamma, output_min=-5.0, output_max=5.0)
+    assert comp.kind == 'none' and comp.slow_state.size == 0
+    for s in desired[:100]:
+        comp.command(s)
+    creep = CreepModel(gamma, np.array([0.05, 0.5]), np.array([0.1, 0.05]))
+    comp.install(creep)
+    assert comp.kind == 'creep' and comp.version == 2
+    np.testing.assert_allclose(comp.slow_state, comp.last_command)   # settled at the command
+    times = np.arange(100, 200) * 1e-3
+    commands = [comp.command(s, time=t) for s, t in zip(desired[100:200], times)]
+    rate = RateDependentModel(gamma, 0.01)
+    comp.install(rate)
+    assert comp.kind == 'rate_dependence' and comp.counters['messages'] == 200
+    comp.install(gamma)
+    assert comp.kind == 'none' and comp.slow_state.size == 0
+    assert np.all(np.isfinite(commands)) and comp.counters['clamped'] == 0

@@ -22,7 +22,7 @@ Parameter keys (besides the five ``model.*`` keys of Gamma):
 - ``model.creep.weights``: ``w_Cj`` [1] (H-output per input unit, like ``w_H``), >= 0.
 """
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 import math
 from typing import Any
@@ -31,13 +31,13 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import check_series, vector_parameter
-from ._signals import lag_bank
+from ._signals import lag_bank, lag_coefficients
 from ..errors import ModelError
 from ..identification import identify_weights
 from ..model import MPIModel
 
-__all__ = ['CreepModel', 'creep_time_constants', 'fit_creep', 'CREEP_TIME_CONSTANTS',
-           'CREEP_WEIGHTS']
+__all__ = ['CreepModel', 'CreepInverse', 'creep_time_constants', 'fit_creep',
+           'CREEP_TIME_CONSTANTS', 'CREEP_WEIGHTS']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -111,6 +111,10 @@ class CreepModel:
         t, x = check_series(time, current)
         return lag_bank(t, x - self.model.input_offset, self.time_constants) @ self.weights
 
+    def inverse_step(self) -> 'CreepInverse':
+        """Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses."""
+        return CreepInverse(self)
+
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """
         Simulate the displacement for a current record.
@@ -131,6 +135,63 @@ class CreepModel:
         t, x = check_series(time, current)
         h, _ = self.model.hysteresis_output(x)
         return self.model.output(h + self.creep_term(t, x))
+
+
+class CreepInverse:
+    """
+    Per-step inverse of the creep operators (see :mod:`mpi_ros.compensation`).
+
+    With the lag states fixed, ``c_j,k = p_j + b_j x_k``: the step map is H with the first
+    weight ``w_H0 + sum_j w_Cj b_j`` plus a known offset, inverted by (12)-(14).  The lags
+    hold absolute currents (a lag of the constant x0 is x0, so ``C[x - x0] = C[x] - x0``).
+
+    Parameters
+    ----------
+    model : CreepModel
+        The extended model.
+
+    """
+
+    def __init__(self, model: CreepModel) -> None:
+        self.model = model
+        self.state = np.zeros(model.time_constants.size)
+        self._b = np.ones(self.state.size)
+        self._p = np.zeros(self.state.size)
+
+    def start(self, current: float) -> None:
+        """Settle the lags at ``current`` [A]."""
+        self.state = np.full(self.model.time_constants.size, float(current))
+
+    def carry(self, other: object) -> bool:
+        """Take over the lag states of another creep step with as many lags."""
+        if isinstance(other, CreepInverse) and other.state.size == self.state.size:
+            self.state = other.state.copy()
+            return True
+        return False
+
+    def prepare(self, previous: float, interval: float, started: bool) -> None:
+        """Fix the lag coefficients for this step (``previous`` command [A], ``interval`` [s])."""
+        if started:
+            coefficients = [lag_coefficients(interval, tau) for tau in self.model.time_constants]
+            a = np.array([c[0] for c in coefficients])
+            self._b = np.array([c[1] for c in coefficients])
+            self._p = a * self.state + (1.0 - a) * previous - self._b * previous
+        else:
+            self._b = np.ones(self.state.size)
+            self._p = np.zeros(self.state.size)
+
+    def invert(self, v: float, previous: float, started: bool,
+               inverse: Callable[[float, float], float]) -> float:
+        """Return the current [A] whose step output is ``v`` (``inverse(v, beta)``)."""
+        x0 = self.model.model.input_offset
+        beta = float(np.dot(self.model.weights, self._b))
+        offset = float(np.dot(self.model.weights, self._p - x0 * (1.0 - self._b)))
+        return inverse(v - offset, beta)
+
+    def advance(self, current: float, previous: float, started: bool) -> float:
+        """Update the lags with the applied ``current`` [A]; return what the material sees."""
+        self.state = self._p + self._b * current
+        return current
 
 
 def creep_time_constants(time: npt.ArrayLike, *, per_decade: float = 2.0,

@@ -12,7 +12,7 @@ Parameter key (besides Gamma's five keys): ``model.rate_dependence.time_constant
 (``tau_e`` [s], >= 0).
 """
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,10 +20,11 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import check_series, fit_gamma, lag_search_limits, scalar_parameter, search_fit
-from ._signals import first_order_lag
+from ._signals import first_order_lag, lag_coefficients
 from ..model import MPIModel
 
-__all__ = ['RateDependentModel', 'fit_rate_dependence', 'RATE_TIME_CONSTANT']
+__all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',
+           'RATE_TIME_CONSTANT']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -64,6 +65,10 @@ class RateDependentModel:
         params[RATE_TIME_CONSTANT] = float(self.time_constant)
         return params
 
+    def inverse_step(self) -> 'RateDependenceInverse':
+        """Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses."""
+        return RateDependenceInverse(self)
+
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """
         Simulate the displacement [m] for a current record (time [s], current [A]).
@@ -83,6 +88,60 @@ class RateDependentModel:
         """
         t, x = check_series(time, current)
         return self.model.simulate(first_order_lag(t, x, self.time_constant))
+
+
+class RateDependenceInverse:
+    """
+    Per-step inverse of the input lag: the lead filter ``x = x_e + tau_e dx_e/dt``.
+
+    ``x_e,k = Gamma^-1[s_c]`` and the lag update solved for the present current (exact).
+
+    Parameters
+    ----------
+    model : RateDependentModel
+        The extended model.
+
+    """
+
+    def __init__(self, model: RateDependentModel) -> None:
+        self.model = model
+        self.state = np.zeros(1)          # the lagged current x_e [A]
+        self._a, self._b = 0.0, 1.0
+
+    def start(self, current: float) -> None:
+        """Settle the lag at ``current`` [A]."""
+        self.state = np.array([float(current)])
+
+    def carry(self, other: object) -> bool:
+        """Take over the lagged current of another rate-dependence step."""
+        if isinstance(other, RateDependenceInverse):
+            self.state = other.state.copy()
+            return True
+        return False
+
+    def prepare(self, previous: float, interval: float, started: bool) -> None:
+        """Fix the lag coefficients for this step."""
+        if started and self.model.time_constant > 0.0:
+            self._a, self._b = lag_coefficients(interval, self.model.time_constant)
+        else:
+            self._a, self._b = 0.0, 1.0
+
+    def invert(self, v: float, previous: float, started: bool,
+               inverse: Callable[[float, float], float]) -> float:
+        """Return the current [A] that drives the lagged current to ``Gamma^-1`` of ``v``."""
+        target = inverse(v, 0.0)
+        if not started:
+            return target
+        a, b = self._a, self._b
+        return previous + (target - a * float(self.state[0]) - (1.0 - a) * previous) / b
+
+    def advance(self, current: float, previous: float, started: bool) -> float:
+        """Update the lag with the applied ``current``; return the lagged current."""
+        a, b = self._a, self._b
+        material = (a * float(self.state[0]) + (1.0 - a) * previous + b * (current - previous)
+                    if started else current)
+        self.state[0] = material
+        return material
 
 
 def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,

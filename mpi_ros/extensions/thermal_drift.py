@@ -17,7 +17,7 @@ Parameter keys (besides Gamma's five keys): ``model.thermal_drift.time_constant`
 (``tau_T`` [s], > 0) and ``model.thermal_drift.weight`` (``w_T`` [1/A], any sign).
 """
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 import math
 from typing import Any
@@ -26,12 +26,12 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import check_series, scalar_parameter, search_fit
-from ._signals import first_order_lag
+from ._signals import first_order_lag, lag_coefficients
 from ..identification import identify_weights
 from ..model import MPIModel
 
-__all__ = ['ThermalDriftModel', 'fit_thermal_drift', 'THERMAL_TIME_CONSTANT',
-           'THERMAL_WEIGHT']
+__all__ = ['ThermalDriftModel', 'ThermalDriftInverse', 'fit_thermal_drift',
+           'THERMAL_TIME_CONSTANT', 'THERMAL_WEIGHT']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -86,6 +86,10 @@ class ThermalDriftModel:
         t, x = check_series(time, current)
         return first_order_lag(t, x * x, self.time_constant)
 
+    def inverse_step(self) -> 'ThermalDriftInverse':
+        """Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses."""
+        return ThermalDriftInverse(self)
+
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """
         Simulate the displacement [m] for a current record.
@@ -106,6 +110,64 @@ class ThermalDriftModel:
         t, x = check_series(time, current)
         h, _ = self.model.hysteresis_output(x)
         return self.model.output(h + self.weight * self.thermal_state(t, x))
+
+
+class ThermalDriftInverse:
+    """
+    Per-step inverse of the thermal drift: the predicted thermal term is subtracted.
+
+    ``T_k = a T_(k-1) + (1 - a) x_(k-1)^2`` (the first-order-hold term, ``~ h / tau_T``, is
+    dropped), then H' by (12)-(14).  The first sample, where the state starts at ``x_0^2``,
+    takes a few fixed-point sweeps.  The heating follows the absolute current.
+
+    Parameters
+    ----------
+    model : ThermalDriftModel
+        The extended model.
+
+    """
+
+    def __init__(self, model: ThermalDriftModel) -> None:
+        self.model = model
+        self.state = np.zeros(1)          # the thermal state T [A^2]
+        self._thermal: float | None = None
+
+    def start(self, current: float) -> None:
+        """Settle the thermal state at ``current`` [A]."""
+        self.state = np.array([float(current) ** 2])
+
+    def carry(self, other: object) -> bool:
+        """Take over the thermal state of another thermal-drift step."""
+        if isinstance(other, ThermalDriftInverse):
+            self.state = other.state.copy()
+            return True
+        return False
+
+    def prepare(self, previous: float, interval: float, started: bool) -> None:
+        """Predict the thermal state of this step."""
+        if started:
+            a, _ = lag_coefficients(interval, self.model.time_constant)
+            self._thermal = a * float(self.state[0]) + (1.0 - a) * previous ** 2
+        else:
+            self._thermal = None
+
+    def invert(self, v: float, previous: float, started: bool,
+               inverse: Callable[[float, float], float]) -> float:
+        """Return the current [A] whose output, drift included, is ``v``."""
+        weight = self.model.weight
+        if self._thermal is not None:
+            return inverse(v - weight * self._thermal, 0.0)
+        # First sample: the state starts at x_0^2 (steady state); a few fixed-point sweeps
+        # x <- H'[v - w_T x^2] (a contraction for the small w_T a drift has) settle it.
+        raw = previous
+        for _ in range(8):
+            raw = inverse(v - weight * raw * raw, 0.0)
+        return raw
+
+    def advance(self, current: float, previous: float, started: bool) -> float:
+        """Store the thermal state; the material sees the applied ``current``."""
+        self.state[0] = self._thermal if self._thermal is not None else current ** 2
+        return current
 
 
 def _fit_at(t: FloatArray, x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
