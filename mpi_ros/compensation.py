@@ -46,8 +46,10 @@ FloatArray = npt.NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True)
-def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
-                     r_s_inv, w_s_inv, point):  # pragma: no cover - compiled
+def _compensate_step(s_c: float, lo: float, hi: float, r_h: FloatArray, w_h: FloatArray,
+                     z_h: FloatArray, r_h_inv: FloatArray, w_h_inv: FloatArray,
+                     z_inv: FloatArray, r_s_inv: FloatArray, w_s_inv: FloatArray,
+                     point: FloatArray) -> tuple[float, float]:  # pragma: no cover
     # point = (x0, y0, sign), the operating point: x = x0 + H'[S'[sign (s_c - y0)]].
     x0 = point[0]
     hysteresis_inverse_states(w_h, z_h, z_inv)              # (14): from the forward state
@@ -63,7 +65,8 @@ def _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
 
 
 @numba.njit(cache=True, nogil=True)
-def _inverse_value(v, r_h, w_h, beta, z_h):  # pragma: no cover - compiled
+def _inverse_value(v: float, r_h: FloatArray, w_h: FloatArray, beta: float,
+                   z_h: FloatArray) -> float:  # pragma: no cover - compiled
     # H~ = H with w_H0 + beta; inverse by (12)-(13), its state by (14); z_h is not changed.
     n1 = w_h.shape[0]
     w = w_h.copy()
@@ -76,7 +79,8 @@ def _inverse_value(v, r_h, w_h, beta, z_h):  # pragma: no cover - compiled
     return _hysteresis_step(v, r_inv, w_inv, z_inv)
 
 
-def _warm_up(kernel: tuple, s_c: float, output_min: float, output_max: float) -> None:
+def _warm_up(kernel: tuple[FloatArray, ...], s_c: float, output_min: float,
+             output_max: float) -> None:
     """
     Run the compiled steps once on copies of the play states.
 
@@ -434,7 +438,7 @@ class Compensator:
                 v = _superposition_value(sign * (s_c - y0), r_si, w_si)     # S' (27)
 
                 def inverse(value: float, beta: float) -> float:
-                    return x0 + _inverse_value(value, r_h, w_h, beta, z_h)
+                    return x0 + float(_inverse_value(value, r_h, w_h, beta, z_h))
 
                 raw = step.invert(v, previous, started, inverse)
             else:

@@ -17,7 +17,7 @@ FloatArray = npt.NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True, inline='always')
-def _dead_zone(x, r):  # pragma: no cover - compiled
+def _dead_zone(x: float, r: float) -> float:  # pragma: no cover - compiled
     if r > 0.0:
         d = x - r
         return d if d > 0.0 else 0.0
@@ -28,7 +28,8 @@ def _dead_zone(x, r):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def dead_zone_step(x, r, out):  # pragma: no cover - compiled
+def dead_zone_step(x: float, r: FloatArray,
+                   out: FloatArray) -> None:  # pragma: no cover - compiled
     """
     Evaluate one-sided dead-zone operators on one sample, into ``out`` (17).
 
@@ -47,7 +48,7 @@ def dead_zone_step(x, r, out):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _dead_zone_batch(x, r):  # pragma: no cover - compiled
+def _dead_zone_batch(x: FloatArray, r: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     out = np.empty((x.shape[0], r.shape[0]))
     for k in range(x.shape[0]):
         for i in range(r.shape[0]):
@@ -79,4 +80,5 @@ def dead_zone_operator(x: npt.ArrayLike, thresholds: npt.ArrayLike) -> FloatArra
     """
     x_arr = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
     r = np.ascontiguousarray(thresholds, dtype=np.float64).reshape(-1)
-    return _dead_zone_batch(x_arr, r)
+    out: FloatArray = _dead_zone_batch(x_arr, r)
+    return out

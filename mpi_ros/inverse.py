@@ -37,7 +37,8 @@ FloatArray = npt.NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True)
-def hysteresis_inverse_laws(r, w, r_out, w_out):  # pragma: no cover - compiled
+def hysteresis_inverse_laws(r: FloatArray, w: FloatArray, r_out: FloatArray,
+                            w_out: FloatArray) -> None:  # pragma: no cover - compiled
     """
     Threshold law (12) and weight law (13), into ``r_out`` and ``w_out``.
 
@@ -64,7 +65,8 @@ def hysteresis_inverse_laws(r, w, r_out, w_out):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def hysteresis_inverse_states(w, z, out):  # pragma: no cover - compiled
+def hysteresis_inverse_states(w: FloatArray, z: FloatArray,
+                              out: FloatArray) -> None:  # pragma: no cover - compiled
     """
     Initial-state law (14), into ``out``: ``z'_i = (w_0+...+w_i) z_i + sum_{j>i} w_j z_j``.
 

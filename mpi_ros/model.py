@@ -44,7 +44,8 @@ FloatArray = npt.NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True, inline='always')
-def _hysteresis_step(x, r_h, w_h, z):  # pragma: no cover - compiled
+def _hysteresis_step(x: float, r_h: FloatArray, w_h: FloatArray,
+                     z: FloatArray) -> float:  # pragma: no cover - compiled
     # Play operators (4) then the weighted sum (5).
     acc = 0.0
     for i in range(r_h.shape[0]):
@@ -54,7 +55,8 @@ def _hysteresis_step(x, r_h, w_h, z):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True, inline='always')
-def _superposition_value(x, r_s, w_s):  # pragma: no cover - compiled
+def _superposition_value(x: float, r_s: FloatArray,
+                         w_s: FloatArray) -> float:  # pragma: no cover - compiled
     acc = 0.0
     for i in range(r_s.shape[0]):
         acc += w_s[i] * _dead_zone(x, r_s[i])              # (17)-(18)
@@ -62,18 +64,23 @@ def _superposition_value(x, r_s, w_s):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _mpi_step(x, r_h, w_h, z, r_s, w_s, inverse, affine):  # pragma: no cover - compiled
+def _mpi_step(x: float, r_h: FloatArray, w_h: FloatArray, z: FloatArray, r_s: FloatArray,
+              w_s: FloatArray, inverse: bool,
+              affine: FloatArray) -> float:  # pragma: no cover - compiled
     # affine = (a, b, c, d): the operators see a + b x, the output is c + d * result.
     u = affine[0] + affine[1] * x
     if inverse:                                             # (27): H' o S'
         out = _hysteresis_step(_superposition_value(u, r_s, w_s), r_h, w_h, z)
     else:
         out = _superposition_value(_hysteresis_step(u, r_h, w_h, z), r_s, w_s)   # (26)
-    return affine[2] + affine[3] * out
+    result: float = affine[2] + affine[3] * out
+    return result
 
 
 @numba.njit(cache=True, nogil=True)
-def _mpi_batch(x, r_h, w_h, z, r_s, w_s, inverse, affine):  # pragma: no cover - compiled
+def _mpi_batch(x: FloatArray, r_h: FloatArray, w_h: FloatArray, z: FloatArray,
+               r_s: FloatArray, w_s: FloatArray, inverse: bool,
+               affine: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     out = np.empty(x.shape[0])
     for k in range(x.shape[0]):
         out[k] = _mpi_step(x[k], r_h, w_h, z, r_s, w_s, inverse, affine)

@@ -22,7 +22,7 @@ FloatArray = npt.NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True, inline='always')
-def play_clamp(x, r, z):  # pragma: no cover - compiled
+def play_clamp(x: float, r: float, z: float) -> float:  # pragma: no cover - compiled
     """
     Return one play operator's new output (2)-(4): ``max(x - r, min(x + r, z))``.
 
@@ -54,7 +54,8 @@ def play_clamp(x, r, z):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _play_batch(x, r, z):  # pragma: no cover - compiled
+def _play_batch(x: FloatArray, r: FloatArray,
+                z: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     n_samples = x.shape[0]
     m = r.shape[0]
     out = np.empty((n_samples, m))
@@ -67,7 +68,7 @@ def _play_batch(x, r, z):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def play_step(x, r, z):  # pragma: no cover - compiled
+def play_step(x: float, r: FloatArray, z: FloatArray) -> None:  # pragma: no cover - compiled
     """
     Advance the play operators by one sample, in place (4).
 
