@@ -65,6 +65,34 @@ def _compensate_step(s_c: float, lo: float, hi: float, r_h: FloatArray, w_h: Flo
 
 
 @numba.njit(cache=True, nogil=True)
+def _compensate_batch(desired: FloatArray, displacement_lo: float, displacement_hi: float,
+                      lo: float, hi: float, r_h: FloatArray, w_h: FloatArray, z_h: FloatArray,
+                      r_h_inv: FloatArray, w_h_inv: FloatArray, z_inv: FloatArray,
+                      r_s_inv: FloatArray, w_s_inv: FloatArray, point: FloatArray,
+                      last: float, counts: npt.NDArray[np.int64],
+                      out: FloatArray) -> float:  # pragma: no cover - compiled
+    # screen_desired + _compensate_step per sample, in one compiled loop; counts holds
+    # (nonfinite_input, out_of_range, clamped).  Returns the last command.
+    margin = 10.0 * (displacement_hi - displacement_lo)
+    for k in range(desired.shape[0]):
+        s_c = desired[k]
+        if not np.isfinite(s_c):
+            counts[0] += 1
+            out[k] = last
+            continue
+        if s_c < displacement_lo or s_c > displacement_hi:
+            counts[1] += 1
+            s_c = min(max(s_c, displacement_lo - margin), displacement_hi + margin)
+        current, raw = _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
+                                        r_s_inv, w_s_inv, point)
+        if current != raw:
+            counts[2] += 1
+        out[k] = current
+        last = current
+    return last
+
+
+@numba.njit(cache=True, nogil=True)
 def _inverse_value(v: float, r_h: FloatArray, w_h: FloatArray, beta: float,
                    z_h: FloatArray) -> float:  # pragma: no cover - compiled
     # H~ = H with w_H0 + beta; inverse by (12)-(13), its state by (14); z_h is not changed.
@@ -454,6 +482,47 @@ class Compensator:
         self.memory.push(material)
         self.last_command = current
         return current
+
+    def command_batch(self, desired: npt.ArrayLike,
+                      times: npt.ArrayLike | None = None) -> FloatArray:
+        """
+        Return the commands for a chunk of desired displacements, as :meth:`command` would.
+
+        A plain model runs the whole chunk in one compiled loop (screening, inverse,
+        clamping, counters); an effect's model steps sample by sample.  The results and
+        the state afterwards equal those of :meth:`command` called per sample.
+
+        Parameters
+        ----------
+        desired : array_like of float, shape (K,)
+            Desired displacements [m] (NaN/Inf hold the last command and are counted).
+        times : array_like of float, shape (K,), optional
+            Their time stamps [s] (effects with lags only).
+
+        Returns
+        -------
+        ndarray of float, shape (K,)
+            Current commands [A], finite and inside ``[output_min, output_max]``.
+
+        """
+        values = np.ascontiguousarray(desired, dtype=np.float64).reshape(-1)
+        if self._step is not None or not self.enabled:
+            stamps = (None,) * values.size if times is None else np.asarray(times, float)
+            return np.array([self.command(float(v), time=None if t is None else float(t))
+                             for v, t in zip(values, stamps)], dtype=np.float64)
+        out = np.empty(values.size)
+        counts = np.zeros(3, dtype=np.int64)
+        lo, hi = self.displacement_range
+        self.last_command = float(_compensate_batch(
+            values, lo, hi, self.output_min, self.output_max, *self._kernel,
+            self.last_command, counts, out))
+        c = self.counters
+        c['messages'] += int(values.size)
+        c['nonfinite_input'] += int(counts[0])
+        c['out_of_range'] += int(counts[1])
+        c['clamped'] += int(counts[2])
+        self.memory.extend(out)
+        return out
 
     def _interval(self, time: float | None) -> float:
         if time is None:

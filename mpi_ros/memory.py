@@ -82,3 +82,33 @@ class TurningPointMemory:
         if len(p) > self.capacity:
             del p[1:3]
             self.overflowed = True
+
+    def extend(self, values: npt.ArrayLike) -> None:
+        """
+        Record a sequence of input samples, as :meth:`push` on each would.
+
+        Only the ends of monotone runs are pushed: an interior point of a run only
+        replaces the run's last point, and a wipe-out it triggers the run's end triggers
+        too (passing an extremum further still passes it).
+
+        Parameters
+        ----------
+        values : array_like of float, shape (K,)
+            Input samples (finite).
+
+        """
+        x = np.asarray(values, dtype=np.float64).reshape(-1)
+        if x.size <= 2:
+            for v in x:
+                self.push(float(v))
+            return
+        direction = np.sign(np.diff(x))
+        nonzero = np.flatnonzero(direction)
+        keep = [0]
+        if nonzero.size:
+            d = direction[nonzero]
+            turns = nonzero[1:][d[1:] != d[:-1]]          # first step of a new run
+            keep.extend(int(i) for i in turns)
+        keep.append(x.size - 1)
+        for i in sorted(set(keep)):
+            self.push(float(x[i]))

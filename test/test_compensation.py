@@ -177,3 +177,34 @@ def test_one_compensator_installs_every_kind_bumplessly():
     comp.install(gamma)
     assert comp.kind == 'none' and comp.slow_state.size == 0
     assert np.all(np.isfinite(commands)) and comp.counters['clamped'] == 0
+
+
+def test_command_batch_equals_command_per_sample():
+    # The compiled chunk path gives the per-sample results, counters, memory and state.
+    rng = np.random.default_rng(5)
+    model = random_model(rng, n=8, l=4)
+    one = FeedforwardCompensator(model, output_min=-1.0, output_max=2.0)
+    chunked = FeedforwardCompensator(model, output_min=-1.0, output_max=2.0)
+    lo, hi = one.displacement_range
+    desired = lo + (hi - lo) * (np.cumsum(rng.normal(0.0, 0.15, 600)) % 1.6 - 0.3)
+    desired[[10, 200]] = np.nan
+    desired[300] = np.inf
+    expected = np.array([one.command(v) for v in desired])
+    got = np.concatenate([chunked.command_batch(part)
+                          for part in np.array_split(desired, [1, 7, 100, 401])])
+    np.testing.assert_array_equal(got, expected)
+    assert chunked.counters == one.counters
+    assert one.counters['out_of_range'] > 0 and one.counters['clamped'] > 0
+    np.testing.assert_array_equal(chunked.memory.points, one.memory.points)
+    np.testing.assert_array_equal(chunked.state, one.state)
+
+
+def test_turning_point_memory_extend_equals_push():
+    rng = np.random.default_rng(9)
+    for _ in range(50):
+        x = np.round(np.cumsum(rng.normal(0.0, 1.0, int(rng.integers(1, 80)))), 1)
+        a, b = TurningPointMemory(), TurningPointMemory()
+        for v in x:
+            a.push(float(v))
+        b.extend(x)
+        np.testing.assert_array_equal(a.points, b.points)
