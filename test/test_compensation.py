@@ -208,3 +208,21 @@ def test_turning_point_memory_extend_equals_push():
             a.push(float(v))
         b.extend(x)
         np.testing.assert_array_equal(a.points, b.points)
+
+
+def test_multi_axis_block_equals_single_axis_compensators():
+    from mpi_ros.compensation import MultiAxisCompensator
+    from mpi_ros.errors import DataError
+    rng = np.random.default_rng(21)
+    models = [random_model(rng, n=6, l=3) for _ in range(4)]
+    multi = MultiAxisCompensator(models, output_min=-1.0, output_max=[1.5, 2.0, 2.5, 3.0])
+    singles = [FeedforwardCompensator(m, output_min=-1.0, output_max=hi)
+               for m, hi in zip(models, [1.5, 2.0, 2.5, 3.0])]
+    ranges = np.array([c.displacement_range for c in singles])
+    block = ranges[:, 0] + (ranges[:, 1] - ranges[:, 0]) * rng.uniform(0.0, 1.0, (50, 4))
+    got = np.vstack([multi.command(block[:10]), multi.command(block[10])[None, :],
+                     multi.command(block[11:])])
+    expected = np.array([[c.command(v) for c, v in zip(singles, row)] for row in block])
+    np.testing.assert_allclose(got, expected, rtol=0.0, atol=1e-12)
+    with pytest.raises(DataError, match='samples x axes with 4 axes; found shape'):
+        multi.command(block[:, :3])
