@@ -73,10 +73,12 @@ class DataOption:
 
 #: Every data option, in the order the command line lists them.
 DATA_OPTIONS = (
-    DataOption('input_topic', 'str', 'bag topic of the input (current)', 'A', 'bag',
-               '/current_command'),
-    DataOption('output_topic', 'str', 'bag topic of the output (displacement)', 'm', 'bag',
-               '/displacement'),
+    DataOption('input_topic', 'str',
+               'bag topic of the input (current): Float64, JointState or Float64MultiArray',
+               'A', 'bag', '/current_command'),
+    DataOption('output_topic', 'str',
+               'bag topic of the output (displacement): Float64, JointState or '
+               'Float64MultiArray', 'm', 'bag', '/displacement'),
     DataOption('input_joint', 'optional_str',
                'joint of a sensor_msgs/JointState input topic (unset: its only joint)', '',
                'bag', ''),
