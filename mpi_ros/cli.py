@@ -22,11 +22,7 @@ import sys
 
 from typing import Any
 
-from .cli_options import (
-    add_data_options, add_order_option, ArgumentParser, data_options, order_option,
-    UsageError)
 from .errors import MPIError
-from .order import format_order
 
 __all__ = ['main']
 
@@ -38,6 +34,7 @@ def _progress(text: str) -> None:
 
 
 def _read_data(path: str, args: argparse.Namespace) -> Any:
+    from .cli_options import data_options
     from .recordings import read_recording
     return read_recording(path, data_options(args))
 
@@ -57,7 +54,9 @@ def _check_output(path: str | None, option: str) -> None:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
+    from .cli_options import data_options, order_option
     from .identification import identify
+    from .order import format_order
     from .params import write_params_yaml
     from .recordings import atomic_write
     _check_output(args.output, '--output')
@@ -199,6 +198,8 @@ def _cmd_demo(argv: list[str]) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
+    # Imported here: the node subcommands start without loading the recordings (rosbags).
+    from .cli_options import add_data_options, add_order_option, ArgumentParser
     parser = ArgumentParser(
         prog='mpi-ros', description='Modified Prandtl-Ishlinskii hysteresis compensation.',
         epilog='Node subcommands (compensator, identifier, plant-simulator) take ROS '
@@ -268,6 +269,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser = _parser()
         args = parser.parse_args(args_list)
         if args.command is None:
+            from .cli_options import UsageError
             parser.print_help()
             msg = 'give a COMMAND (see the list above)'
             raise UsageError(msg)
