@@ -282,6 +282,8 @@ def _read_bag_topics(
         stamps: dict[str, list[int]] = {role: [] for role in roles}
         values: dict[str, list[float]] = {role: [] for role in roles}
         counts = dict.fromkeys(readers, 0)
+        by_topic = {topic: [(role, selection) for role, selection in roles.items()
+                            if selection.topic == topic] for topic in readers}
         store = typestore()
         try:
             for conn, stamp, data in reader.messages(connections=wanted):
@@ -294,9 +296,7 @@ def _read_bag_topics(
                            f'decoded as {conn.msgtype} ({type(err).__name__}: {err}); the bag '
                            'is corrupt; re-record it')
                     raise DataError(msg) from err
-                for role, selection in roles.items():
-                    if selection.topic != conn.topic:
-                        continue
+                for role, selection in by_topic[conn.topic]:
                     try:
                         value = readers[conn.topic].value(decoded, selection)
                     except SelectionError as err:
