@@ -20,6 +20,8 @@ import json
 from pathlib import Path
 import sys
 
+from typing import Any
+
 from .errors import MPIError
 
 __all__ = ['main']
@@ -31,37 +33,10 @@ def _progress(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
-def _parse_order(values: list[str] | None) -> str | tuple[int, int]:
-    if values is None:
-        return (14, 7)
-    if values == ['auto']:
-        return 'auto'
-    if len(values) == 2 and all(v.isdigit() for v in values):
-        return int(values[0]), int(values[1])
-    msg = f"--order takes 'auto' or two whole numbers N L; found {' '.join(values)!r}"
-    raise MPIError(msg)
-
-
-def _add_data_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument('--input-topic', default='/current_command',
-                   help='bag topic of the input (std_msgs/Float64, A)')
-    p.add_argument('--output-topic', default='/displacement',
-                   help='bag topic of the output (std_msgs/Float64, m)')
-    p.add_argument('--time-column', default='time', help='CSV time column [s]')
-    p.add_argument('--input-column', default=None, help='CSV input column (default: first)')
-    p.add_argument('--output-column', default=None, help='CSV output column (default: next)')
-    p.add_argument('--input-scale', type=float, default=1.0, help='multiply the input by this')
-    p.add_argument('--output-scale', type=float, default=1.0,
-                   help='multiply the output by this (e.g. 1e-9 for nm -> m)')
-
-
-def _read_data(path: str, args: argparse.Namespace):  # noqa: ANN202
-    from .recordings import read_signals
-    if Path(path).suffix.lower() == '.csv':
-        return read_signals(path, time_column=args.time_column, input_column=args.input_column,
-                            output_column=args.output_column, input_scale=args.input_scale,
-                            output_scale=args.output_scale)
-    return read_signals(path, input_topic=args.input_topic, output_topic=args.output_topic)
+def _read_data(path: str, args: argparse.Namespace) -> Any:
+    from .cli_options import data_options
+    from .recordings import read_recording
+    return read_recording(path, data_options(args))
 
 
 def _check_output(path: str | None, option: str) -> None:
@@ -79,15 +54,18 @@ def _check_output(path: str | None, option: str) -> None:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
+    from .cli_options import data_options, order_option
     from .identification import identify
+    from .order import format_order
     from .params import write_params_yaml
     from .recordings import atomic_write
     _check_output(args.output, '--output')
     _check_output(args.json, '--json')
+    data_options(args)                       # refuse bad options before reading
+    order = order_option(args)
     data = _read_data(args.data, args)
-    order = _parse_order(args.order)
     _progress(f'identifying from {len(data.time)} samples of {args.data} '
-              f'(order {order if isinstance(order, str) else "n=%d, l=%d" % order}) ...')
+              f'(order {format_order(order)}) ...')
     result = identify(data.current, data.displacement, order=order)
     for row in result.order_table:
         _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out nonlinearity error "
@@ -122,26 +100,78 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     return 0
 
 
+def _model_parameters(path: str, node_name: str | None) -> dict[str, Any]:
+    """Read the model keys of `node_name` (None: the file's compensator or only entry)."""
+    import yaml
+    from .params import read_params_yaml
+    if node_name is None:
+        return read_params_yaml(path)
+    parameters = read_params_yaml(path, node_name=node_name)
+    # read_params_yaml falls back to a file's only entry whatever its name; an explicit
+    # --node-name must name an entry that is there.
+    document = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
+    entries = [str(key) for key, value in document.items()
+               if isinstance(value, dict) and 'ros__parameters' in value]
+    if node_name.lstrip('/') not in {entry.lstrip('/') for entry in entries}:
+        msg = (f'--node-name {node_name}: parameter file {path} has no entry for node '
+               f'{node_name!r}; entries found: {", ".join(entries)}; pass --node-name with '
+               'one of them, or leave it out')
+        raise MPIError(msg)
+    return parameters
+
+
+def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool) -> tuple[
+        str | None, str]:
+    """Return the time column (None: none) and the input column of a --input table."""
+    what = 'desired displacement' if inverse else 'current'
+    time_column = args.time_column or None
+    if time_column is not None and time_column not in header:
+        if time_column != 'time':
+            msg = (f'--time-column {time_column}: --input {args.input} has no such column; '
+                   f'columns: {", ".join(header)}; pass one of them, or --time-column \'\' '
+                   'if the file has no time column')
+            raise MPIError(msg)
+        time_column = None
+    names = [name for name in header if name != time_column]
+    if args.input_column is not None:
+        if args.input_column not in names:
+            msg = (f'--input-column {args.input_column}: --input {args.input} has no such '
+                   f'column besides the time; columns: {", ".join(names) or "none"}; pass the '
+                   f'column holding the {what}')
+            raise MPIError(msg)
+        return time_column, args.input_column
+    if len(names) != 1:
+        listing = ', '.join(names) or 'none'
+        msg = (f'--input {args.input} has {len(names)} columns besides the time ({listing}); '
+               f'pass --input-column with the one holding the {what}')
+        raise MPIError(msg)
+    return time_column, names[0]
+
+
 def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     from .model import MPIModel
-    from .params import read_params_yaml
     from .recordings import read_csv_table, write_csv_columns
-    model = MPIModel.from_params(read_params_yaml(args.params, node_name=args.node_name))
-    header, table = read_csv_table(args.input)
-    names = [h for h in header if h != 'time']
-    if not names:
-        msg = f'{args.input} has no input column besides time; columns: {", ".join(header)}'
+    model = MPIModel.from_params(_model_parameters(args.params, args.node_name))
+    header, table = read_csv_table(args.input,
+                                   nonfinite_hint='remove those rows or fill in the values')
+    time_column, input_column = _input_column(header, args, inverse=inverse)
+    result_column = args.column_name or ('current' if inverse else 'displacement')
+    if result_column in (input_column, time_column):
+        msg = (f'--column-name {result_column}: the result column would replace the '
+               f'{"input" if result_column == input_column else "time"} column of the same '
+               'name; pass --column-name with another name')
         raise MPIError(msg)
-    column = header.index(names[0])
+    column = header.index(input_column)
     operator = model.inverse() if inverse else model
     result = operator.simulate(table[:, column])
     columns = {}
-    if 'time' in header:
-        columns['time'] = table[:, header.index('time')]
-    columns[names[0]] = table[:, column]
-    columns[args.column_name or ('current' if inverse else 'displacement')] = result
+    if time_column is not None:
+        columns[time_column] = table[:, header.index(time_column)]
+    columns[input_column] = table[:, column]
+    columns[result_column] = result
     write_csv_columns(args.output, columns)
-    _progress(f'wrote {len(result)} samples to {args.output}')
+    _progress(f'wrote {len(result)} samples to {args.output} ({input_column} -> '
+              f'{result_column})')
     return 0
 
 
@@ -168,30 +198,40 @@ def _cmd_demo(argv: list[str]) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    # Imported here: the node subcommands start without loading the recordings (rosbags).
+    from .cli_options import add_data_options, add_order_option, ArgumentParser
+    parser = ArgumentParser(
         prog='mpi-ros', description='Modified Prandtl-Ishlinskii hysteresis compensation.',
         epilog='Node subcommands (compensator, identifier, plant-simulator) take ROS '
                'arguments exactly like `ros2 run mpi_ros <node> --ros-args ...`. '
-               'diagnose and demo have their own --help.')
+               'diagnose and demo have their own --help. Errors (usage errors too) exit '
+               'with status 1.')
     sub = parser.add_subparsers(dest='command', metavar='COMMAND')
     p = sub.add_parser('identify', help='fit a model from a bag or CSV, write params YAML')
     p.add_argument('data', help='rosbag2 directory (sqlite3/mcap) or CSV file')
-    p.add_argument('--order', nargs='+', metavar='N',
-                   help="'auto' or N L (default 14 7, the paper's order)")
+    add_order_option(p, default='14,7')
     p.add_argument('-o', '--output', required=True, help='parameter YAML to write')
     p.add_argument('--json', help='fit statistics to write (order, errors, samples)')
-    p.add_argument('--node-name', default='compensator', help='node the YAML is keyed by')
-    _add_data_options(p)
+    p.add_argument('--node-name', default='compensator',
+                   help='node the YAML is keyed by (default: compensator)')
+    add_data_options(p)
     p.set_defaults(func=_cmd_identify)
-    for name, func, what in (('simulate', _cmd_simulate, 'forward model Gamma'),
-                             ('compensate', _cmd_compensate, 'inverse model Gamma^-1')):
+    for name, func, what, column in (
+            ('simulate', _cmd_simulate, 'forward model Gamma', 'current'),
+            ('compensate', _cmd_compensate, 'inverse model Gamma^-1',
+             'desired displacement')):
         p = sub.add_parser(name, help=f'apply the {what} to a CSV column')
         p.add_argument('params', help='parameter YAML (as written by mpi-ros identify)')
         p.add_argument('--input', required=True,
-                       help='CSV with a header; the first non-time column is the input')
+                       help=f'CSV with a header; its column of the {column}')
         p.add_argument('--output', required=True, help='CSV to write (time, input, result)')
         p.add_argument('--column-name', default=None, help='name of the result column')
-        p.add_argument('--node-name', default='compensator', help='node key in the YAML')
+        p.add_argument('--node-name', default=None,
+                       help='node whose parameters to use (default: compensator, or the '
+                            "file's only node)")
+        add_data_options(p, names=['time_column', 'input_column'], descriptions={
+            'input_column': f'CSV column of the {column} (needed when the file has several '
+                            'columns besides the time)'})
         p.set_defaults(func=func)
     sub.add_parser('diagnose', help='find which effect the model misses (see diagnose -h)',
                    add_help=False)
@@ -213,7 +253,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        Exit status: 0 on success, 1 on a reported error, 2 on usage errors.
+        Exit status: 0 on success, 1 on any error (usage errors included), 130
+        when interrupted.
 
     """
     args_list = list(sys.argv[1:] if argv is None else argv)
@@ -225,10 +266,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _cmd_diagnose(args_list[1:])
         if args_list and args_list[0] == 'demo':
             return _cmd_demo(args_list[1:])
-        args = _parser().parse_args(args_list)
+        parser = _parser()
+        args = parser.parse_args(args_list)
         if args.command is None:
-            _parser().print_help()
-            return 2
+            from .cli_options import UsageError
+            parser.print_help()
+            msg = 'give a COMMAND (see the list above)'
+            raise UsageError(msg)
         return int(args.func(args))
     except MPIError as err:
         print(f'error: {err}', file=sys.stderr)

@@ -41,6 +41,8 @@ from typing import Any
 
 import numpy as np
 
+from .cli_options import ArgumentParser
+
 __all__ = ['demo_main', 'ORDERS', 'EFFECTS']
 
 #: The paper's table (section 5).
@@ -420,7 +422,7 @@ def demo_main(argv: list[str]) -> int:
         plain one's, else 1.
 
     """
-    parser = argparse.ArgumentParser(prog='mpi-ros demo', description=__doc__.splitlines()[1])
+    parser = ArgumentParser(prog='mpi-ros demo', description=__doc__.splitlines()[1])
     parser.add_argument('--output', default='mpi_ros_demo', help='folder for the report')
     parser.add_argument('--domain-id', type=int, default=random.randint(101, 199),
                         help='ROS_DOMAIN_ID to use (default: random in 101-199)')

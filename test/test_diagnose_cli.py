@@ -9,7 +9,6 @@ from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.excitation import identification_excitation
 from mpi_ros.recordings import read_csv_table, write_csv_columns
 import numpy as np
-import pytest
 
 
 def test_excitation_is_written_as_csv(tmp_path):
@@ -29,13 +28,15 @@ def test_excitation_with_too_low_a_rate_fails(tmp_path, capsys):
     assert not out.exists()
 
 
-def test_usage_errors_exit_2(tmp_path):
-    with pytest.raises(SystemExit) as exc:
-        main(['diagnose'])
-    assert exc.value.code == 2
-    with pytest.raises(SystemExit) as exc:
-        main(['diagnose', str(tmp_path / 'data.csv')])     # no --json/--report
-    assert exc.value.code == 2
+def test_usage_errors_exit_1(tmp_path, capsys):
+    """Usage errors exit with status 1 (README), after the usage and one error line."""
+    assert main(['diagnose']) == 1
+    err = capsys.readouterr().err
+    assert err.startswith('usage: mpi-ros diagnose')
+    assert err.strip().splitlines()[-1] == ('error: mpi-ros diagnose: give DATA to diagnose, '
+                                            'or --excitation OUT.csv')
+    assert main(['diagnose', str(tmp_path / 'data.csv')]) == 1     # no --json/--report
+    assert '--json and --report are required with DATA' in capsys.readouterr().err
 
 
 def _write(path, t, x, cfg, seed):

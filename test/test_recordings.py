@@ -9,8 +9,9 @@ import sys
 from hypothesis import given, HealthCheck, settings, strategies as st
 from mpi_ros.errors import DataError
 from mpi_ros.recordings import (
-    _sort_dedupe, atomic_write, BagRecorder, read_bag_signals, read_csv_signals, read_csv_table,
+    atomic_write, BagRecorder, read_bag_signals, read_csv_signals, read_csv_table,
     read_signals, Recording, write_bag_signals, write_csv_columns)
+from mpi_ros.recordings.bag_reader import _sort_dedupe
 import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer

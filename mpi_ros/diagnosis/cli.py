@@ -2,10 +2,13 @@
 """
 ``mpi-ros diagnose``: the command-line front of :func:`mpi_ros.diagnosis.diagnose`.
 
-``mpi-ros diagnose DATA [--validate DATA2] [--window T0 T1] [--input-topic T]
-[--output-topic T] [--time-column C --input-column C --output-column C --input-scale F
---output-scale F] [--order auto|N L] --json report.json --report DIR
-[--params-out extended.yaml]``
+``mpi-ros diagnose DATA [--validate DATA2] [--window T0 T1] [data options]
+[--order auto|N,L|N L] --json report.json --report DIR [--params-out extended.yaml]``
+
+The data options (``--input-topic``, ``--input-joint``, ``--input-index``,
+``--input-column``, ``--output-scale``, ...) are those of ``mpi-ros identify``
+(:func:`mpi_ros.cli_options.add_data_options`); they apply to DATA and to
+``--validate``.
 
 ``mpi-ros diagnose --excitation OUT.csv [--excitation-rate HZ --excitation-bias A
 --excitation-amplitude A --seed N]`` writes the diagnostic validation excitation (columns
@@ -20,15 +23,17 @@ from typing import Any, Sequence
 from .diagnose import diagnose
 from .report import write_extended_params, write_json, write_report
 from .signatures import diagnostic_excitation
+from ..cli_options import (
+    add_data_options, add_order_option, ArgumentParser, data_options, order_option)
 from ..errors import DataError, MPIError
-from ..recordings import read_signals, Recording, write_csv_columns
+from ..recordings import read_recording, Recording, write_csv_columns
 
 __all__ = ['diagnose_main', 'build_parser']
 
 
 def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     """Return the argument parser of the diagnose command."""
-    p = argparse.ArgumentParser(prog=prog, description=(
+    p = ArgumentParser(prog=prog, description=(
         'Diagnose what the MPI model misses in measured data, name the cause, fit the'
         ' extended model and measure the gain on validation data.'))
     p.add_argument('data', nargs='?',
@@ -38,15 +43,7 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
                    help='diagnose only DATA between T0 and T1 [s] after its first sample')
     p.add_argument('--split', type=float, default=0.6,
                    help='training fraction when no --validate is given (default 0.6)')
-    p.add_argument('--input-topic', help='bag topic of the current')
-    p.add_argument('--output-topic', help='bag topic of the displacement')
-    p.add_argument('--time-column', help='CSV column of the time [s]')
-    p.add_argument('--input-column', help='CSV column of the input')
-    p.add_argument('--output-column', help='CSV column of the output')
-    p.add_argument('--input-scale', type=float, help='factor to A')
-    p.add_argument('--output-scale', type=float, help='factor to m (e.g. 1e-9 for nm)')
-    p.add_argument('--order', nargs='+', default=['auto'], metavar='auto|N L',
-                   help="model order: 'auto' or two integers n l")
+    add_order_option(p, default='auto')
     p.add_argument('--json', help='report.json to write (required with DATA)')
     p.add_argument('--report', help='directory for summary.md and plots (required with DATA)')
     p.add_argument('--params-out', help='parameter YAML of the extended model')
@@ -59,6 +56,7 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p.add_argument('--excitation-amplitude', type=float, default=0.8,
                    help='half-width of --excitation [A] (default 0.8)')
     p.add_argument('--seed', type=int, default=0, help='seed of --excitation (default 0)')
+    add_data_options(p)
     return p
 
 
@@ -85,22 +83,12 @@ def _write_excitation(args: argparse.Namespace) -> None:
 
 
 def _read(path: str, args: argparse.Namespace) -> Any:
-    options: dict[str, Any] = {}
-    if str(path).lower().endswith('.csv'):
-        for name in ('time_column', 'input_column', 'output_column', 'input_scale',
-                     'output_scale'):
-            if getattr(args, name) is not None:
-                options[name] = getattr(args, name)
-    else:
-        for name in ('input_topic', 'output_topic'):
-            if getattr(args, name) is not None:
-                options[name] = getattr(args, name)
-    return read_signals(path, **options)
+    return read_recording(path, data_options(args))
 
 
 def diagnose_main(argv: Sequence[str] | None = None) -> int:
     """
-    Run the diagnose command; return the exit code (0 success, 1 error, 2 usage).
+    Run the diagnose command; return the exit code (0 success, 1 error or usage error).
 
     Parameters
     ----------
@@ -114,23 +102,18 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
 
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.order == ['auto']:
-        order: Any = 'auto'
-    elif len(args.order) == 2 and all(v.isdigit() for v in args.order):
-        order = (int(args.order[0]), int(args.order[1]))
-    else:
-        parser.error(f"--order must be 'auto' or two integers N L; found {args.order}")
 
     def say(line: str) -> None:
         print(line, file=sys.stderr, flush=True)
 
-    if args.data is None and args.excitation is None:
-        parser.error('give DATA to diagnose, or --excitation OUT.csv')
-    if args.data is not None and (args.json is None or args.report is None):
-        parser.error('--json and --report are required with DATA')
-
     try:
+        args = parser.parse_args(argv)
+        order = order_option(args)
+        if args.data is None and args.excitation is None:
+            parser.error('give DATA to diagnose, or --excitation OUT.csv')
+        if args.data is not None and (args.json is None or args.report is None):
+            parser.error('--json and --report are required with DATA')
+        data_options(args)                   # refuse bad data options before any work
         if args.excitation:
             _write_excitation(args)
             say(f'wrote {args.excitation}')

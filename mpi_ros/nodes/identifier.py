@@ -2,9 +2,13 @@
 """
 Identifier node: fit an MPI model (28)-(36) from a rosbag2 bag and push it atomically.
 
-One run: read the bag (sqlite3 or mcap) with :func:`mpi_ros.recordings.read_bag_signals`,
-pairing ``input_topic`` (current [A]) with ``output_topic`` (displacement [m]); fit with
-:func:`mpi_ros.identify` (``order`` ``auto`` or ``N,L``); report the fit errors (37);
+One run: read the bag (sqlite3 or mcap; a ``.csv`` file works too) with
+:func:`mpi_ros.recordings.read_recording`, pairing ``input_topic`` (current [A]) with
+``output_topic`` (displacement [m]); the data parameters (``input_joint``, ``input_field``,
+``input_index``, ``output_scale``, ...) are the data options of ``mpi-ros identify``
+(:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit with :func:`mpi_ros.identify` (``order``
+``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
+fit errors (37);
 optionally write the parameter YAML (``params_file``); then send all five ``model.*``
 keys in **one** ``set_parameters_atomically`` request to ``target_node``. The target
 either applies the whole model or rejects it, so nothing is ever half-applied; the
@@ -18,7 +22,7 @@ any failure: unreadable bag, failed fit, target missing, push rejected or unansw
 from dataclasses import dataclass
 import sys
 import time
-from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional
 
 from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParametersAtomically
@@ -35,25 +39,45 @@ from .parameters import (
 from .spinning import shutdown
 from .. import IdentificationResult, identify
 from ..errors import DataError, IdentificationError, MPIError
+from ..order import format_order, Order, parse_order as parse_order_text
 from ..params import write_params_yaml
-from ..recordings import read_bag_signals
+from ..recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording
 
 __all__ = [
-    'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS',
+    'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS', 'DATA_PARAMETERS',
     'fit_bag', 'parse_order', 'push_model_parameters', 'main',
 ]
 
 Type = Parameter.Type
 
+_KINDS = {'str': Type.STRING, 'optional_str': Type.STRING, 'choice': Type.STRING,
+          'optional_int': Type.INTEGER, 'float': Type.DOUBLE, 'bool': Type.BOOL}
+
+
+def _data_parameter(option: DataOption) -> ParameterSpec:
+    """Return the node parameter of one shared data option."""
+    description = option.description[0].upper() + option.description[1:]
+    if option.kind.startswith('optional'):
+        unset = "''" if option.kind == 'optional_str' else '-1'
+        description = description.replace('(unset:', f'({unset}:')
+    if option.applies != 'any':
+        description += f'; {option.applies} only'
+    return ParameterSpec(
+        option.name, _KINDS[option.kind], option.parameter_default, description, option.unit,
+        value_range=(-1, 2**31 - 1) if option.kind == 'optional_int' else None,
+        choices=JOINT_FIELDS if option.kind == 'choice' else ())
+
+
+#: The data parameters: one per shared data option, in the command line's order.
+DATA_PARAMETERS = tuple(_data_parameter(option) for option in DATA_OPTIONS)
+
 PARAMETERS = (
     ParameterSpec('bag', Type.STRING, '',
-                  'Path of the rosbag2 bag (directory, or .mcap/.db3 file) to identify from'),
-    ParameterSpec('input_topic', Type.STRING, '/current_command',
-                  'Topic of the actuator current in the bag (std_msgs/msg/Float64)', 'A'),
-    ParameterSpec('output_topic', Type.STRING, '/displacement',
-                  'Topic of the measured displacement in the bag (std_msgs/msg/Float64)', 'm'),
+                  'Path of the rosbag2 bag (directory, or .mcap/.db3 file) to identify from '
+                  '(a .csv file is read with the CSV data parameters)'),
+    *DATA_PARAMETERS,
     ParameterSpec('order', Type.STRING, 'auto',
-                  "Model orders: 'auto' (selection by the fit errors) or 'N,L' (N play "
+                  "Model orders: 'auto' (selection by the fit errors), 'N,L' or 'N L' (N play "
                   'operators in H, L dead-zone operators in S)'),
     ParameterSpec('target_node', Type.STRING, '/compensator',
                   'Fully qualified name of the node that receives the model'),
@@ -68,6 +92,7 @@ PARAMETERS = (
 )
 
 _SPECS = specs_by_name(PARAMETERS)
+_DATA_NAMES = frozenset(spec.name for spec in DATA_PARAMETERS)
 
 
 class ParameterPushError(MPIError, RuntimeError):
@@ -133,6 +158,9 @@ class IdentifierNode(Node):
             for parameter in parameters:
                 if parameter.name == 'order':
                     parse_order(parameter.value)
+                elif parameter.name in _DATA_NAMES:
+                    DataOptions.from_mapping({parameter.name: parameter.value},
+                                             spelling='parameter')
         except (ParameterRejected, MPIError) as err:
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
@@ -158,11 +186,12 @@ class IdentifierNode(Node):
             msg = 'no bag given; run with --ros-args -p bag:=PATH'
             raise DataError(msg)
         logger = self.get_logger()
-        logger.info(f'identifying from {bag} ({value("input_topic").value} -> '
-                    f'{value("output_topic").value}, order {value("order").value})')
-        fit = fit_bag(bag, input_topic=value('input_topic').value,
-                      output_topic=value('output_topic').value,
-                      order=parse_order(value('order').value))
+        options = DataOptions.from_mapping(
+            {name: value(name).value for name in _DATA_NAMES}, spelling='parameter')
+        order = parse_order(value('order').value)
+        logger.info(f'identifying from {bag} ({options.input_topic} -> '
+                    f'{options.output_topic}, order {format_order(order)})')
+        fit = fit_bag(bag, options=options, order=order)
         logger.info(fit.summary())
         params_file = value('params_file').value
         if params_file:
@@ -177,14 +206,14 @@ class IdentifierNode(Node):
         return fit
 
 
-def parse_order(text: str) -> Union[str, Tuple[int, int]]:
+def parse_order(text: str) -> Order:
     """
-    Parse the ``order`` parameter.
+    Parse the ``order`` parameter with :func:`mpi_ros.order.parse_order`.
 
     Parameters
     ----------
     text : str
-        ``auto`` or ``N,L`` (also ``N L``), with N >= 1 and L >= 1.
+        ``auto``, ``N,L`` or ``N L``, with N >= 1 and L >= 1.
 
     Returns
     -------
@@ -194,36 +223,33 @@ def parse_order(text: str) -> Union[str, Tuple[int, int]]:
     Raises
     ------
     mpi_ros.nodes.parameters.ParameterRejected
-        For anything else.
+        For anything else; the message names ``order``.
 
     """
-    cleaned = text.strip().lower()
-    if cleaned == 'auto':
-        return 'auto'
-    parts = cleaned.replace(',', ' ').split()
     try:
-        n, l_s = (int(part) for part in parts)
-    except ValueError:
-        n = l_s = 0
-    if n < 1 or l_s < 1:
-        msg = f"order must be 'auto' or 'N,L' with N, L >= 1 (e.g. '14,7'); found {text!r}"
-        raise ParameterRejected(msg)
-    return (n, l_s)
+        return parse_order_text(text, option='order')
+    except IdentificationError as err:
+        raise ParameterRejected(str(err)) from err
 
 
-def fit_bag(path: str, *, input_topic: str, output_topic: str,
-            order: Union[str, Tuple[int, int]] = 'auto') -> BagFit:
+def fit_bag(path: str, *, input_topic: str = '/current_command',
+            output_topic: str = '/displacement', order: Order = 'auto',
+            options: Optional[DataOptions] = None) -> BagFit:
     """
     Read a bag, fit an MPI model and compute its errors on the same data.
 
     Parameters
     ----------
     path : str
-        rosbag2 bag (directory or file).
+        rosbag2 bag (directory or file), or a CSV file.
     input_topic, output_topic : str
-        Topics of the current [A] and of the displacement [m].
+        Topics of the current [A] and of the displacement [m] (used when
+        `options` is None).
     order : 'auto' or tuple of (int, int)
         Model orders (n, l), or automatic selection.
+    options : mpi_ros.recordings.DataOptions, optional
+        Every data option (topics, joints, fields, indices, scales); default:
+        the two topics with the other options at their defaults.
 
     Returns
     -------
@@ -238,7 +264,10 @@ def fit_bag(path: str, *, input_topic: str, output_topic: str,
         When the fit fails.
 
     """
-    recording = read_bag_signals(path, input_topic=input_topic, output_topic=output_topic)
+    if options is None:
+        options = DataOptions(input_topic=input_topic, output_topic=output_topic,
+                              spelling='parameter')
+    recording = read_recording(path, options)
     result = identify(recording.current, recording.displacement, order=order)
     parameters = {key: [float(v) for v in values]
                   for key, values in result.model.to_params().items()}

@@ -105,3 +105,73 @@ def test_missing_target_fails_with_bounded_wait(monkeypatch, capsys, excitation_
                         '-p', 'service_timeout:=0.5')
     assert status == 1
     assert 'no parameter service /nobody_here/set_parameters_atomically' in err
+
+
+# ------------------------------------------------------------------ data parameters
+
+
+@pytest.fixture(scope='module')
+def message_bags(tmp_path_factory):
+    """Return the excitation as a JointState bag and a Float64MultiArray bag, and the data."""
+    from test.message_bags import write_array_signals, write_joint_state_signals
+    t, current = identification_excitation(12.0, sample_rate=250.0, seed=1)
+    displacement = MagnetostrictiveActuator().simulate(t, current)
+    root = tmp_path_factory.mktemp('message_bags')
+    write_joint_state_signals(root / 'joints', t, current, displacement)
+    write_array_signals(root / 'arrays', t, current, 1e9 * displacement, storage='mcap')
+    return root, current, displacement
+
+
+JOINT_PARAMETERS = {'input_topic': '/joint_states', 'output_topic': '/joint_states',
+                    'input_joint': 'actuator', 'input_field': 'effort',
+                    'output_joint': 'actuator'}
+ARRAY_PARAMETERS = {'input_topic': '/command', 'output_topic': '/measurement',
+                    'input_index': 1, 'output_index': 0, 'output_scale': 1e-9}
+
+
+@pytest.mark.parametrize('bag, parameters', [('joints', JOINT_PARAMETERS),
+                                             ('arrays', ARRAY_PARAMETERS)])
+def test_identifies_from_joint_state_and_array_bags(ros_context, message_bags, bag,
+                                                    parameters):
+    from mpi_ros import identify
+    root, current, displacement = message_bags
+    node = IdentifierNode(context=ros_context, parameter_overrides=[
+        Parameter('bag', value=str(root / bag)), Parameter('order', value='6 3'),
+        Parameter('push', value=False),
+        *(Parameter(name, value=value) for name, value in parameters.items())])
+    try:
+        fit = node.run()
+    finally:
+        node.destroy_node()
+    core = identify(current, displacement, n=6, l=3)
+    assert fit.result.order == (6, 3)
+    assert fit.result.samples == current.size
+    assert fit.result.nonlinearity_error == pytest.approx(core.nonlinearity_error, rel=1e-6)
+
+
+@pytest.mark.parametrize('parameter, value, needle', [
+    ('input_field', 'torque', 'input_field'),
+    ('output_scale', 0.0, 'output_scale must be a finite non-zero number; found 0.0'),
+    ('input_index', -2, 'input_index out of range'),
+])
+def test_bad_data_parameters_are_rejected(ros_context, parameter, value, needle):
+    node = IdentifierNode(context=ros_context)
+    try:
+        result = node.set_parameters([Parameter(parameter, value=value)])[0]
+    finally:
+        node.destroy_node()
+    assert not result.successful
+    assert needle in result.reason
+
+
+def test_data_errors_name_the_parameters(monkeypatch, capsys, message_bags):
+    root = message_bags[0]
+    args = [f'{name}:={value}' for name, value in dict(JOINT_PARAMETERS,
+                                                       input_joint='elbow').items()]
+    status, err = _main(monkeypatch, capsys, '-p', f'bag:={root / "joints"}',
+                        *[a for arg in args for a in ('-p', arg)], '-p', 'push:=false')
+    assert status == 1
+    last = err.strip().splitlines()[-1]
+    assert ("it has no joint 'elbow' (input_joint); joints found: 'wrist', 'actuator'; set "
+            'input_joint to one of them') in last
+    assert '--input-joint' not in last

@@ -1,0 +1,374 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Read the actuator input and output of a rosbag2 bag (sqlite3 or mcap) as paired samples.
+
+Each topic's messages become one number each through the reader registered
+for the topic's type (:data:`mpi_ros.recordings.messages.MESSAGE_READERS`);
+each output sample is paired with the input held at its log time.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+from rosbags.rosbag2 import Reader
+
+from .messages import (
+    MESSAGE_READERS, MessageReader, Selection, SelectionError, supported_types, typestore)
+from .options import DataOptions
+from .recording import FloatArray, MIN_SAMPLES, PathLike, Recording
+from ..errors import DataError
+
+__all__ = ['read_bag_signals', 'read_bag', 'BAG_SUFFIXES', 'TIME_SOURCES']
+
+#: Suffixes of rosbag2 storage files.
+BAG_SUFFIXES = ('.db3', '.mcap')
+#: Sources of the sample times: the bag's log (receive) time.
+TIME_SOURCES = ('receive',)
+
+_Stamped = tuple[npt.NDArray[np.int64], FloatArray]
+
+
+def read_bag_signals(
+    path: PathLike,
+    *,
+    input_topic: str = '/current_command',
+    output_topic: str = '/displacement',
+    input_joint: str | None = None,
+    output_joint: str | None = None,
+    input_field: str = 'position',
+    output_field: str = 'position',
+    input_index: int | None = None,
+    output_index: int | None = None,
+    time_source: str = 'receive',
+    drop_nonfinite: bool = False,
+) -> Recording:
+    """
+    Read the input and output topics of a rosbag2 bag as paired samples.
+
+    Each topic may carry ``std_msgs/msg/Float64``, ``sensor_msgs/msg/JointState``
+    (one joint's position, velocity or effort) or
+    ``std_msgs/msg/Float64MultiArray`` (one element), see
+    :mod:`mpi_ros.recordings.messages`. Each output message is
+    paired with the most recent input message logged at or before it
+    (zero-order hold): the displacement measured at time t responds to the
+    last command sent before t. Output messages logged before the first input
+    message have no command and are dropped.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Bag directory (with ``metadata.yaml``), its ``metadata.yaml``, or a
+        single ``.db3``/``.mcap`` storage file. A directory without
+        ``metadata.yaml`` but with exactly one storage file (a recording that
+        was interrupted) is read from that file, with a note.
+    input_topic : str, optional
+        Topic of the actuator input x (current [A]).
+    output_topic : str, optional
+        Topic of the actuator output s (displacement [m]). It may equal
+        `input_topic` when the two select different joints, fields or
+        elements of it.
+    input_joint, output_joint : str, optional
+        Joint of a ``JointState`` topic; by default the message's only joint.
+    input_field, output_field : {'position', 'velocity', 'effort'}, optional
+        Field of the joint in a ``JointState`` topic.
+    input_index, output_index : int, optional
+        Element of a ``Float64MultiArray`` topic (after ``layout.data_offset``);
+        by default the array's only element.
+    time_source : {'receive'}, optional
+        Which time stamps the samples: ``'receive'`` is the bag's log time.
+        ``std_msgs/msg/Float64`` carries no header stamp, so it is the only
+        source for every type.
+    drop_nonfinite : bool, optional
+        Drop NaN/Inf messages (with a note) instead of raising.
+
+    Returns
+    -------
+    Recording
+        ``time`` [s] relative to the first paired sample, ``current`` [A]
+        (the held input), ``displacement`` [m], ``source`` = the path and
+        ``notes`` on what was dropped, sorted or de-duplicated.
+
+    Raises
+    ------
+    DataError
+        If the path is missing or not a bag; the bag is truncated or corrupt;
+        a topic is missing (the message lists the topics present), has an
+        unsupported type (the message lists the supported ones), no message
+        or a single one; a selected joint, field or element is missing (the
+        message lists what the messages hold); a topic holds NaN/Inf (without
+        `drop_nonfinite`); or fewer than :data:`MIN_SAMPLES` samples pair up.
+
+    Notes
+    -----
+    Log times t_k [ns] are sorted stably per topic; of several messages with
+    the same time stamp the last one read is kept and the duplicates are
+    counted in ``notes``. With input times τ_j and output times t_k the pairs
+    are (x(τ_j*), s(t_k)) with j* = max{j : τ_j ≤ t_k}.
+
+    """
+    options = DataOptions(input_topic=input_topic, output_topic=output_topic,
+                          input_joint=input_joint, output_joint=output_joint,
+                          input_field=input_field, output_field=output_field,
+                          input_index=input_index, output_index=output_index,
+                          drop_nonfinite=drop_nonfinite)
+    return read_bag(path, options, time_source=time_source)
+
+
+def read_bag(path: PathLike, options: DataOptions, *, time_source: str = 'receive') -> Recording:
+    """
+    Read a bag with the bag options of `options` (see :func:`read_bag_signals`).
+
+    The input and output are multiplied by ``options.input_scale`` and
+    ``options.output_scale``; messages name the options in ``options.spelling``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Bag directory, its ``metadata.yaml`` or a ``.db3``/``.mcap`` file.
+    options : DataOptions
+        Topics, selections, scales and `drop_nonfinite`.
+    time_source : {'receive'}, optional
+        See :func:`read_bag_signals`.
+
+    Returns
+    -------
+    Recording
+        As :func:`read_bag_signals`, scaled.
+
+    Raises
+    ------
+    DataError
+        As :func:`read_bag_signals`.
+
+    """
+    bag = Path(path)
+    if time_source not in TIME_SOURCES:
+        msg = (f'time_source must be one of {TIME_SOURCES}; found {time_source!r}; '
+               'std_msgs/msg/Float64 has no header stamp, so only the bag log time is '
+               'available')
+        raise DataError(msg)
+    selections = _selections(options)
+    storage_path, notes = _locate_bag(bag)
+    raw = _read_bag_topics(bag, storage_path, selections, options)
+    (t_in, x_in), (t_out, s_out) = (
+        _clean_topic(bag, selection, *raw[role], options=options, notes=notes)
+        for role, selection in zip(('input', 'output'), selections))
+    in_label, out_label = (selection.label for selection in selections)
+    held = np.searchsorted(t_in, t_out, side='right') - 1
+    paired = held >= 0
+    n_early = int(np.count_nonzero(~paired))
+    if n_early:
+        notes.append(f'dropped {n_early} {out_label} message(s) logged before the first '
+                     f'{in_label} message')
+    n_paired = int(np.count_nonzero(paired))
+    if n_paired < MIN_SAMPLES:
+        msg = (f'bag {bag}: only {n_paired} {out_label} message(s) at or after the first '
+               f'{in_label} message (need at least {MIN_SAMPLES}); record longer, and start '
+               'the recording before the actuator runs so both topics are captured')
+        raise DataError(msg)
+    t_out, s_out, x_held = t_out[paired], s_out[paired], x_in[held[paired]]
+    time = (t_out - t_out[0]).astype(np.float64) * 1e-9
+    return Recording(time, x_held * options.input_scale, s_out * options.output_scale,
+                     source=str(bag), notes=tuple(notes))
+
+
+def _selections(options: DataOptions) -> tuple[Selection, Selection]:
+    """Return the input and output selections; refuse two equal ones."""
+    pair = tuple(
+        Selection(getattr(options, f'{role}_topic'), joint=getattr(options, f'{role}_joint'),
+                  joint_field=getattr(options, f'{role}_field'),
+                  index=getattr(options, f'{role}_index'),
+                  names={'topic': options.name(f'{role}_topic'),
+                         'joint': options.name(f'{role}_joint'),
+                         'joint_field': options.name(f'{role}_field'),
+                         'index': options.name(f'{role}_index')})
+        for role in ('input', 'output'))
+    if pair[0] == pair[1]:
+        msg = (f'{options.name("input_topic")} and {options.name("output_topic")} are both '
+               f'{options.input_topic!r} with the same joint, field and index; the input and '
+               'output must be different topics, or different joints, fields or elements of '
+               'one topic')
+        raise DataError(msg)
+    return pair[0], pair[1]
+
+
+def _locate_bag(bag: Path) -> tuple[Path, list[str]]:
+    """Return the path to hand to rosbags' Reader and initial notes."""
+    if not bag.exists():
+        msg = (f'bag {bag} does not exist; check the path (a rosbag2 bag is a directory '
+               'holding metadata.yaml and a .db3 or .mcap file)')
+        raise DataError(msg)
+    if bag.is_file() and bag.name == 'metadata.yaml':
+        return bag.parent, []
+    if bag.is_file():
+        if bag.suffix.lower() in BAG_SUFFIXES:
+            return bag, []
+        msg = (f'{bag} is not a rosbag2 bag: expected a bag directory or a .db3/.mcap file, '
+               f'found a {bag.suffix or "suffix-less"} file; use read_csv_signals for CSV')
+        raise DataError(msg)
+    if (bag / 'metadata.yaml').is_file():
+        return bag, []
+    files = sorted(p for p in bag.iterdir() if p.suffix.lower() in BAG_SUFFIXES)
+    if len(files) == 1:
+        note = (f'{bag} has no metadata.yaml (the recording was probably interrupted); '
+                f'read the storage file {files[0].name} directly')
+        return files[0], [note]
+    if not files:
+        msg = (f'{bag} is not a rosbag2 bag: it holds no metadata.yaml and no .db3/.mcap '
+               'file; pass the bag directory that `ros2 bag record` created')
+        raise DataError(msg)
+    msg = (f'{bag} has no metadata.yaml and {len(files)} storage files; run '
+           f'`ros2 bag reindex {bag}` or pass one of {[p.name for p in files]}')
+    raise DataError(msg)
+
+
+def _corrupt(bag: Path, err: BaseException) -> DataError:
+    msg = (f'cannot read bag {bag}: {type(err).__name__}: {err}; the bag is truncated or '
+           'corrupt (e.g. the recorder was killed); re-record it, or repair it '
+           '(`sqlite3 in.db3 .recover | sqlite3 out.db3`, `mcap recover`) and retry')
+    return DataError(msg)
+
+
+def _sort_dedupe(
+    stamps: npt.NDArray[np.int64], values: FloatArray,
+) -> tuple[npt.NDArray[np.int64], FloatArray, int, int]:
+    """Sort stably by stamp and keep the last of equal stamps; return the counts."""
+    n_unsorted = int(np.count_nonzero(np.diff(stamps) < 0))
+    order = np.argsort(stamps, kind='stable')
+    stamps, values = stamps[order], values[order]
+    last = np.append(stamps[1:] != stamps[:-1], True)
+    n_duplicate = int(np.count_nonzero(~last))
+    return stamps[last], values[last], n_unsorted, n_duplicate
+
+
+def _read_bag_topics(
+    bag: Path, storage_path: Path, selections: tuple[Selection, Selection],
+    options: DataOptions,
+) -> dict[str, _Stamped]:
+    """Return log times [ns] and selected values of the input and output, in storage order."""
+    # rosbags, apsw (sqlite), lz4/zstd and struct raise many types on damaged files;
+    # the try blocks below hold only rosbags calls, so every failure there is the bag's.
+    try:
+        reader = Reader(storage_path)
+        reader.open()
+    except Exception as err:
+        raise _corrupt(bag, err) from err
+    try:
+        connections = list(reader.connections)
+        present = {conn.topic: conn.msgtype for conn in connections}
+        readers = {}
+        for role, selection in zip(('input', 'output'), selections):
+            topic = selection.topic
+            if topic not in present:
+                listing = ', '.join(f'{name} ({kind})' for name, kind in sorted(present.items()))
+                option = options.setting(f'{role}_topic', '<topic>')
+                msg = (f'bag {bag} has no topic {topic}; topics in the bag: '
+                       f'{listing or "none"}; pass {option} with one of them')
+                raise DataError(msg)
+            kinds = sorted({conn.msgtype for conn in connections if conn.topic == topic})
+            if len(kinds) != 1 or kinds[0] not in MESSAGE_READERS:
+                msg = (f'topic {topic} in bag {bag} has type {", ".join(kinds)}; expected '
+                       f'{supported_types()}; republish the signal as one of these types '
+                       'and record again')
+                raise DataError(msg)
+            readers[topic] = MESSAGE_READERS[kinds[0]]
+            _check_selectors(bag, selection, readers[topic])
+        roles = {'input': selections[0], 'output': selections[1]}
+        wanted = [conn for conn in connections if conn.topic in readers]
+        stamps: dict[str, list[int]] = {role: [] for role in roles}
+        values: dict[str, list[float]] = {role: [] for role in roles}
+        counts = dict.fromkeys(readers, 0)
+        by_topic = {topic: [(role, selection) for role, selection in roles.items()
+                            if selection.topic == topic] for topic in readers}
+        store = typestore()
+        try:
+            for conn, stamp, data in reader.messages(connections=wanted):
+                number = counts[conn.topic]
+                counts[conn.topic] += 1
+                try:
+                    decoded = store.deserialize_cdr(data, conn.msgtype)
+                except Exception as err:
+                    msg = (f'message {number} of topic {conn.topic} in bag {bag} cannot be '
+                           f'decoded as {conn.msgtype} ({type(err).__name__}: {err}); the bag '
+                           'is corrupt; re-record it')
+                    raise DataError(msg) from err
+                for role, selection in by_topic[conn.topic]:
+                    try:
+                        value = readers[conn.topic].value(decoded, selection)
+                    except SelectionError as err:
+                        msg = (f'message {number} of topic {conn.topic} ({conn.msgtype}) in '
+                               f'bag {bag}: {err}')
+                        raise DataError(msg) from err
+                    stamps[role].append(stamp)
+                    values[role].append(value)
+        except DataError:
+            raise
+        except Exception as err:
+            raise _corrupt(bag, err) from err
+    finally:
+        with contextlib.suppress(Exception):
+            reader.close()
+    return {role: (np.array(stamps[role], dtype=np.int64),
+                   np.array(values[role], dtype=np.float64)) for role in roles}
+
+
+def _check_selectors(bag: Path, selection: Selection, reader: MessageReader) -> None:
+    """Refuse a joint, field or index set for a topic whose type does not have it."""
+    selectors = reader.selectors
+    given = [name for name, unset in (('joint', None), ('joint_field', 'position'),
+                                      ('index', None))
+             if getattr(selection, name) != unset and name not in selectors]
+    if given:
+        options = ', '.join(selection.name(name) for name in given)
+        users = sorted(kind for kind, other in MESSAGE_READERS.items()
+                       if set(given) <= set(other.selectors))
+        msg = (f'{options} does not apply to topic {selection.topic} in bag {bag}: its type '
+               f'{reader.msgtype} has no joints or elements to select '
+               f'({options} applies to {", ".join(users) or "no supported type"}); remove '
+               f'{options} or choose another topic')
+        raise DataError(msg)
+
+
+def _clean_topic(
+    bag: Path,
+    selection: Selection,
+    stamps: npt.NDArray[np.int64],
+    values: FloatArray,
+    *,
+    options: DataOptions,
+    notes: list[str],
+) -> _Stamped:
+    """Check counts, sort stably, keep the last of duplicate stamps, handle NaN/Inf."""
+    topic = selection.label
+    if stamps.size == 0:
+        msg = (f'topic {topic} in bag {bag} has no messages; check that its publisher ran '
+               f'during the recording (`ros2 bag info {bag}`)')
+        raise DataError(msg)
+    if stamps.size == 1:
+        msg = (f'topic {topic} in bag {bag} has a single message; a recording needs at least '
+               f'{MIN_SAMPLES} samples; record longer')
+        raise DataError(msg)
+    stamps, values, n_unsorted, n_duplicate = _sort_dedupe(stamps, values)
+    if n_unsorted:
+        notes.append(f'{topic}: {n_unsorted} message(s) out of time order; sorted stably '
+                     'by log time')
+    if n_duplicate:
+        notes.append(f'{topic}: {n_duplicate} duplicate time stamp(s); kept the last '
+                     'message of each')
+    bad = ~np.isfinite(values)
+    n_bad = int(np.count_nonzero(bad))
+    if n_bad and not options.drop_nonfinite:
+        first = int(np.flatnonzero(bad)[0])
+        msg = (f'topic {topic} in bag {bag} has {n_bad} non-finite value(s) (NaN/Inf), the '
+               f'first at message {first} ({(stamps[first] - stamps[0]) * 1e-9:.9g} s after '
+               f'the first message); fix the publisher or pass '
+               f'{options.setting("drop_nonfinite")}')
+        raise DataError(msg)
+    if n_bad:
+        notes.append(f'{topic}: dropped {n_bad} non-finite value(s) (NaN/Inf)')
+        stamps, values = stamps[~bad], values[~bad]
+    return stamps, values

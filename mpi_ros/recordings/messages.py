@@ -1,0 +1,239 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Message readers: one number per bag message, chosen by the topic's message type.
+
+A recording needs one number per message of a topic: the actuator input x
+[A] or output s [m]. A :class:`MessageReader` takes it from a decoded message;
+which number is described by a :class:`Selection` (a joint and field of a
+``sensor_msgs/msg/JointState``, an element of a
+``std_msgs/msg/Float64MultiArray``). The bag reader picks the reader by the
+topic's type as stored in the bag, through :data:`MESSAGE_READERS`.
+
+Adding a message type is one class and one registry line (the type must be in
+rosbags' ROS 2 Jazzy typestore)::
+
+    class PointXReader(MessageReader):
+        msgtype = 'geometry_msgs/msg/Point'
+
+        def value(self, msg, selection):
+            return float(msg.x)
+
+    MESSAGE_READERS = {..., PointXReader.msgtype: PointXReader()}
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+from dataclasses import dataclass
+import functools
+from typing import Any, ClassVar, Mapping
+
+from rosbags.typesys import get_typestore, Stores
+
+from ..errors import DataError
+
+__all__ = [
+    'Selection',
+    'SelectionError',
+    'MessageReader',
+    'Float64Reader',
+    'JointStateReader',
+    'Float64MultiArrayReader',
+    'MESSAGE_READERS',
+    'supported_types',
+    'typestore',
+]
+
+
+class SelectionError(DataError):
+    """A message does not hold the selected number (joint, field or index)."""
+
+
+@dataclass(frozen=True)
+class Selection:
+    """
+    Which number to take from each message of one topic.
+
+    Attributes
+    ----------
+    topic : str
+        Topic name in the bag.
+    joint : str or None
+        Joint name in a ``JointState``; None takes the message's only joint.
+    joint_field : {'position', 'velocity', 'effort'}
+        Field of the joint in a ``JointState``.
+    index : int or None
+        Element of a ``Float64MultiArray`` after ``layout.data_offset``;
+        None takes the array's only element.
+    names : Mapping[str, str]
+        How the user writes the options behind ``topic``, ``joint``,
+        ``joint_field`` and ``index`` (e.g. ``'--input-joint'``), for messages.
+
+    """
+
+    topic: str
+    joint: str | None = None
+    joint_field: str = 'position'
+    index: int | None = None
+    names: Mapping[str, str] = dataclasses.field(default_factory=dict, compare=False)
+
+    def name(self, attribute: str) -> str:
+        """Return how the user writes the option behind `attribute`."""
+        return self.names.get(attribute, attribute)
+
+    @property
+    def label(self) -> str:
+        """Topic, with the joint, field or index when one is selected."""
+        parts = [part for part in (self.joint, None if self.joint is None else self.joint_field,
+                                   None if self.index is None else f'[{self.index}]') if part]
+        return f'{self.topic} {" ".join(parts)}' if parts else self.topic
+
+
+class MessageReader(abc.ABC):
+    """
+    Take the selected number from one decoded message of one type.
+
+    Subclasses set :attr:`msgtype` and :attr:`selectors` and implement
+    :meth:`value`; one line in :data:`MESSAGE_READERS` registers them.
+    """
+
+    #: Message type the reader decodes, as stored in the bag.
+    msgtype: ClassVar[str]
+    #: Attributes of :class:`Selection` the type uses (``joint``, ``joint_field``,
+    #: ``index``); setting another one for a topic of this type is an error.
+    selectors: ClassVar[tuple[str, ...]] = ()
+
+    @abc.abstractmethod
+    def value(self, msg: Any, selection: Selection) -> float:
+        """
+        Return the selected number of one message.
+
+        Parameters
+        ----------
+        msg : object
+            The message, decoded by rosbags.
+        selection : Selection
+            What to take from it.
+
+        Returns
+        -------
+        float
+            The number, in the unit it was published in.
+
+        Raises
+        ------
+        SelectionError
+            If the message does not hold it; the message says what it holds.
+
+        """
+
+
+class Float64Reader(MessageReader):
+    """``std_msgs/msg/Float64``: the number is ``data``."""
+
+    msgtype = 'std_msgs/msg/Float64'
+
+    def value(self, msg: Any, selection: Selection) -> float:
+        """Return ``msg.data``."""
+        return float(msg.data)
+
+
+class JointStateReader(MessageReader):
+    """``sensor_msgs/msg/JointState``: one field (position, velocity, effort) of one joint."""
+
+    msgtype = 'sensor_msgs/msg/JointState'
+    selectors = ('joint', 'joint_field')
+
+    def value(self, msg: Any, selection: Selection) -> float:
+        """Return ``msg.<joint_field>[i]`` where ``msg.name[i]`` is the selected joint."""
+        names = [str(name) for name in msg.name]
+        joint_option = selection.name('joint')
+        if selection.joint is None:
+            if len(names) != 1:
+                msg_text = (f'it holds {len(names)} joints ({_listing(names)}) and '
+                            f'{joint_option} is not set; set {joint_option} to one of them')
+                raise SelectionError(msg_text)
+            position = 0
+        elif selection.joint in names:
+            position = names.index(selection.joint)
+        else:
+            msg_text = (f'it has no joint {selection.joint!r} ({joint_option}); joints found: '
+                        f'{_listing(names)}; set {joint_option} to one of them')
+            raise SelectionError(msg_text)
+        values = getattr(msg, selection.joint_field)
+        if position >= len(values):
+            field_option = selection.name('joint_field')
+            others = [name for name in ('position', 'velocity', 'effort')
+                      if name != selection.joint_field and len(getattr(msg, name)) > position]
+            msg_text = (f'it has no {selection.joint_field} for joint {names[position]!r}: '
+                        f'{selection.joint_field} holds {len(values)} value(s) for '
+                        f'{len(names)} joint(s) (its publisher does not fill it); set '
+                        f'{field_option} to a filled field '
+                        f'({", ".join(others) or "none is filled"})')
+            raise SelectionError(msg_text)
+        return float(values[position])
+
+
+class Float64MultiArrayReader(MessageReader):
+    """``std_msgs/msg/Float64MultiArray``: one element of ``data``."""
+
+    msgtype = 'std_msgs/msg/Float64MultiArray'
+    selectors = ('index',)
+
+    def value(self, msg: Any, selection: Selection) -> float:
+        """Return ``msg.data[layout.data_offset + index]``."""
+        offset = int(msg.layout.data_offset)
+        size = len(msg.data) - offset
+        option = selection.name('index')
+        if selection.index is None:
+            if size != 1:
+                msg_text = (f'it holds {size} elements and {option} is not set; set {option} '
+                            f'to one of 0 to {size - 1}')
+                raise SelectionError(msg_text)
+            index = 0
+        else:
+            index = selection.index
+        if not 0 <= index < size:
+            fix = (f'set {option} to one of 0 to {size - 1}' if size > 0
+                   else 'record a topic whose arrays hold the signal')
+            msg_text = (f'{option} {index} is out of range: the array holds {max(size, 0)} '
+                        f'element(s){_offset_note(offset)}; {fix}')
+            raise SelectionError(msg_text)
+        return float(msg.data[offset + index])
+
+
+#: Message type -> reader. A new type is one class above and one line here.
+MESSAGE_READERS: dict[str, MessageReader] = {
+    Float64Reader.msgtype: Float64Reader(),
+    JointStateReader.msgtype: JointStateReader(),
+    Float64MultiArrayReader.msgtype: Float64MultiArrayReader(),
+}
+
+
+def supported_types() -> str:
+    """
+    List the message types :data:`MESSAGE_READERS` reads, for messages.
+
+    Returns
+    -------
+    str
+        E.g. ``'std_msgs/msg/Float64, sensor_msgs/msg/JointState or ...'``.
+
+    """
+    names = list(MESSAGE_READERS)
+    return names[0] if len(names) == 1 else f'{", ".join(names[:-1])} or {names[-1]}'
+
+
+@functools.lru_cache(maxsize=1)
+def typestore() -> Any:
+    """Build rosbags' ROS 2 Jazzy typestore once and return it."""
+    return get_typestore(Stores.ROS2_JAZZY)
+
+
+def _listing(names: list[str]) -> str:
+    return ', '.join(repr(name) for name in names) or 'none'
+
+
+def _offset_note(offset: int) -> str:
+    return f' after layout.data_offset {offset}' if offset else ''

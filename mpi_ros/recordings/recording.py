@@ -1,0 +1,98 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The :class:`Recording` type: paired actuator input/output samples.
+
+An MPI model Γ = S∘H (26) is identified from pairs of samples of the actuator
+input x (coil current [A]) and output s (displacement [m]); every reader of
+:mod:`mpi_ros.recordings` returns them as a :class:`Recording`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import os
+from typing import Union
+
+import numpy as np
+import numpy.typing as npt
+
+from ..errors import DataError
+
+__all__ = ['MIN_SAMPLES', 'Recording', 'PathLike', 'FloatArray']
+
+PathLike = Union[str, 'os.PathLike[str]']
+FloatArray = npt.NDArray[np.float64]
+
+#: Smallest number of paired samples a recording must hold to be usable.
+MIN_SAMPLES = 10
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    """
+    Paired input/output samples of one actuator experiment.
+
+    The arrays are converted to read-only ``float64`` copies on construction.
+
+    Parameters
+    ----------
+    time : ndarray of float, shape (N,)
+        Sample times [s]. Bags give times relative to the first paired sample;
+        CSV files give the time column as written (times its scale).
+    current : ndarray of float, shape (N,)
+        Actuator input x at each sample [A] (for a generic actuator: its input,
+        in the input's unit).
+    displacement : ndarray of float, shape (N,)
+        Actuator output s at each sample [m] (for a generic actuator: its
+        output, in the output's unit).
+    source : str
+        Where the samples come from (the file or bag path).
+    notes : tuple of str
+        What the reader changed or noticed (dropped, sorted or duplicate
+        samples), one sentence each; empty when the data was clean.
+
+    Raises
+    ------
+    DataError
+        If the arrays are not one-dimensional numbers of equal length.
+
+    Examples
+    --------
+    >>> rec = Recording([0.0, 0.1], [0.0, 0.5], [0.0, 1e-6], source='demo')
+    >>> len(rec), rec.current.flags.writeable
+    (2, False)
+
+    """
+
+    time: FloatArray
+    current: FloatArray
+    displacement: FloatArray
+    source: str = ''
+    notes: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        """Validate and freeze the arrays."""
+        lengths = {}
+        for name in ('time', 'current', 'displacement'):
+            try:
+                arr = np.array(getattr(self, name), dtype=np.float64)
+            except (TypeError, ValueError) as err:
+                msg = f'Recording.{name} must be an array of numbers; {err}'
+                raise DataError(msg) from err
+            if arr.ndim != 1:
+                msg = (f'Recording.{name} must be one-dimensional; found shape {arr.shape}; '
+                       'pass one sample per element')
+                raise DataError(msg)
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
+            lengths[name] = arr.size
+        if len(set(lengths.values())) != 1:
+            msg = (f'Recording arrays must have equal lengths; found {lengths}; '
+                   'pair the samples before building a Recording')
+            raise DataError(msg)
+        object.__setattr__(self, 'source', str(self.source))
+        object.__setattr__(self, 'notes', tuple(str(note) for note in self.notes))
+
+    def __len__(self) -> int:
+        """Return the number of samples N."""
+        return int(self.time.size)
