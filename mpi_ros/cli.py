@@ -66,14 +66,20 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     data = _read_data(args.data, args)
     _progress(f'identifying from {len(data.time)} samples of {args.data} '
               f'(order {format_order(order)}) ...')
-    result = identify(data.current, data.displacement, order=order)
+    result = identify(data.current, data.displacement, order=order, anchor=args.anchor)
     for row in result.order_table:
         _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out nonlinearity error "
-                  f"{100 * row['nonlinearity_error']:6.2f} %")
+                  f"{100 * row['nonlinearity_error']:6.2f} % of the output range")
     n, l = result.order  # noqa: E741
+    model = result.model
     _progress(f'order n={n}, l={l}: nonlinearity error (37) '
-              f'{100 * result.nonlinearity_error:.2f} %, relative RMS error '
-              f'{100 * result.rms_error:.3f} % ({result.solve_time:.2f} s)')
+              f'{100 * result.nonlinearity_error:.2f} % of the output range, RMS error '
+              f'{100 * result.rms_error:.3f} % (straight line: '
+              f'{100 * result.linear_rms_error:.3f} %) ({result.solve_time:.2f} s)')
+    _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
+              f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; first '
+              f'{result.burn_in} samples not fitted (start state unknown until the input '
+              'covered its range)')
     summary = dict(result.summary(), source=str(args.data))
     # Both files appear only when both are complete: each is written to a temporary
     # file and renamed; a YAML this run created is removed again if the JSON fails.
@@ -214,6 +220,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--json', help='fit statistics to write (order, errors, samples)')
     p.add_argument('--node-name', default='compensator',
                    help='node the YAML is keyed by (default: compensator)')
+    p.add_argument('--anchor', choices=('operating_point', 'origin'), default='operating_point',
+                   help='operating_point (default): any sensor zero, bias, sign or start '
+                        'state; origin: the design of the paper, for data that start at rest '
+                        'at zero input and zero output')
     add_data_options(p)
     p.set_defaults(func=_cmd_identify)
     for name, func, what, column in (

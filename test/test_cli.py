@@ -40,14 +40,16 @@ def test_identify_writes_params_and_json(recording, source, capsys):
                '--json', str(tmp / 'fit.json')])
     assert rc == 0
     model = MPIModel.from_params(read_params_yaml(tmp / 'p.yaml'))
-    assert model.n == 4                          # the output never goes negative, so S has
-    assert model.superposition.thresholds.size == 3   # only its 0 and positive thresholds
+    assert model.n == 4                          # S' is centred on the output's operating
+    assert model.superposition.thresholds.size == 5   # point: 2l+1 thresholds (issue 9)
+    assert model.to_params()['model.output_offset'] != 0.0
     fit = json.loads((tmp / 'fit.json').read_text())
     assert fit['order'] == [4, 2] and fit['samples'] == current.size
     core = identify(current, displacement, n=4, l=2)        # the CLI reports the core's fit
     assert fit['nonlinearity_error'] == pytest.approx(core.nonlinearity_error, rel=1e-9)
     assert fit['rms_error'] == pytest.approx(core.rms_error, rel=1e-9)
-    assert 'nonlinearity error (37)' in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert 'nonlinearity error (37)' in err and 'operating point: input offset' in err
 
 
 def test_simulate_then_compensate_round_trip(recording):
