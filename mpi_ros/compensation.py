@@ -194,12 +194,13 @@ class LinearMap:
         return self.gain * displacement + self.offset
 
 
-def _major_loop(current_min: float, current_max: float, points: int = 401) -> FloatArray:
-    # From the initial states (the rest at x0) to current_min, up, down, up: a play's
-    # output depends only on the extremes of a monotone path, so the jump to current_min
-    # equals a ramp there.
+def _major_loop(current_min: float, current_max: float,
+                points: int = 401) -> tuple[FloatArray, slice]:
+    # Up and down once to set the plays (whatever the model's initial states: a model
+    # identified on a record that starts mid-history has none it can vouch for), then the
+    # major loop proper: up, down, up.  Returns the currents and the part to use.
     up = np.linspace(current_min, current_max, points)
-    return np.concatenate([up, up[::-1], up])
+    return np.concatenate([up, up[::-1], up, up[::-1], up]), slice(2 * points, None)
 
 
 def operating_range(model: MPIModel, current_min: float,
@@ -220,7 +221,8 @@ def operating_range(model: MPIModel, current_min: float,
         Lowest and highest displacement [m] on the major loop.
 
     """
-    s = model.simulate(_major_loop(current_min, current_max))
+    x, keep = _major_loop(current_min, current_max)
+    s = model.simulate(x)[keep]
     return float(np.min(s)), float(np.max(s))
 
 
@@ -241,8 +243,8 @@ def best_linear_map(model: MPIModel, current_min: float, current_max: float) -> 
         ``current ~ gain * displacement + offset``.
 
     """
-    x = _major_loop(current_min, current_max)
-    gain, offset = np.polyfit(model.simulate(x), x, 1)
+    x, keep = _major_loop(current_min, current_max)
+    gain, offset = np.polyfit(model.simulate(x)[keep], x[keep], 1)
     return LinearMap(float(gain), float(offset))
 
 

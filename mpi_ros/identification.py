@@ -39,7 +39,9 @@ Real records (documented in docs/design.md, "Identification on real records"):
   the input has visited both extremes of the record; the generalised error is
   therefore minimised only over the samples after the input first covered its range
   (99 %): the fit uses only what the data determine, not the initial loading curve.
-  The returned model's initial states are the centre (0).
+  The returned model's initial states are the plays at rest at the record's lowest
+  input (where an actuator rests when it is off; the paper's ``z_H0 = 0`` at ``x = 0``
+  for data that start there): a compensator starts from that state.
 - The data are scaled internally; all thresholds follow the data, so results do not
   depend on units.
 - A branch of S' the output never reaches (the output stays on one side of
@@ -485,6 +487,10 @@ class ScaledDesign:
         Samples at the start left out of the generalised error (states not determined).
     constant : bool
         True when the generalised error has the constant term (``anchor='operating_point'``).
+    input_rest : float or None
+        The input [A] at which the returned model's plays start at rest (its initial
+        states): the lowest input of the record, where an actuator rests when it is off;
+        None: ``z_H0 = 0`` (32).
 
     """
 
@@ -498,6 +504,7 @@ class ScaledDesign:
     sign: int = 1
     burn_in: int = 0
     constant: bool = False
+    input_rest: float | None = None
 
     def scaled_input(self, x: FloatArray) -> FloatArray:
         """Return ``(x - x0) / x_scale``, the input the QP sees."""
@@ -538,6 +545,11 @@ class ScaledDesign:
                                         w_s_inv * (self.x_scale / self.y_scale))
         # H[u] + c = H[u + c / W] once the states are set by the data (wiping-out).
         x0 = self.input_offset - constant * self.x_scale / (float(np.sum(w_h)) + shift_weight)
+        if self.input_rest is not None:
+            # Every play at rest at the lowest input: the actuator's state when it has been
+            # off (the paper's z_H0 = 0 at x = 0 for data that start there).
+            hysteresis = PIHysteresisOperator(hysteresis.thresholds, w_h,
+                                              np.full(r_h.size, self.input_rest - x0))
         return MPIModel(hysteresis, invert_superposition(s_inv),                # (22)-(25)
                         input_offset=x0, output_offset=self.output_offset,
                         output_sign=self.sign)
@@ -666,7 +678,7 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
                     to_turning_point=True)
     return ScaledDesign(x_scale, y_scale, r_h, r_s_inv, c,
                         input_offset=0.5 * (x_lo + x_hi), output_offset=0.5 * (y_lo + y_hi),
-                        sign=sign, burn_in=start, constant=True)
+                        sign=sign, burn_in=start, constant=True, input_rest=x_lo)
 
 
 def _mpi_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: FloatArray, *,
