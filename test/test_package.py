@@ -88,8 +88,9 @@ def test_config_file_is_keyed_by_the_node_and_names_its_parameters(node):
     module = __import__(f'mpi_ros.nodes.{node}', fromlist=['PARAMETERS'])
     specs = {spec.name: spec for spec in module.PARAMETERS}
     document = yaml.safe_load((ROOT / 'config' / f'{node}.yaml').read_text(encoding='utf-8'))
-    assert list(document) == [node]
-    parameters = flatten_parameters(document[node]['ros__parameters'])
+    # /**/<node>: the file applies in any namespace (ros2 launch ... namespace:=rig_a).
+    assert list(document) == [f'/**/{node}']
+    parameters = flatten_parameters(document[f'/**/{node}']['ros__parameters'])
     assert parameters
     for name, value in parameters.items():
         assert name in specs, f'{node}.yaml sets undeclared parameter {name}'
