@@ -33,7 +33,8 @@ def test_package_xml_declares_the_dependencies():
     assert package.licenses == ['Apache-2.0']
     exec_depends = {d.name for d in package.exec_depends}
     assert {'rclpy', 'std_msgs', 'rcl_interfaces', 'diagnostic_msgs',
-            'python3-numpy'} <= exec_depends
+            'python3-numpy', 'python3-scipy', 'ament_index_python', 'launch',
+            'launch_ros'} <= exec_depends
     assert {d.name for d in package.test_depends} == {
         'ament_flake8', 'ament_pep257', 'python3-pytest'}
 
@@ -73,7 +74,7 @@ def test_pip_install_pulls_ros_wheels_only_without_a_ros_install():
     plain = _install_requires({})
     assert 'ros-jazzy-rclpy[fastrtps]' in plain
     assert 'ros-jazzy-common-interfaces' in plain
-    for name in ('numpy', 'numba', 'osqp', 'rosbags', 'matplotlib', 'pyyaml'):
+    for name in ('numpy', 'numba', 'osqp', 'scipy', 'rosbags', 'matplotlib', 'pyyaml'):
         assert any(re.match(rf'{name}\b', requirement) for requirement in plain), name
     for env in ({'AMENT_PREFIX_PATH': '/opt/ros/jazzy'}, {'ROS_DISTRO': 'jazzy'},
                 {'MPI_ROS_SKIP_ROS_WHEELS': '1'}):
