@@ -114,6 +114,13 @@ class ProcessGroup:
             if process.poll() is None:
                 process.send_signal(signal.SIGINT)
 
+    def wait(self, label, timeout=30.0):
+        """Wait (bounded) for one process to end; return its exit status, None on timeout."""
+        try:
+            return self.processes[label].wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return None
+
     def wait_all(self, timeout=30.0):
         """Wait (bounded) for every process to end; return ``{label: exit status}``."""
         deadline = time.monotonic() + timeout
