@@ -40,12 +40,16 @@ NODES = ('compensator', 'plant_simulator', 'identifier')
 
 # -- stand-ins for launch / launch_ros ---------------------------------------------------
 class _Recorded:
+    """Records the arguments it was built with."""
+
     def __init__(self, *args, **kwargs):
         self.args = args
         self.kwargs = kwargs
 
 
 class _LaunchConfiguration:
+    """launch.substitutions.LaunchConfiguration: the value of a launch argument."""
+
     def __init__(self, name):
         self.name = name
 
@@ -54,6 +58,8 @@ class _LaunchConfiguration:
 
 
 class _IfCondition:
+    """launch.conditions.IfCondition: true, 1, false or 0 (else an error)."""
+
     def __init__(self, predicate):
         self.predicate = predicate
 
@@ -65,12 +71,16 @@ class _IfCondition:
 
 
 class _DeclareLaunchArgument(_Recorded):
+    """launch.actions.DeclareLaunchArgument."""
+
     @property
     def name(self):
         return self.args[0]
 
 
 class _OpaqueFunction(_Recorded):
+    """launch.actions.OpaqueFunction: its function returns the actions."""
+
     def execute(self, context):
         return self.kwargs['function'](context)
 
