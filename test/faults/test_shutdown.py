@@ -84,8 +84,11 @@ def test_busy_compensator_exits_cleanly_on_two_signals(group, driver, bags, sign
 
 
 @pytest.mark.slow
-def test_busy_plant_simulator_exits_cleanly_on_two_signals(group, driver):
-    group.start('plant', node_command('plant_simulator'))
+@pytest.mark.parametrize('record', [False, True])
+def test_busy_plant_simulator_exits_cleanly_on_two_signals(group, driver, tmp_path, record):
+    bag = tmp_path / 'recorded'
+    extra = ['--ros-args', '-p', f'record.path:={bag}'] if record else []
+    group.start('plant', node_command('plant_simulator') + extra)
     assert group.wait_for_output('plant', 'simulating'), group.output('plant')
     driver.handshake(driver.current_pub, 1.0)
     currents = [LIMITS[0] + (LIMITS[1] - LIMITS[0]) * (k % 100) / 99.0 for k in range(100)]
@@ -99,6 +102,9 @@ def test_busy_plant_simulator_exits_cleanly_on_two_signals(group, driver):
     assert statuses == {'plant': 0}, output
     assert bad_output(output) == [], output
     assert output.count('simulating') == 1
+    if record:                  # the recording is finished (and logged) before shutdown
+        assert f'into {bag}' in output
+        assert (bag / 'metadata.yaml').is_file()
 
 
 @pytest.mark.slow
