@@ -35,6 +35,7 @@ PYTHON_REQUIRES = [
     'numpy>=1.24',
     'numba>=0.58',
     'osqp>=1.0',
+    'scipy>=1.10',
     'rosbags>=0.10',
     'matplotlib>=3.7',
     'pyyaml>=6.0',

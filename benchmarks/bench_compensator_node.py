@@ -321,6 +321,12 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
                                             loop_qos(qos_depth, reliability), raw=True)
     executor = events_executor()
     executor.add_node(node)
+    # Ready only once this reader has matched the compensator's writer: commands published
+    # before the match are lost (volatile), which under load cost the first 0.3-0.6 s of
+    # commands (the later ones then look 0.3-0.6 s late, being paired with earlier sends).
+    deadline = time.monotonic() + 60.0
+    while subscription.get_publisher_count() < 1 and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
     Path(out + '.ready').touch()
     deadline = time.monotonic() + timeout
     while received[0] < count and time.monotonic() < deadline:

@@ -26,8 +26,9 @@ waiting for each answer; the bag's time stamps are the real send times.
 
 Samples are exchanged in lock step (each desired value waits for its measured
 displacement), so the result does not depend on DDS timing.  DDS stays on this
-machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) on a random or given
-``ROS_DOMAIN_ID``; every process the demo starts is stopped by the demo.
+machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) on the ``--domain-id`` given, else
+the exported ``ROS_DOMAIN_ID``, else a random one; every process the demo starts is stopped
+by the demo. The bag has real time stamps (the wall clock from the start of the recording).
 """
 
 import argparse
@@ -42,8 +43,9 @@ from typing import Any
 import numpy as np
 
 from .cli_options import ArgumentParser
+from .errors import MPIError
 
-__all__ = ['demo_main', 'ORDERS', 'EFFECTS']
+__all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']
 
 #: The paper's table (section 5).
 ORDERS = ((0, 0), (4, 2), (8, 4), (14, 7))
@@ -104,7 +106,7 @@ class _DemoLoop:
 
 def _run(args: argparse.Namespace) -> dict[str, Any]:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
+    os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)      # the nodes it starts inherit it
     import rclpy
 
     from .excitation import identification_excitation
@@ -134,10 +136,13 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
         _progress(f'[demo] recording {t.size} excitation samples into {bag} ...')
         driver.handshake(driver.current_pub, current[0])
         with BagRecorder(bag, overwrite=True) as recorder:
+            # Real time stamps: the wall clock at the start of the recording plus the
+            # excitation's own time (the samples are exchanged in lock step).
+            wall_start = time.time() - float(t[0])
             for k in range(t.size):
                 s = driver.exchange(driver.current_pub, current[k])
-                recorder.write_input(float(t[k]), float(current[k]))
-                recorder.write_output(float(t[k]) + 1e-6, s)
+                recorder.write_input(wall_start + float(t[k]), float(current[k]))
+                recorder.write_output(wall_start + float(t[k]) + 1e-6, s)
         plant.stop()
         processes.remove(plant)
         # 3: identify.
@@ -183,7 +188,7 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
 
 def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
+    os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)      # the nodes it starts inherit it
     import rclpy
 
     from .excitation import identification_excitation
@@ -231,13 +236,15 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
         _progress(f'[demo] recording {t.size} excitation samples in real time '
                   f'({t[-1]:.0f} s) into {bag} ...')
         driver.handshake(driver.current_pub, current[0])
+        wall_start = time.time()
         sent, measured = driver.exchange_paced(driver.current_pub, current, t,
                                                timeout=_REPLY_TIMEOUT)
         plant.stop()
         processes.remove(plant)
         lateness('identification', sent, t)
         with BagRecorder(bag, overwrite=True) as recorder:
-            for tk, ik, sk in zip(sent, current, measured):
+            # Real time stamps: the wall clock at the start plus the real send times.
+            for tk, ik, sk in zip(wall_start + sent, current, measured):
                 recorder.write_input(float(tk), float(ik))
                 recorder.write_output(float(tk) + 1e-6, float(sk))
         # Identify the plain and the extended model of the same order.
@@ -405,6 +412,46 @@ def _report(out: Path, data: Any, models: dict, t: np.ndarray, desired: np.ndarr
     (out / 'results.json').write_text(json.dumps(results, indent=2))
 
 
+def demo_domain_id(given: int | None = None) -> int:
+    """
+    Return the ROS_DOMAIN_ID of the demo: ``--domain-id``, else the exported one, else random.
+
+    Parameters
+    ----------
+    given : int, optional
+        The ``--domain-id`` option.
+
+    Returns
+    -------
+    int
+        ``given`` if not None; else ``$ROS_DOMAIN_ID`` if set and not empty; else a
+        random domain in 101-199 (so that two demos on one machine do not meet).
+
+    Raises
+    ------
+    mpi_ros.errors.MPIError
+        When the domain (given or exported) is not an integer in 0-232.
+
+    """
+    if given is None:
+        exported = os.environ.get('ROS_DOMAIN_ID', '').strip()
+        if not exported:
+            return random.randint(101, 199)
+        source = 'the exported ROS_DOMAIN_ID'
+        try:
+            given = int(exported)
+        except ValueError:
+            given = -1
+    else:
+        source = '--domain-id'
+        exported = str(given)
+    if not 0 <= given <= 232:
+        msg = (f'{source} must be an integer from 0 to 232; found {exported!r}; '
+               'pass --domain-id N or unset ROS_DOMAIN_ID')
+        raise MPIError(msg)
+    return given
+
+
 def demo_main(argv: list[str]) -> int:
     """
     Run the demo; see the module docstring.
@@ -424,8 +471,9 @@ def demo_main(argv: list[str]) -> int:
     """
     parser = ArgumentParser(prog='mpi-ros demo', description=__doc__.splitlines()[1])
     parser.add_argument('--output', default='mpi_ros_demo', help='folder for the report')
-    parser.add_argument('--domain-id', type=int, default=random.randint(101, 199),
-                        help='ROS_DOMAIN_ID to use (default: random in 101-199)')
+    parser.add_argument('--domain-id', type=int, default=None,
+                        help='ROS_DOMAIN_ID to use (default: the exported ROS_DOMAIN_ID if '
+                        'set, else a random one in 101-199)')
     parser.add_argument('--effect', choices=EFFECTS, default=None,
                         help='switch this effect on in the plant simulator and compare the '
                         'plain with the extended compensator (default: none, the plain '
@@ -449,6 +497,7 @@ def demo_main(argv: list[str]) -> int:
     parser.add_argument('--goal', type=float, default=0.03,
                         help='compensated control error (38) to reach (fraction)')
     args = parser.parse_args(argv)
+    args.domain_id = demo_domain_id(args.domain_id)
     duration, track_duration = _DURATIONS[args.effect is not None]
     args.duration = duration if args.duration is None else args.duration
     args.track_duration = track_duration if args.track_duration is None else args.track_duration

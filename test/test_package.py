@@ -33,7 +33,8 @@ def test_package_xml_declares_the_dependencies():
     assert package.licenses == ['Apache-2.0']
     exec_depends = {d.name for d in package.exec_depends}
     assert {'rclpy', 'std_msgs', 'rcl_interfaces', 'diagnostic_msgs',
-            'python3-numpy'} <= exec_depends
+            'python3-numpy', 'python3-scipy', 'ament_index_python', 'launch',
+            'launch_ros'} <= exec_depends
     assert {d.name for d in package.test_depends} == {
         'ament_flake8', 'ament_pep257', 'python3-pytest'}
 
@@ -73,7 +74,7 @@ def test_pip_install_pulls_ros_wheels_only_without_a_ros_install():
     plain = _install_requires({})
     assert 'ros-jazzy-rclpy[fastrtps]' in plain
     assert 'ros-jazzy-common-interfaces' in plain
-    for name in ('numpy', 'numba', 'osqp', 'rosbags', 'matplotlib', 'pyyaml'):
+    for name in ('numpy', 'numba', 'osqp', 'scipy', 'rosbags', 'matplotlib', 'pyyaml'):
         assert any(re.match(rf'{name}\b', requirement) for requirement in plain), name
     for env in ({'AMENT_PREFIX_PATH': '/opt/ros/jazzy'}, {'ROS_DISTRO': 'jazzy'},
                 {'MPI_ROS_SKIP_ROS_WHEELS': '1'}):
@@ -88,8 +89,9 @@ def test_config_file_is_keyed_by_the_node_and_names_its_parameters(node):
     module = __import__(f'mpi_ros.nodes.{node}', fromlist=['PARAMETERS'])
     specs = {spec.name: spec for spec in module.PARAMETERS}
     document = yaml.safe_load((ROOT / 'config' / f'{node}.yaml').read_text(encoding='utf-8'))
-    assert list(document) == [node]
-    parameters = flatten_parameters(document[node]['ros__parameters'])
+    # /**/<node>: the file applies in any namespace (ros2 launch ... namespace:=rig_a).
+    assert list(document) == [f'/**/{node}']
+    parameters = flatten_parameters(document[f'/**/{node}']['ros__parameters'])
     assert parameters
     for name, value in parameters.items():
         assert name in specs, f'{node}.yaml sets undeclared parameter {name}'

@@ -104,6 +104,12 @@ PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
 )
 
 _SPECS = specs_by_name(PARAMETERS)
+#: Most desired displacements served in one subscription callback.
+_DRAIN_LIMIT = 1000
+#: Counters of bad inputs: a diagnostics period with any of them is WARN, and they are logged.
+_FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
+#: At most one log line about bad inputs per this period [s]; checked every second.
+_FAULT_LOG_PERIOD_S = 5.0
 _LIMIT_KEYS = ('output.min', 'output.max')
 _EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
 _ALL_MODEL_KEYS = MODEL_KEYS + _EXTENSION_KEYS
@@ -143,6 +149,7 @@ class CompensatorNode(Node):
         self._messages_out = 0
         self._dropped_unconfigured = 0
         self._last_report = (time.monotonic(), 0, {})
+        self._fault_log = (-math.inf, {})
         # Validator first: rclpy runs it once per key while declaring (a bad
         # --params-file override is rejected there), then once per request.
         self.add_pre_set_parameters_callback(self._complete_model_request)
@@ -166,6 +173,7 @@ class CompensatorNode(Node):
             Float64, 'desired_displacement', self._on_desired_displacement, qos)
         self._timer = self.create_timer(
             self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
+        self._fault_timer = self.create_timer(1.0, self.log_faults)
 
     # -- public read-only state -------------------------------------------------------
     @property
@@ -238,16 +246,21 @@ class CompensatorNode(Node):
         # are still handled one by one, in order, each with its own command (and, for an
         # extended model, its own arrival time).  The callback takes no MessageInfo: the
         # rclpy 7.1.6 EventsExecutor raises SystemError for such callbacks, so the
-        # publisher's source time stamp is out of reach.
+        # publisher's source time stamp is out of reach.  At most _DRAIN_LIMIT messages per
+        # call, so that a flood that outruns the node still lets the spin loop see a stop
+        # request (the messages left queued keep their events and come in the next calls).
         take = self._subscription.handle.take_message
-        while msg is not None:
+        for served in range(_DRAIN_LIMIT):
+            if served:
+                taken = take(Float64, False)
+                msg = taken[0] if taken is not None else None
+            if msg is None:
+                break
             current = self.command(msg.data, stamp=self._stamp() if self._extended else None)
             if current is not None:
                 self._command.data = current
                 self._publisher.publish(self._command)
                 self._messages_out += 1
-            taken = take(Float64, False)
-            msg = taken[0] if taken is not None else None
 
     # -- parameters ---------------------------------------------------------------------
     def _complete_model_request(self, parameters: List[Parameter]) -> List[Parameter]:
@@ -400,6 +413,32 @@ class CompensatorNode(Node):
     def _publish_diagnostics(self) -> None:
         self._diagnostics.publish(self.diagnostics())
 
+    def log_faults(self) -> bool:
+        """
+        Log one warning about the bad inputs since the last one, at most every 5 s.
+
+        Returns
+        -------
+        bool
+            True when a line was logged (there were new non-finite, out-of-range or
+            clamped inputs and the last such line is at least 5 s old).
+
+        """
+        now = time.monotonic()
+        last_time, last_counters = self._fault_log
+        if now - last_time < _FAULT_LOG_PERIOD_S or self._compensator is None:
+            return False
+        counters = self._compensator.counters
+        faults = _new_faults(counters, last_counters)
+        if not any(faults.values()):
+            return False
+        self._fault_log = (now, {key: counters.get(key, 0) for key in _FAULT_KEYS})
+        self.get_logger().warning(
+            f'{_describe_faults(faults)} since the last report (non-finite: last command held; '
+            'out of range: beyond the displacement range of the model; clamped: command limited '
+            'to [output.min, output.max])')
+        return True
+
     def diagnostics(self) -> DiagnosticArray:
         """
         Build the diagnostics message (and restart the rate window).
@@ -407,7 +446,9 @@ class CompensatorNode(Node):
         Returns
         -------
         diagnostic_msgs.msg.DiagnosticArray
-            One status named ``<node name>: feedforward``.
+            One status named ``<node name>: feedforward`` with ``hardware_id`` the
+            node's fully qualified name: WARN while unconfigured (``no model``) and
+            after a period with non-finite, out-of-range or clamped inputs, else OK.
 
         """
         now = time.monotonic()
@@ -417,17 +458,16 @@ class CompensatorNode(Node):
         rate = (self._messages_in - last_count) / elapsed if elapsed > 0.0 else 0.0
         self._last_report = (now, self._messages_in, counters)
 
-        status = DiagnosticStatus(name=f'{self.get_name()}: feedforward', hardware_id='')
-        faults = {key: counters.get(key, 0) - last_counters.get(key, 0)
-                  for key in ('nonfinite_input', 'out_of_range', 'clamped')}
+        status = DiagnosticStatus(name=f'{self.get_name()}: feedforward',
+                                  hardware_id=self.get_fully_qualified_name())
+        faults = _new_faults(counters, last_counters)
         if self._compensator is None:
             status.level = DiagnosticStatus.WARN
-            status.message = ('unconfigured: no model, no commands published; push all '
+            status.message = ('no model: unconfigured, no commands published; push all '
                               'model.* parameters with set_parameters_atomically')
-        elif faults['nonfinite_input'] or faults['out_of_range']:
+        elif any(faults.values()):
             status.level = DiagnosticStatus.WARN
-            status.message = (f'{faults["nonfinite_input"]} non-finite and '
-                              f'{faults["out_of_range"]} out-of-range inputs in the last period')
+            status.message = f'{_describe_faults(faults)} in the last period'
         elif not self.get_parameter('enabled').value:
             status.level = DiagnosticStatus.OK
             status.message = 'compensation disabled: best linear map'
@@ -469,7 +509,6 @@ def main(args: Optional[List[str]] = None) -> int:
 
     """
     return run_node_main(CompensatorNode, 'compensator', args)
-    return 0
 
 
 def _no_stamp() -> None:
@@ -494,6 +533,19 @@ def _model_params(values: Dict[str, Any]) -> Optional[Dict[str, Any]]:
         if not all(_is_off(values[key]) for key in keys):
             params.update({key: values[key] for key in keys if values[key] is not None})
     return params
+
+
+def _new_faults(counters: Dict[str, int], before: Dict[str, int]) -> Dict[str, int]:
+    """Return how many inputs of each fault kind came since ``before``."""
+    return {key: max(counters.get(key, 0) - before.get(key, 0), 0) for key in _FAULT_KEYS}
+
+
+def _describe_faults(faults: Dict[str, int]) -> str:
+    """Describe fault counts in words, e.g. ``3 non-finite, 2 clamped inputs``."""
+    words = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
+             'clamped': 'clamped'}
+    parts = [f'{faults[key]} {words[key]}' for key in _FAULT_KEYS if faults[key]]
+    return f'{", ".join(parts) or "no bad"} inputs'
 
 
 def _kind(model: Any) -> str:

@@ -31,12 +31,13 @@ from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValu
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, MODEL_KEYS,
     ParameterRejected, ParameterSpec, specs_by_name,
 )
-from .spinning import shutdown
+from .spinning import shutdown, StopSignals
 from .. import IdentificationResult, identify
 from ..errors import DataError, IdentificationError, MPIError
 from ..order import format_order, Order, parse_order as parse_order_text
@@ -346,27 +347,38 @@ def main(args: Optional[List[str]] = None) -> int:
     Returns
     -------
     int
-        0 when the model was fitted and (if asked) accepted; 1 on any failure.
+        0 when the model was fitted and (if asked) accepted, and on a stop by SIGINT or
+        SIGTERM (however many); 1 on any failure.
 
     """
-    rclpy.init(args=args)
-    node = None
-    status = 0
-    try:
-        node = IdentifierNode()
-        node.run()
-    except KeyboardInterrupt:
-        status = 1
-        print('error: identifier: interrupted; nothing was pushed unless the target said so',
-              file=sys.stderr, flush=True)
-    except (MPIError, ParameterRejected, InvalidParameterTypeException,
-            InvalidParameterValueException) as err:
-        status = 1
-        print(f'error: identifier: {err}', file=sys.stderr, flush=True)
-    finally:
-        if node is not None:
-            node.destroy_node()
-        shutdown()
+    with StopSignals(interrupt=True) as stop:
+        node = None
+        status = 0
+        try:
+            rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+            node = IdentifierNode()
+            node.run()
+        except KeyboardInterrupt:
+            pass
+        except (MPIError, ParameterRejected, InvalidParameterTypeException,
+                InvalidParameterValueException) as err:
+            if not stop.requested:
+                status = 1
+                print(f'error: identifier: {err}', file=sys.stderr, flush=True)
+        except Exception:  # noqa: B902 - see below
+            # A stop signal raises KeyboardInterrupt wherever the main thread is; inside
+            # rclpy's C++ (taking the service answer) it comes out as another exception.
+            if not stop.requested:
+                raise
+        finally:
+            stop.interrupt = False      # a signal from here on must not break the cleanup
+            if node is not None:
+                node.destroy_node()
+            shutdown()
+        if stop.requested:
+            print(f'identifier: stopped by {stop.name}; nothing was pushed unless the target '
+                  'said so (check model_version on its /diagnostics)', file=sys.stderr,
+                  flush=True)
     return status
 
 

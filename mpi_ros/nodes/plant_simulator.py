@@ -209,6 +209,12 @@ class PlantSimulatorNode(Node):
         self._subscription = None
         if self._excitation is None:
             self._subscribe()
+        self.get_logger().info(
+            f'simulating {_describe_truth(values)}: '
+            f'{self.resolve_topic_name("current_command")} [A] -> '
+            f'{self._publisher.topic_name} [m]'
+            + (' (excitation first)' if self._excitation is not None else '')
+            + (f', recording into {values["record.path"]}' if values['record.path'] else ''))
 
     @property
     def exits_when_done(self) -> bool:
@@ -358,6 +364,25 @@ def main(args: Optional[List[str]] = None) -> int:
     return run_node_main(
         PlantSimulatorNode, 'plant_simulator', args,
         until=lambda node: node.finished if node.exits_when_done else None)
+
+
+def _describe_truth(values: Dict[str, Any]) -> str:
+    """Say in words what the node simulates (for its start-up log line)."""
+    if values['truth'] == 'mpi':
+        n = len(values['model.hysteresis.thresholds']) - 1
+        l_s = len(values['model.superposition.thresholds']) - 1
+        text = f'an MPI model (n={n}, l={l_s})'
+    else:
+        effects = [name for name, key in (
+            ('creep', 'actuator.creep_gain'),
+            ('eddy-current lag', 'actuator.eddy_time_constant_s'),
+            ('thermal drift', 'actuator.thermal_gain_m_per_a2'),
+            ('dead time', 'actuator.dead_time_s')) if values[key] > 0.0]
+        text = ('the built-in magnetostrictive actuator (Preisach type'
+                + (f'; {", ".join(effects)}' if effects else '') + ')')
+    if values['noise_std'] > 0.0:
+        text += f' with {values["noise_std"]:g} m sensor noise'
+    return text
 
 
 def _excitation_schedule(values: Dict[str, Any]) -> tuple:

@@ -12,10 +12,28 @@ woken by ``KeyboardInterrupt``, runs ``rclpy.try_shutdown()``: that checks ``ok(
 calls ``rcl_shutdown``, which fails with ``RCLError: rcl_shutdown already called`` when the
 handler thread got there in between (about 1 run in 10 here). :func:`shutdown` tolerates
 exactly that case.
+
+Signals (SIGINT, SIGTERM)
+    rclpy's own handlers (``SignalHandlerOptions.ALL``) chain Python's SIGINT handler, so
+    a ``KeyboardInterrupt`` is raised wherever the main thread happens to be: inside the
+    EventsExecutor's C++ while it builds a message (``RuntimeError: Unable to convert call
+    argument``, or ``terminate called after throwing pybind11::error_already_set`` and an
+    abort), or in a callback that publishes while their handler thread shuts the context
+    down (``publisher's context is invalid``). And they are uninstalled at shutdown, so a
+    second signal (Ctrl-C in a terminal reaches the whole process group, then ``ros2
+    launch`` sends its own SIGINT) finds Python's default handlers again and ends the
+    process with -2 (SIGINT) or -15 (SIGTERM) while it tears DDS down. :func:`run_node_main`
+    therefore starts rclpy with ``SignalHandlerOptions.NO`` and handles both signals itself
+    with :class:`StopSignals`: the first one only asks the spin loop to stop (it ends within
+    :data:`SPIN_PERIOD_S`); the node is destroyed and the context shut down in order on the
+    main thread, and every later signal is ignored, so the process exits 0.
 """
 
+import signal
 import sys
-from typing import Any, Callable, List, Optional
+import threading
+from types import FrameType
+from typing import Any, Callable, Dict, List, Optional
 
 import rclpy
 from rclpy.context import Context
@@ -23,12 +41,85 @@ from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValu
 from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
-__all__ = ['events_executor', 'run_node_main', 'shutdown', 'spin']
+__all__ = ['STOP_SIGNALS', 'StopSignals', 'events_executor', 'run_node_main', 'shutdown',
+           'spin']
 
 #: Longest time one spin_once waits for work [s]; bounds the reaction to shutdown.
 SPIN_PERIOD_S = 0.1
+
+#: The signals that stop a node: Ctrl-C (SIGINT) and ``kill`` / ``ros2 launch`` (SIGTERM).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class StopSignals:
+    """
+    Turn the first SIGINT or SIGTERM into a stop request and ignore every later one.
+
+    Use it as a context manager around ``rclpy.init(..., signal_handler_options=
+    SignalHandlerOptions.NO)`` and the spin loop. In the main thread it installs Python
+    handlers for :data:`STOP_SIGNALS` (elsewhere it does nothing: only the main thread
+    receives signals in Python). The first signal sets :attr:`received`; with
+    ``interrupt=True`` it also raises ``KeyboardInterrupt`` (for work that no spin loop
+    polls, such as a fit). Later signals do nothing. On leaving, the previous handlers come
+    back if no signal arrived; after one, both signals are set to ``SIG_IGN``, so that a
+    late signal cannot kill the process while it exits (Python restores the default
+    handlers in place of Python functions, but keeps ``SIG_IGN``, when it finalises).
+
+    Parameters
+    ----------
+    interrupt : bool
+        Raise ``KeyboardInterrupt`` in the main thread on the first signal.
+
+    Examples
+    --------
+    >>> with StopSignals() as stop:
+    ...     stop.requested
+    False
+
+    """
+
+    def __init__(self, *, interrupt: bool = False) -> None:
+        self.received: Optional[int] = None
+        #: Raise KeyboardInterrupt on the first signal (set False before cleaning up).
+        self.interrupt = interrupt
+        self._previous: Dict[int, Any] = {}
+
+    @property
+    def requested(self) -> bool:
+        """Tell whether a stop signal arrived."""
+        return self.received is not None
+
+    @property
+    def name(self) -> str:
+        """Name the signal that arrived (``SIGINT``, ``SIGTERM``), or ``''``."""
+        return '' if self.received is None else signal.Signals(self.received).name
+
+    def __enter__(self) -> 'StopSignals':
+        """Install the handlers (main thread only)."""
+        if threading.current_thread() is threading.main_thread():
+            for signum in STOP_SIGNALS:
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc_info: Any) -> None:
+        """Restore the previous handlers, or ignore both signals if one arrived."""
+        previous, self._previous = self._previous, {}
+        for signum, handler in previous.items():
+            # signal.signal first runs the handlers of signals already caught, so none is
+            # left pending (Python would report it as 'ignored due to race condition').
+            signal.signal(signum, signal.SIG_IGN if self.received is not None else handler)
+
+    def _handle(self, signum: int, frame: Optional[FrameType]) -> None:
+        # No signal.signal here: inside a handler it would not run a signal caught at the
+        # same time, which would then be reported as 'ignored due to race condition'.
+        if self.received is not None:
+            return
+        self.received = signum
+        if self.interrupt:
+            raise KeyboardInterrupt
 
 
 def events_executor(context: Optional[Context] = None) -> Executor:
@@ -49,9 +140,10 @@ def events_executor(context: Optional[Context] = None) -> Executor:
     return EventsExecutor(context=context)
 
 
-def spin(executor: Executor, context: Context, *, until: Optional[Future] = None) -> None:
+def spin(executor: Executor, context: Context, *, until: Optional[Future] = None,
+         stop: Optional[StopSignals] = None) -> None:
     """
-    Process callbacks until the context shuts down or ``until`` completes.
+    Process callbacks until the context shuts down, ``until`` completes or a stop signal.
 
     Parameters
     ----------
@@ -61,9 +153,12 @@ def spin(executor: Executor, context: Context, *, until: Optional[Future] = None
         Context whose shutdown ends the loop.
     until : rclpy.task.Future, optional
         Stop as soon as this future is done.
+    stop : StopSignals, optional
+        Stop (within :data:`SPIN_PERIOD_S`) once it has received a signal.
 
     """
-    while context.ok() and (until is None or not until.done()):
+    while (context.ok() and (until is None or not until.done())
+           and (stop is None or not stop.requested)):
         executor.spin_once(timeout_sec=SPIN_PERIOD_S)
 
 
@@ -105,27 +200,30 @@ def run_node_main(make_node: Callable[[], Any], label: str, args: Optional[List[
     Returns
     -------
     int
-        0 on shutdown (Ctrl-C, external shutdown, ``until`` done); 1 when the node
-        cannot be configured (invalid parameters), with one ``error:`` line on stderr.
+        0 on shutdown (SIGINT or SIGTERM, however many, external shutdown, ``until``
+        done); 1 when the node cannot be configured (invalid parameters), with one
+        ``error:`` line on stderr.
 
     """
     from ..errors import MPIError
     from .parameters import ParameterRejected
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = make_node()
-        executor = events_executor(node.context)
-        executor.add_node(node)
-        spin(executor, node.context, until=None if until is None else until(node))
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (MPIError, ParameterRejected, InvalidParameterTypeException,
-            InvalidParameterValueException) as err:
-        print(f'error: {label}: {err}', file=sys.stderr, flush=True)
-        return 1
-    finally:
-        if node is not None:
-            node.destroy_node()
-        shutdown()
+    with StopSignals() as stop:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        node = None
+        try:
+            node = make_node()
+            executor = events_executor(node.context)
+            executor.add_node(node)
+            spin(executor, node.context, until=None if until is None else until(node),
+                 stop=stop)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        except (MPIError, ParameterRejected, InvalidParameterTypeException,
+                InvalidParameterValueException) as err:
+            print(f'error: {label}: {err}', file=sys.stderr, flush=True)
+            return 1
+        finally:
+            if node is not None:
+                node.destroy_node()
+            shutdown()
     return 0

@@ -84,7 +84,7 @@ def test_identifier_without_compensator_fails_after_a_bounded_wait(nodes, bags):
     assert ('error: identifier: no parameter service /compensator/set_parameters_atomically '
             'within 3 s' in log_text(ident))
     assert 'Nothing was pushed' in log_text(ident)
-    assert 2.5 <= waited <= 3.0 + 10.0          # the configured wait, plus shutdown
+    assert waited >= 2.5                        # it did wait (wait_exit bounds it above)
 
 
 def test_plant_killed_and_restarted_during_a_run(nodes, driver, bags):
