@@ -164,25 +164,40 @@ def test_bad_model_is_rejected_and_old_model_kept(configured, case):
     assert configured.command(2.0e-5) == pytest.approx(before, abs=1e-9)
 
 
-def test_partial_atomic_update_is_rejected(configured):
-    old_model = configured.compensator.model
+def test_partial_update_applies_when_the_whole_model_is_valid(configured):
+    """Issue 11: a request is laid over the running model; a valid whole model applies."""
     partial = {key: MODEL_B[key] for key in (R_H, W_H, Z_H0)}
     result = configured.set_parameters_atomically(as_parameters(partial))
-    assert not result.successful
-    assert R_S in result.reason and W_S in result.reason
-    assert configured.compensator.model is old_model
+    assert result.successful, result.reason
+    assert configured.model_version == 2
+    params = configured.compensator.model.to_params()
+    assert params[R_H] == MODEL_B[R_H] and params[R_S] == MODEL_A[R_S]
 
 
-def test_non_atomic_set_parameters_never_mixes_models(configured):
-    """set_parameters delivers one key at a time: every model key alone is rejected."""
+def test_partial_update_giving_an_invalid_model_is_rejected(configured):
     old_model = configured.compensator.model
-    results = configured.set_parameters(as_parameters(MODEL_B))
-    assert [r.successful for r in results] == [False] * len(MODEL_KEYS)
-    for key, result in zip(MODEL_KEYS, results):
-        assert key in result.reason
-        assert 'set_parameters_atomically' in result.reason
+    partial = {key: MODEL_B[key] for key in (R_H, W_H)}
+    result = configured.set_parameters_atomically(as_parameters(partial))
+    assert not result.successful
+    assert Z_H0 in result.reason and 'running model (version 1) stays' in result.reason
     assert configured.compensator.model is old_model
     assert model_parameters(configured) == MODEL_A
+
+
+def test_non_atomic_set_parameters_applies_the_model_keys_together(configured):
+    """Issue 11: set_parameters (ros2 param load) sets a request's model keys in one step."""
+    results = configured.set_parameters(as_parameters(MODEL_B) + limits())
+    assert all(r.successful for r in results), [r.reason for r in results]
+    assert configured.model_version == 2  # one swap, never a mixed model
+    assert model_parameters(configured) == MODEL_B
+    bad = dict(MODEL_A, **{W_S: [1.0e-5, 2.0e-5, -3.0e-5]})
+    old_model = configured.compensator.model
+    results = configured.set_parameters(as_parameters(bad))
+    assert [r.successful for r in results] == [False] * len(MODEL_KEYS)
+    for result in results:
+        assert W_S in result.reason and '(19)' in result.reason
+    assert configured.compensator.model is old_model
+    assert model_parameters(configured) == MODEL_B
 
 
 def test_unknown_model_key_is_not_accepted(configured):
