@@ -336,7 +336,11 @@ class CompensatorNode(Node):
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         """Check only: type, range, whole model and limits; keep the candidate for apply."""
         try:
-            check_parameters(_SPECS, parameters, allow_unset=self._declaring)
+            # rclpy's own keys (use_sim_time) are accepted back at their value only (a
+            # ros2 param dump loaded back); any change is refused by check_parameters.
+            checked = [p for p in parameters if p.name in _SPECS or not (
+                self.has_parameter(p.name) and _same(self.get_parameter(p.name), p))]
+            check_parameters(_SPECS, checked, allow_unset=self._declaring)
             if self._declaring:
                 # One key at a time, the others not declared yet: cross-key checks
                 # run once all keys are declared (_configure_from_declared).
@@ -372,7 +376,13 @@ class CompensatorNode(Node):
         names = {parameter.name for parameter in parameters}
         values = parameter_values(self, list(_SPECS), parameters)
         prepared: Dict[str, Any] = {}
-        if names.intersection(_ALL_MODEL_KEYS):
+        model_names = names.intersection(_ALL_MODEL_KEYS)
+        current = parameter_values(self, list(model_names))
+        # Unconfigured, a request that changes nothing (a dump of this node loaded back)
+        # is accepted: there is no model to check it against, and nothing to apply.
+        unchanged = self._compensator is None and all(
+            values[key] == current[key] for key in model_names)
+        if model_names and not unchanged:
             params = _model_params(values)
             if params is None:
                 missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
@@ -576,6 +586,10 @@ def _model_params(values: Dict[str, Any]) -> Optional[Dict[str, Any]]:
         if not all(_is_off(values[key]) for key in keys):
             params.update({key: values[key] for key in keys if values[key] is not None})
     return params
+
+
+def _same(current: Parameter, incoming: Parameter) -> bool:
+    return current.type_ == incoming.type_ and current.value == incoming.value
 
 
 def _resolve_null(spec: ParameterSpec, parameter: Parameter,

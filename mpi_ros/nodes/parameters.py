@@ -13,6 +13,7 @@ but the declared one (and an unset value) with a reason that names the key.
 
 from dataclasses import dataclass
 import math
+import re
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
@@ -20,6 +21,7 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
 from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+import yaml
 
 from .loop import RELIABILITY
 from ..extensions.creep import CREEP_TIME_CONSTANTS, CREEP_WEIGHTS
@@ -37,6 +39,7 @@ __all__ = [
     'MODEL_PARAMETERS',
     'NULL_STRINGS',
     'OPERATING_POINT_KEYS',
+    'RCLPY_PARAMETERS',
     'ParameterSpec',
     'ParameterRejected',
     'check_parameter',
@@ -62,6 +65,10 @@ _TYPE_WORDS = {
     Type.STRING_ARRAY: 'an array of strings',
 }
 
+#: Parameters every rclpy node declares itself.  The nodes do not let them change; the
+#: compensator accepts its current value back, so a ``ros2 param dump`` loads back.
+RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
+
 #: (expected, found) type pairs that are a YAML spelling slip, with the fix.
 _TYPE_HINTS = {
     (Type.DOUBLE, Type.INTEGER): ' (write 2.0, not 2)',
@@ -73,6 +80,9 @@ _TYPE_HINTS = {
 #: ``'null'`` (or ``'~'``, as spelled), ``ros2 param load`` (``str(None)`` re-parsed) gives
 #: ``'None'``.  For a parameter that is not a string, these strings mean "unset".
 NULL_STRINGS = ('null', 'Null', 'NULL', '~', 'None')
+
+#: How Python writes a float without a dot (``repr(1e-05) == '1e-05'``).
+_DOTLESS_FLOAT = re.compile(r'[-+]?[0-9]+e[-+]?[0-9]+')
 
 _ARRAY_TYPES = (Type.BYTE_ARRAY, Type.BOOL_ARRAY, Type.INTEGER_ARRAY, Type.DOUBLE_ARRAY,
                 Type.STRING_ARRAY)
@@ -326,10 +336,22 @@ def is_null(spec: ParameterSpec, parameter: Parameter) -> bool:
 
 def normalized(spec: ParameterSpec, parameter: Parameter) -> Parameter:
     """
-    Return ``parameter`` with an empty array typed as the spec's array type.
+    Return ``parameter`` with the types that ``ros2 param load`` loses restored.
 
-    ``ros2 param load`` re-parses each value from its text, and an empty YAML list ``[]``
-    comes back as an empty *bool* array; for an array parameter it is the empty array.
+    ``ros2 param load`` (rclpy's ``parameter_dict_from_yaml_file``) re-parses every value
+    from Python's ``str()`` of it, and ``ros2 param set`` parses its text the same way
+    (``rclpy.parameter.get_parameter_value``).  That loses two types:
+
+    - an empty list ``[]`` comes back as an empty *bool* array;
+    - a float that Python writes without a dot (``1e-05``, ``-6e-06``: typical weights
+      in m/A) is a *string* to PyYAML, so it comes back as a string, a list of them as
+      a string array, and a list mixing them with other floats as one string.
+
+    For a double or double-array parameter exactly these forms are turned back into
+    doubles: a string (or every item of a string array) in Python's dot-less float
+    notation, or a string holding a YAML list of floats of which at least one is in that
+    notation.  Everything else stays as it came (integers, ``'[0.0, 1.0]'``, ...) and is
+    refused by :func:`check_parameter`.
 
     Parameters
     ----------
@@ -341,12 +363,25 @@ def normalized(spec: ParameterSpec, parameter: Parameter) -> Parameter:
     Returns
     -------
     rclpy.parameter.Parameter
-        The same parameter, or an empty one of ``spec.type_``.
+        The same parameter, or one of ``spec.type_`` with the same value.
 
     """
-    if (spec.type_ in _ARRAY_TYPES and parameter.type_ in _ARRAY_TYPES
-            and parameter.type_ != spec.type_ and len(parameter.value) == 0):
+    found = parameter.type_
+    if found == spec.type_ or is_null(spec, parameter):
+        return parameter
+    if spec.type_ in _ARRAY_TYPES and found in _ARRAY_TYPES and len(parameter.value) == 0:
         return Parameter(parameter.name, spec.type_, [])
+    if spec.type_ == Type.DOUBLE and found == Type.STRING and _dotless(parameter.value):
+        return Parameter(parameter.name, Type.DOUBLE, float(parameter.value))
+    if spec.type_ == Type.DOUBLE_ARRAY and found == Type.STRING_ARRAY:
+        items = list(parameter.value)
+        if all(_dotless(item) for item in items):
+            return Parameter(parameter.name, Type.DOUBLE_ARRAY, [float(v) for v in items])
+    if spec.type_ == Type.DOUBLE_ARRAY and found == Type.STRING:
+        items = _yaml_list(parameter.value)
+        if (items and all(isinstance(v, float) or _dotless(v) for v in items)
+                and any(_dotless(v) for v in items)):
+            return Parameter(parameter.name, Type.DOUBLE_ARRAY, [float(v) for v in items])
     return parameter
 
 
@@ -427,6 +462,10 @@ def check_parameters(specs: Mapping[str, ParameterSpec], parameters: Iterable[Pa
     """
     for parameter in parameters:
         spec = specs.get(parameter.name)
+        if spec is None and parameter.name in RCLPY_PARAMETERS:
+            msg = (f"{parameter.name} is rclpy's own parameter and cannot be changed on this "
+                   'node; leave it out of the request')
+            raise ParameterRejected(msg)
         if spec is None:
             msg = f'{parameter.name} is not a parameter of this node'
             raise ParameterRejected(msg)
@@ -482,6 +521,19 @@ def specs_by_name(specs: Iterable[ParameterSpec]) -> Mapping[str, ParameterSpec]
 
     """
     return {spec.name: spec for spec in specs}
+
+
+def _dotless(item: Any) -> bool:
+    """Tell whether ``item`` is a string in Python's dot-less float notation (``1e-05``)."""
+    return isinstance(item, str) and _DOTLESS_FLOAT.fullmatch(item.strip()) is not None
+
+
+def _yaml_list(text: str) -> Optional[list]:
+    try:
+        value = yaml.safe_load(text)
+    except yaml.YAMLError:
+        return None
+    return value if isinstance(value, list) else None
 
 
 def _plain(value: Any) -> Any:
