@@ -93,8 +93,8 @@ def _strictly_ascending(arr: FloatArray, key: str) -> None:
     if np.any(steps <= 0.0):
         i = int(np.flatnonzero(steps <= 0.0)[0])
         kind = 'duplicate' if steps[i] == 0.0 else 'unsorted'
-        msg = (f'{key} must be strictly ascending; found {kind} values {arr[i]!r} and'
-               f' {arr[i + 1]!r} at items {i} and {i + 1}')
+        msg = (f'{key} must be strictly ascending; found {kind} values {float(arr[i])!r} and'
+               f' {float(arr[i + 1])!r} at items {i} and {i + 1}')
         raise ModelError(msg)
 
 
@@ -184,7 +184,7 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
         raise ModelError(msg)
     if r_h[0] != 0.0:
         msg = (f'{HYSTERESIS_THRESHOLDS} must start at exactly 0.0 (r_H0 = 0);'
-               f' found {r_h[0]!r}; re-run identify or prepend 0.0')
+               f' found {float(r_h[0])!r}; re-run identify or prepend 0.0')
         raise ModelError(msg)
     _strictly_ascending(r_h, HYSTERESIS_THRESHOLDS)
     zeros = int(np.count_nonzero(r_s == 0.0))
@@ -196,13 +196,13 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
     _strictly_ascending(r_s, SUPERPOSITION_THRESHOLDS)
     if not w_h[0] > 0.0:
         msg = (f'{HYSTERESIS_WEIGHTS} violates (8): the first weight w_H0 must be positive;'
-               f' found {w_h[0]!r}')
+               f' found {float(w_h[0])!r}')
         raise ModelError(msg)
     negative = np.flatnonzero(w_h[1:] < 0.0)
     if negative.size:
         i = int(negative[0]) + 1
         msg = (f'{HYSTERESIS_WEIGHTS} violates (8): weights after the first must be >= 0;'
-               f' item {i} is {w_h[i]!r} ({negative.size} negative)')
+               f' item {i} is {float(w_h[i])!r} ({negative.size} negative)')
         raise ModelError(msg)
     c = int(np.flatnonzero(r_s == 0.0)[0])
     slopes = np.empty_like(w_s)
@@ -212,8 +212,8 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
     if bad.size:
         i = int(bad[0])
         msg = (f'{SUPERPOSITION_WEIGHTS} violates (19): the static map must be strictly'
-               f' increasing, but the piece at threshold {r_s[i]!r} (item {i}) has slope'
-               f' {slopes[i]!r}')
+               f' increasing, but the piece at threshold {float(r_s[i])!r} (item {i}) has slope'
+               f' {float(slopes[i])!r}')
         raise ModelError(msg)
     return {HYSTERESIS_THRESHOLDS: r_h, HYSTERESIS_WEIGHTS: w_h,
             HYSTERESIS_INITIAL_STATES: z_h0, SUPERPOSITION_THRESHOLDS: r_s,

@@ -7,18 +7,47 @@ Topics (relative names, std_msgs/msg/Float64, SI units)
     ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray) every ``diagnostics_period``.
 
 Model life cycle
-    The node starts *unconfigured* unless the five ``model.*`` parameters are given
+    The node starts *unconfigured* unless the five ``model.*`` keys of Gamma are given
     (e.g. ``--params-file params.yaml`` written by ``mpi-ros identify``). While
     unconfigured it publishes nothing: without a model there is no safe command, and
     the current source keeps its last value. Its diagnostics say so (WARN).
-    A model is replaced through the standard ``set_parameters_atomically`` service with
-    all five ``model.*`` keys in one request. The on-set validator lays the request over
-    the current values and builds the candidate with ``MPIModel.from_params``; any
-    error rejects the whole request with a reason naming the parameter, and the running
-    model stays untouched. A request that carries only some ``model.*`` keys is
-    rejected too, because rclpy's ``set_parameters`` delivers keys one at a time and
-    would otherwise switch through mixed models. The post-set callback swaps the
-    prebuilt model in through ``FeedforwardCompensator.swap_model`` (bumpless, (14)).
+    The model is every ``model.*`` key: Gamma's five arrays, the operating point
+    (``model.input_offset`` [A], ``model.output_offset`` [m], ``model.output_sign``
+    +1/-1, defaults 0, 0, +1: ``y = y0 + sign * S[H[x - x0]]``) and the extension keys.
+
+Model updates (one rule for every path)
+    A request is laid over the current values and the *whole* resulting model is
+    validated (``extended_model_from_params`` and its inverse); if it is valid it is
+    applied in one swap, otherwise every model key of the request is rejected with a
+    reason naming the key and the running model and its parameters stay untouched.
+    The model keys of one request always succeed or fail together:
+
+    - ``set_parameters_atomically`` (the identifier's push): the request as it is.
+    - ``set_parameters`` (``ros2 param load FILE`` sends all keys of the file in one
+      such request; ``ros2 param set`` sends one key): rclpy would hand the callbacks
+      the keys one at a time, so the node serves this service itself
+      (:func:`mpi_ros.nodes.parameters.set_parameters_in_groups`): the request's
+      ``model.*`` keys go through one atomic step at the position of the first one,
+      every other key alone, as rclpy does. ``output.min`` and ``output.max`` are
+      coupled the same way. A single key that gives a valid model (e.g. a new
+      ``model.output_offset``) applies at once; keys that can only change together
+      (a new order changes three arrays) go in one request.
+    - In-process ``Node.set_parameters`` follows the same rule.
+
+    Nothing is ever held back between requests, so the parameters always describe
+    the running model. A request with all five keys of Gamma describes the whole
+    model: the pre-set callback adds the default of every operating-point key and the
+    "off" value of every extension key the request leaves out. The post-set callback
+    swaps the prebuilt model in (bumpless, (14)). ``/diagnostics`` reports
+    ``rejected_updates`` and ``last_rejected_update`` (the reason).
+
+``null`` and ``ros2 param dump``
+    A YAML ``null`` (how ``ros2 param dump`` writes an unset key) means "unset": at
+    start it is ignored (``--params-file`` of a dump of an unconfigured node starts it
+    unconfigured); at run time a ``null`` for an unset key is answered "stays unset",
+    for an extension key it switches the extension off, for an operating-point key it
+    sets the default, and for a key of Gamma it is rejected (a running model cannot be
+    removed). An empty list loaded by ``ros2 param load`` is the empty array.
 
 Extended models (:mod:`mpi_ros.extensions`)
     The ``model.creep.*``, ``model.rate_dependence.time_constant``,
@@ -28,11 +57,9 @@ Extended models (:mod:`mpi_ros.extensions`)
     ``ExtendedCompensator``, fed with each message's arrival time on the steady clock
     (``message_time``; queued messages served together get close times); a dead time
     cannot be inverted, so Gamma alone is compensated and a warning is logged. An
-    extension is off while its keys are unset or 0 / empty. A request carrying all five
-    core keys describes the whole model: the pre-set callback adds the "off" value of every
-    extension key the request leaves out, so pushing a plain model switches an extension
-    off and the parameters always describe the running model. Extension keys alone (no
-    core key) change the extension of the running Gamma. A swap within the same kind of
+    extension is off while its keys are unset or 0 / empty. Pushing a plain model (all
+    five core keys, no extension key) switches an extension off. Extension keys alone
+    (no core key) change the extension of the running Gamma. A swap within the same kind of
     compensator uses its ``swap_model``; a change of kind builds a new compensator that
     takes over the turning points of the applied current (play state replayed through
     the new H, (14)), the last command and the counters; its lag states start settled at
@@ -57,8 +84,9 @@ from std_msgs.msg import Float64
 from .loop import loop_qos
 from .parameters import (
     check_parameters, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
-    harden_parameter_services, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS,
-    parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
+    harden_parameter_services, is_null, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS,
+    normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected, ParameterSpec,
+    set_parameters_in_groups, specs_by_name,
 )
 from .spinning import run_node_main
 from ..compensation import FeedforwardCompensator
@@ -68,6 +96,7 @@ from ..extensions import (
     EXTENSION_KEYS,
 )
 from ..model import MPIModel
+from ..params import OPERATING_POINT_DEFAULTS
 
 __all__ = ['CompensatorNode', 'PARAMETERS', 'main']
 
@@ -112,7 +141,9 @@ _FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
 _FAULT_LOG_PERIOD_S = 5.0
 _LIMIT_KEYS = ('output.min', 'output.max')
 _EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
-_ALL_MODEL_KEYS = MODEL_KEYS + _EXTENSION_KEYS
+_ALL_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + _EXTENSION_KEYS
+#: Keys set together within one set_parameters request (set_parameters_in_groups).
+_GROUPS = (_ALL_MODEL_KEYS, _LIMIT_KEYS)
 
 Compensator = Union[FeedforwardCompensator, ExtendedCompensator]
 
@@ -139,12 +170,13 @@ class CompensatorNode(Node):
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         self._declaring = True
-        self._pending: Optional[Dict[str, Any]] = None
+        self._prepared: Optional[Dict[str, Any]] = None
         self._compensator: Optional[Compensator] = None
         self._extended = False
         self._model_kind = 'none'
         self._model_version = 0
         self._rejected_updates = 0
+        self._last_rejection = ''
         self._messages_in = 0
         self._messages_out = 0
         self._dropped_unconfigured = 0
@@ -156,7 +188,7 @@ class CompensatorNode(Node):
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         declare_parameters(self, PARAMETERS)
-        harden_parameter_services(self)
+        harden_parameter_services(self, groups=_GROUPS, specs=_SPECS)
         self._declaring = False
         # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
         # Time object per message) or None: sample_period apart.
@@ -263,12 +295,47 @@ class CompensatorNode(Node):
                 self._messages_out += 1
 
     # -- parameters ---------------------------------------------------------------------
+    def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
+        """
+        Set parameters like the ``set_parameters`` service: model keys together.
+
+        rclpy's ``Node.set_parameters`` sets one key at a time; here, as in the node's
+        ``set_parameters`` service, the request's ``model.*`` keys (and the two output
+        limits) are set in one atomic step each, so a model is applied whole or not at
+        all (see the module docstring).
+
+        Parameters
+        ----------
+        parameter_list : list of rclpy.parameter.Parameter
+            The request.
+
+        Returns
+        -------
+        list of rcl_interfaces.msg.SetParametersResult
+            One result per parameter; the keys of one group share theirs.
+
+        """
+        return set_parameters_in_groups(self, parameter_list, groups=_GROUPS, specs=_SPECS)
+
     def _complete_model_request(self, parameters: List[Parameter]) -> List[Parameter]:
-        """Pre-set: a request with all five core keys switches omitted extensions off."""
-        names = {parameter.name for parameter in parameters}
+        """Pre-set: resolve null and empty lists; five core keys describe the whole model."""
+        completed = []
+        for parameter in parameters:
+            spec = _SPECS.get(parameter.name)
+            if spec is not None:
+                current = self.get_parameter_or(
+                    parameter.name, Parameter(parameter.name, Type.NOT_SET, None))
+                parameter = _resolve_null(spec, normalized(spec, parameter), current)
+            if parameter is not None:
+                completed.append(parameter)
+        names = {parameter.name for parameter in completed}
         if not names.issuperset(MODEL_KEYS):
-            return parameters
-        completed = list(parameters)
+            return completed
+        for key in OPERATING_POINT_KEYS:
+            default = OPERATING_POINT_DEFAULTS[key]
+            if key in names or self.get_parameter(key).value == default:
+                continue
+            completed.append(Parameter(key, _SPECS[key].type_, default))
         for key in _EXTENSION_KEYS:
             if key in names or _is_off(self.get_parameter(key).value):
                 continue
@@ -282,68 +349,90 @@ class CompensatorNode(Node):
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         """Check only: type, range, whole model and limits; keep the candidate for apply."""
         try:
-            check_parameters(_SPECS, parameters, allow_unset=self._declaring)
+            # rclpy's own keys (use_sim_time) are accepted back at their value only (a
+            # ros2 param dump loaded back); any change is refused by check_parameters.
+            checked = [p for p in parameters if p.name in _SPECS or not (
+                self.has_parameter(p.name) and _same(self.get_parameter(p.name), p))]
+            check_parameters(_SPECS, checked, allow_unset=self._declaring)
             if self._declaring:
                 # One key at a time, the others not declared yet: cross-key checks
                 # run once all keys are declared (_configure_from_declared).
                 return SetParametersResult(successful=True)
-            self._pending = self._candidate(parameters)
+            self._prepared = self._candidate(parameters)
         except (ParameterRejected, MPIError) as err:
-            self._pending = None
+            self._prepared = None
             self._rejected_updates += 1
-            self.get_logger().warning(f'rejected parameter update: {err}')
-            return SetParametersResult(successful=False, reason=str(err))
+            reason = self._rejection(parameters, err)
+            self._last_rejection = reason
+            self.get_logger().warning(f'rejected parameter update: {reason}')
+            return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
+
+    def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
+        """Word a refusal: the keys of the request, why, and that the model stays."""
+        model_names = [p.name for p in parameters if p.name in _ALL_MODEL_KEYS]
+        if not model_names:
+            return str(err)
+        if len(model_names) <= 2:
+            changed = ', '.join(model_names)
+        else:
+            changed = f'model update ({len(model_names)} model.* keys)'
+        if self._compensator is None:
+            stays = 'the node stays unconfigured'
+        else:
+            stays = f'the running model (version {self._model_version}) stays'
+        return (f'{changed} rejected, the whole model was checked: {err}. Nothing was '
+                f'applied; {stays}. Keys that must change together (e.g. a new order) go '
+                'in one request: ros2 param load FILE, or set_parameters_atomically')
 
     def _candidate(self, parameters: List[Parameter]) -> Dict[str, Any]:
         names = {parameter.name for parameter in parameters}
         values = parameter_values(self, list(_SPECS), parameters)
-        pending: Dict[str, Any] = {}
-        model_names = names.intersection(MODEL_KEYS)
-        if model_names:
-            missing = [key for key in MODEL_KEYS if key not in model_names]
-            if missing:
-                msg = (f'{sorted(model_names)[0]}: model parameters must be set together in '
-                       f'one set_parameters_atomically request; missing: {", ".join(missing)}')
-                raise ParameterRejected(msg)
-        if names.intersection(_ALL_MODEL_KEYS):
+        prepared: Dict[str, Any] = {}
+        model_names = names.intersection(_ALL_MODEL_KEYS)
+        current = parameter_values(self, list(model_names))
+        # Unconfigured, a request that changes nothing (a dump of this node loaded back)
+        # is accepted: there is no model to check it against, and nothing to apply.
+        unchanged = self._compensator is None and all(
+            values[key] == current[key] for key in model_names)
+        if model_names and not unchanged:
             params = _model_params(values)
             if params is None:
-                key = sorted(names.intersection(_EXTENSION_KEYS))[0]
-                msg = (f'{key}: a model extension needs the five model.* keys of Gamma; '
-                       'push them in the same set_parameters_atomically request')
+                missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
+                msg = (f'the node has no model yet, and a model needs all five keys of '
+                       f'Gamma; missing: {missing}')
                 raise ParameterRejected(msg)
             model = extended_model_from_params(params)
             gamma = model if isinstance(model, MPIModel) else model.model
             gamma.inverse()  # (12)-(14), (22)-(25) must exist before the swap is promised
-            pending['model'] = (model, params)
+            prepared['model'] = (model, params)
         if names.intersection(_LIMIT_KEYS):
-            pending['limits'] = _ordered_limits(values['output.min'], values['output.max'])
+            prepared['limits'] = _ordered_limits(values['output.min'], values['output.max'])
         if 'enabled' in names:
-            pending['enabled'] = values['enabled']
+            prepared['enabled'] = values['enabled']
         if 'sample_period' in names:
-            pending['sample_period'] = values['sample_period']
+            prepared['sample_period'] = values['sample_period']
         if 'diagnostics_period' in names:
-            pending['diagnostics_period'] = values['diagnostics_period']
-        return pending
+            prepared['diagnostics_period'] = values['diagnostics_period']
+        return prepared
 
     def _apply_parameters(self, parameters: List[Parameter]) -> None:
         """Swap in what the validator prepared (post-set: the values are stored)."""
-        pending, self._pending = self._pending, None
-        if self._declaring or not pending:
+        prepared, self._prepared = self._prepared, None
+        if self._declaring or not prepared:
             return
-        if 'limits' in pending and self._compensator is not None:
-            self._compensator.set_limits(*pending['limits'])
-        if 'enabled' in pending and self._compensator is not None:
-            self._compensator.enabled = pending['enabled']
-        if 'sample_period' in pending and self._extended:
-            self._compensator.sample_period = pending['sample_period']
-        if 'model' in pending:
-            self._install_model(*pending['model'])
-        if 'diagnostics_period' in pending:
+        if 'limits' in prepared and self._compensator is not None:
+            self._compensator.set_limits(*prepared['limits'])
+        if 'enabled' in prepared and self._compensator is not None:
+            self._compensator.enabled = prepared['enabled']
+        if 'sample_period' in prepared and self._extended:
+            self._compensator.sample_period = prepared['sample_period']
+        if 'model' in prepared:
+            self._install_model(*prepared['model'])
+        if 'diagnostics_period' in prepared:
             self.destroy_timer(self._timer)
             self._timer = self.create_timer(
-                pending['diagnostics_period'], self._publish_diagnostics)
+                prepared['diagnostics_period'], self._publish_diagnostics)
 
     def _configure_from_declared(self) -> None:
         values = parameter_values(self, list(_SPECS))
@@ -357,7 +446,8 @@ class CompensatorNode(Node):
                 raise ParameterRejected(msg)
             self.get_logger().info(
                 'no model given: unconfigured, publishing nothing until a model arrives '
-                'through set_parameters_atomically')
+                '(all five model.* keys of Gamma in one request: ros2 param load, or '
+                'set_parameters_atomically)')
             return
         if len(given) != len(MODEL_KEYS):
             missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
@@ -463,8 +553,9 @@ class CompensatorNode(Node):
         faults = _new_faults(counters, last_counters)
         if self._compensator is None:
             status.level = DiagnosticStatus.WARN
-            status.message = ('no model: unconfigured, no commands published; push all '
-                              'model.* parameters with set_parameters_atomically')
+            status.message = ('no model: unconfigured, no commands published; give all '
+                              'five model.* keys of Gamma in one request (ros2 param load, '
+                              'set_parameters_atomically)')
         elif any(faults.values()):
             status.level = DiagnosticStatus.WARN
             status.message = f'{_describe_faults(faults)} in the last period'
@@ -475,6 +566,7 @@ class CompensatorNode(Node):
             status.level = DiagnosticStatus.OK
             status.message = 'compensating'
         values = dict(counters)
+        values['last_rejected_update'] = self._last_rejection
         compensator = self._compensator
         if compensator is not None:
             values['extension'] = self._model_kind
@@ -528,7 +620,7 @@ def _model_params(values: Dict[str, Any]) -> Optional[Dict[str, Any]]:
     """Return the flat model parameters (core keys + extensions that are on), None if unset."""
     if any(values[key] is None for key in MODEL_KEYS):
         return None
-    params = {key: values[key] for key in MODEL_KEYS}
+    params = {key: values[key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}
     for keys in EXTENSION_KEYS.values():
         if not all(_is_off(values[key]) for key in keys):
             params.update({key: values[key] for key in keys if values[key] is not None})
@@ -546,6 +638,31 @@ def _describe_faults(faults: Dict[str, int]) -> str:
              'clamped': 'clamped'}
     parts = [f'{faults[key]} {words[key]}' for key in _FAULT_KEYS if faults[key]]
     return f'{", ".join(parts) or "no bad"} inputs'
+
+
+def _same(current: Parameter, incoming: Parameter) -> bool:
+    return current.type_ == incoming.type_ and current.value == incoming.value
+
+
+def _resolve_null(spec: ParameterSpec, parameter: Parameter,
+                  current: Parameter) -> Optional[Parameter]:
+    """
+    Resolve a YAML ``null`` in a run-time request (see the module docstring).
+
+    Returns the parameter to set instead, or None to leave it out (the key is unset
+    already); a null for a key of Gamma (or any other key) is returned unchanged for the
+    validator to reject.
+
+    """
+    if not is_null(spec, parameter):
+        return parameter
+    if current.type_ == Type.NOT_SET:
+        return None
+    if spec.name in EXTENSION_OFF:
+        return Parameter(spec.name, spec.type_, EXTENSION_OFF[spec.name])
+    if spec.name in OPERATING_POINT_DEFAULTS:
+        return Parameter(spec.name, spec.type_, OPERATING_POINT_DEFAULTS[spec.name])
+    return parameter
 
 
 def _kind(model: Any) -> str:

@@ -8,15 +8,22 @@ One run: read the bag (sqlite3 or mcap; a ``.csv`` file works too) with
 ``input_index``, ``output_scale``, ...) are the data options of ``mpi-ros identify``
 (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit with :func:`mpi_ros.identify` (``order``
 ``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
-fit errors (37);
-optionally write the parameter YAML (``params_file``); then send all five ``model.*``
-keys in **one** ``set_parameters_atomically`` request to ``target_node``. The target
-either applies the whole model or rejects it, so nothing is ever half-applied; the
-wait for the service and for its answer is bounded by ``service_timeout``.
+fit errors (37); optionally write the parameter YAML (``params_file``); then send all
+eight ``model.*`` keys (Gamma's five arrays and the operating point
+``model.input_offset``, ``model.output_offset``, ``model.output_sign``) in **one**
+``set_parameters_atomically`` request to ``target_node``. The target either applies the
+whole model or rejects it, so nothing is ever half-applied (a plain model switches the
+target's extension off); the wait for the service and for its answer is bounded by
+``service_timeout``.
+
+When :func:`mpi_ros.identify` refuses the data (``IdentificationError``: output not
+monotone in the input, a fit no better than a straight line, too little excitation),
+the node logs the reason, writes no file and pushes nothing.
 
 The node exits with status 0 when the model was fitted (and, if ``push`` is true,
 accepted by the target), and with status 1 and one ``error: ...`` line on stderr for
-any failure: unreadable bag, failed fit, target missing, push rejected or unanswered.
+any failure: unreadable bag, refused or failed fit, target missing, push rejected or
+unanswered.
 """
 
 from dataclasses import dataclass
@@ -24,6 +31,7 @@ import sys
 import time
 from typing import Any, Dict, List, Mapping, Optional
 
+import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParametersAtomically
 import rclpy
@@ -35,7 +43,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, MODEL_KEYS,
-    ParameterRejected, ParameterSpec, specs_by_name,
+    OPERATING_POINT_KEYS, ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import shutdown, StopSignals
 from .. import IdentificationResult, identify
@@ -110,13 +118,14 @@ class BagFit:
     result : mpi_ros.IdentificationResult
         The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
         ``.samples``, solver status.
-    parameters : dict of str to list of float
-        ``result.model.to_params()``: the five ``model.*`` keys.
+    parameters : dict of str to list of float, float or int
+        ``result.model.to_params()``: the five ``model.*`` arrays of Gamma and the three
+        operating point keys.
 
     """
 
     result: IdentificationResult
-    parameters: Dict[str, List[float]]
+    parameters: Dict[str, Any]
 
     def summary(self) -> str:
         """
@@ -151,7 +160,7 @@ class IdentifierNode(Node):
         super().__init__(node_name, **kwargs)
         self.add_on_set_parameters_callback(self._validate_parameters)
         declare_parameters(self, PARAMETERS)
-        harden_parameter_services(self)
+        harden_parameter_services(self, specs=_SPECS)
 
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         try:
@@ -192,7 +201,12 @@ class IdentifierNode(Node):
         order = parse_order(value('order').value)
         logger.info(f'identifying from {bag} ({options.input_topic} -> '
                     f'{options.output_topic}, order {format_order(order)})')
-        fit = fit_bag(bag, options=options, order=order)
+        try:
+            fit = fit_bag(bag, options=options, order=order)
+        except IdentificationError as err:
+            logger.error(f'identification refused the data of {bag}: {err}; no model was '
+                         'written or pushed')
+            raise
         logger.info(fit.summary())
         params_file = value('params_file').value
         if params_file:
@@ -262,7 +276,7 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
     mpi_ros.errors.DataError
         When the bag is unreadable or the topics are missing or unusable.
     mpi_ros.errors.IdentificationError
-        When the fit fails.
+        When the fit fails or identify refuses the data (the message says why).
 
     """
     if options is None:
@@ -270,10 +284,10 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
                               spelling='parameter')
     recording = read_recording(path, options)
     result = identify(recording.current, recording.displacement, order=order)
-    parameters = {key: [float(v) for v in values]
-                  for key, values in result.model.to_params().items()}
-    if set(parameters) != set(MODEL_KEYS):
-        msg = f'identify returned parameters {sorted(parameters)}; expected {list(MODEL_KEYS)}'
+    parameters = result.model.to_params()
+    expected = MODEL_KEYS + OPERATING_POINT_KEYS
+    if set(parameters) != set(expected):
+        msg = f'identify returned parameters {sorted(parameters)}; expected {list(expected)}'
         raise IdentificationError(msg)
     return BagFit(result=result, parameters=parameters)
 
@@ -289,9 +303,10 @@ def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str,
         Node that owns the client (it is spun on a private executor while waiting).
     target_node : str
         Fully qualified target name, e.g. ``/compensator``.
-    parameters : Mapping[str, sequence of float or float]
+    parameters : Mapping[str, sequence of float or float or int]
         The ``model.*`` keys (as from ``MPIModel.to_params()``, or an extended model's
-        ``to_params()``: its scalar keys are sent as doubles).
+        ``to_params()``): arrays are sent as double arrays, integers
+        (``model.output_sign``) as integers, other scalars as doubles.
     timeout : float
         Longest wait [s] for the service to appear, and again for the answer.
 
@@ -383,7 +398,12 @@ def main(args: Optional[List[str]] = None) -> int:
 
 
 def _typed(name: str, value: Any) -> Parameter:
-    """Return a double (scalar) or double-array parameter."""
-    if isinstance(value, (int, float)):
+    """Return an integer, double (scalar) or double-array parameter."""
+    if isinstance(value, bool):
+        msg = f'{name} must be a number or a list of numbers; found bool {value!r}'
+        raise ParameterPushError(msg)
+    if isinstance(value, (int, np.integer)):
+        return Parameter(name, Type.INTEGER, int(value))
+    if isinstance(value, (float, np.floating)):
         return Parameter(name, Type.DOUBLE, float(value))
     return Parameter(name, Type.DOUBLE_ARRAY, [float(v) for v in value])

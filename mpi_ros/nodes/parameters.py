@@ -13,18 +13,23 @@ but the declared one (and an unset value) with a reason that names the key.
 
 from dataclasses import dataclass
 import math
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple
+import re
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
+from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+import yaml
 
 from .loop import RELIABILITY
 from ..extensions.creep import CREEP_TIME_CONSTANTS, CREEP_WEIGHTS
 from ..extensions.dead_time import DEAD_TIME
 from ..extensions.rate_dependence import RATE_TIME_CONSTANT
 from ..extensions.thermal_drift import THERMAL_TIME_CONSTANT, THERMAL_WEIGHT
+from ..params import (INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS,
+                      OUTPUT_OFFSET, OUTPUT_SIGN)
 
 __all__ = [
     'harden_parameter_services',
@@ -32,13 +37,19 @@ __all__ = [
     'EXTENSION_PARAMETERS',
     'MODEL_KEYS',
     'MODEL_PARAMETERS',
+    'NULL_STRINGS',
+    'OPERATING_POINT_KEYS',
+    'RCLPY_PARAMETERS',
     'ParameterSpec',
     'ParameterRejected',
     'check_parameter',
     'check_parameters',
     'declare_parameters',
+    'is_null',
     'loop_qos_parameters',
+    'normalized',
     'parameter_values',
+    'set_parameters_in_groups',
     'specs_by_name',
 ]
 
@@ -47,12 +58,34 @@ Type = Parameter.Type
 _TYPE_WORDS = {
     Type.BOOL: 'a bool (true/false)',
     Type.INTEGER: 'an integer',
-    Type.DOUBLE: 'a double (write 2.0, not 2)',
+    Type.DOUBLE: 'a double',
     Type.STRING: 'a string',
-    Type.DOUBLE_ARRAY: 'an array of doubles (write [0.0, 1.0], not [0, 1])',
+    Type.DOUBLE_ARRAY: 'an array of doubles',
     Type.INTEGER_ARRAY: 'an array of integers',
     Type.STRING_ARRAY: 'an array of strings',
 }
+
+#: Parameters every rclpy node declares itself.  The nodes do not let them change; the
+#: compensator accepts its current value back, so a ``ros2 param dump`` loads back.
+RCLPY_PARAMETERS = ('use_sim_time', 'start_type_description_service')
+
+#: (expected, found) type pairs that are a YAML spelling slip, with the fix.
+_TYPE_HINTS = {
+    (Type.DOUBLE, Type.INTEGER): ' (write 2.0, not 2)',
+    (Type.DOUBLE_ARRAY, Type.INTEGER_ARRAY): ' (write [0.0, 1.0], not [0, 1])',
+}
+
+#: How an unset value arrives when it was written as YAML ``null`` (what ``ros2 param dump``
+#: writes for an unset parameter): ``--params-file`` (the rcl YAML parser) gives the string
+#: ``'null'`` (or ``'~'``, as spelled), ``ros2 param load`` (``str(None)`` re-parsed) gives
+#: ``'None'``.  For a parameter that is not a string, these strings mean "unset".
+NULL_STRINGS = ('null', 'Null', 'NULL', '~', 'None')
+
+#: How Python writes a float without a dot (``repr(1e-05) == '1e-05'``).
+_DOTLESS_FLOAT = re.compile(r'[-+]?[0-9]+e[-+]?[0-9]+')
+
+_ARRAY_TYPES = (Type.BYTE_ARRAY, Type.BOOL_ARRAY, Type.INTEGER_ARRAY, Type.DOUBLE_ARRAY,
+                Type.STRING_ARRAY)
 
 
 class ParameterRejected(Exception):
@@ -134,6 +167,7 @@ class ParameterSpec:
         return descriptor
 
 
+#: The five keys of Gamma = S o H; a model needs all of them (no defaults).
 MODEL_KEYS = (
     'model.hysteresis.thresholds',
     'model.hysteresis.weights',
@@ -161,6 +195,20 @@ MODEL_PARAMETERS = (
     ParameterSpec(
         'model.superposition.weights', Type.DOUBLE_ARRAY, None,
         'Dead-zone weights w_S, one per threshold, satisfying (19)', 'm/A'),
+    ParameterSpec(
+        INPUT_OFFSET, Type.DOUBLE, OPERATING_POINT_DEFAULTS[INPUT_OFFSET],
+        'Operating point: input x0 at which the plays of H are centred; the model is '
+        'y = y0 + sign * S[H[x - x0]]', 'A',
+        constraints='part of the model: validated with the other model.* keys'),
+    ParameterSpec(
+        OUTPUT_OFFSET, Type.DOUBLE, OPERATING_POINT_DEFAULTS[OUTPUT_OFFSET],
+        'Operating point: sensor reading y0 the model adds (the sensor zero)', 'm',
+        constraints='part of the model: validated with the other model.* keys'),
+    ParameterSpec(
+        OUTPUT_SIGN, Type.INTEGER, OPERATING_POINT_DEFAULTS[OUTPUT_SIGN],
+        'Operating point: +1 when the sensor rises as the actuator extends, -1 when it '
+        'falls',
+        constraints='1 or -1; part of the model: validated with the other model.* keys'),
 )
 
 #: Keys of the model extensions (:mod:`mpi_ros.extensions`), each declared unset.  An
@@ -239,6 +287,11 @@ def declare_parameters(node: Node, specs: Iterable[ParameterSpec]) -> None:
     key during declaration, which is the only chance to reject a bad override from a
     ``--params-file``.
 
+    An override written as YAML ``null`` (``ros2 param dump`` writes unset parameters so)
+    reaches the node as the string ``'null'``; for a parameter that is not a string it
+    means "not given": the parameter is declared with its default (unset where it has
+    none), so a node starts from a dump of itself.
+
     Parameters
     ----------
     node : rclpy.node.Node
@@ -247,8 +300,89 @@ def declare_parameters(node: Node, specs: Iterable[ParameterSpec]) -> None:
         The parameters.
 
     """
+    # rclpy 7.1.6 has no public accessor of the overrides (the --params-file values and
+    # the parameter_overrides argument); the dict is only read here.
+    overrides: Mapping[str, Parameter] = getattr(node, '_parameter_overrides', {})
     for spec in specs:
-        node.declare_parameter(spec.name, spec.default, spec.descriptor())
+        override = overrides.get(spec.name)
+        null = override is not None and is_null(spec, override)
+        node.declare_parameter(spec.name, spec.default, spec.descriptor(),
+                               ignore_override=null)
+
+
+def is_null(spec: ParameterSpec, parameter: Parameter) -> bool:
+    """
+    Tell whether an incoming value is YAML ``null`` for a parameter that is not a string.
+
+    Parameters
+    ----------
+    spec : ParameterSpec
+        The declared spec of ``parameter.name``.
+    parameter : rclpy.parameter.Parameter
+        Incoming value.
+
+    Returns
+    -------
+    bool
+        True for an unset value, and for one of :data:`NULL_STRINGS` when ``spec`` is
+        not a string parameter.
+
+    """
+    if parameter.type_ == Type.NOT_SET:
+        return True
+    return (spec.type_ != Type.STRING and parameter.type_ == Type.STRING
+            and parameter.value in NULL_STRINGS)
+
+
+def normalized(spec: ParameterSpec, parameter: Parameter) -> Parameter:
+    """
+    Return ``parameter`` with the types that ``ros2 param load`` loses restored.
+
+    ``ros2 param load`` (rclpy's ``parameter_dict_from_yaml_file``) re-parses every value
+    from Python's ``str()`` of it, and ``ros2 param set`` parses its text the same way
+    (``rclpy.parameter.get_parameter_value``).  That loses two types:
+
+    - an empty list ``[]`` comes back as an empty *bool* array;
+    - a float that Python writes without a dot (``1e-05``, ``-6e-06``: typical weights
+      in m/A) is a *string* to PyYAML, so it comes back as a string, a list of them as
+      a string array, and a list mixing them with other floats as one string.
+
+    For a double or double-array parameter exactly these forms are turned back into
+    doubles: a string (or every item of a string array) in Python's dot-less float
+    notation, or a string holding a YAML list of floats of which at least one is in that
+    notation.  Everything else stays as it came (integers, ``'[0.0, 1.0]'``, ...) and is
+    refused by :func:`check_parameter`.
+
+    Parameters
+    ----------
+    spec : ParameterSpec
+        The declared spec of ``parameter.name``.
+    parameter : rclpy.parameter.Parameter
+        Incoming value.
+
+    Returns
+    -------
+    rclpy.parameter.Parameter
+        The same parameter, or one of ``spec.type_`` with the same value.
+
+    """
+    found = parameter.type_
+    if found == spec.type_ or is_null(spec, parameter):
+        return parameter
+    if spec.type_ in _ARRAY_TYPES and found in _ARRAY_TYPES and len(parameter.value) == 0:
+        return Parameter(parameter.name, spec.type_, [])
+    if spec.type_ == Type.DOUBLE and found == Type.STRING and _dotless(parameter.value):
+        return Parameter(parameter.name, Type.DOUBLE, float(parameter.value))
+    if spec.type_ == Type.DOUBLE_ARRAY and found == Type.STRING_ARRAY:
+        items = list(parameter.value)
+        if all(_dotless(item) for item in items):
+            return Parameter(parameter.name, Type.DOUBLE_ARRAY, [float(v) for v in items])
+    if spec.type_ == Type.DOUBLE_ARRAY and found == Type.STRING:
+        items = _yaml_list(parameter.value)
+        if (items and all(isinstance(v, float) or _dotless(v) for v in items)
+                and any(_dotless(v) for v in items)):
+            return Parameter(parameter.name, Type.DOUBLE_ARRAY, [float(v) for v in items])
+    return parameter
 
 
 def check_parameter(spec: ParameterSpec, parameter: Parameter, *,
@@ -272,14 +406,18 @@ def check_parameter(spec: ParameterSpec, parameter: Parameter, *,
 
     """
     found = parameter.type_
-    if found == Type.NOT_SET:
+    if is_null(spec, parameter):
         if allow_unset:
             return
-        msg = (f'{spec.name} cannot be unset; expected {_TYPE_WORDS[spec.type_]}')
+        msg = (f'{spec.name} cannot be unset (null) while the node runs; expected '
+               f'{_TYPE_WORDS[spec.type_]}; give a value or leave the key out')
         raise ParameterRejected(msg)
     if found != spec.type_:
-        msg = (f'{spec.name} must be {_TYPE_WORDS[spec.type_]}; '
-               f'found {found.name.lower()} {parameter.value!r}')
+        hint = _TYPE_HINTS.get((spec.type_, found), '')
+        value = parameter.value
+        shown = list(value) if found in _ARRAY_TYPES else value
+        msg = (f'{spec.name} must be {_TYPE_WORDS[spec.type_]}{hint}; '
+               f'found {found.name.lower()} {shown!r}')
         raise ParameterRejected(msg)
     value = parameter.value
     if spec.type_ == Type.DOUBLE:
@@ -324,6 +462,10 @@ def check_parameters(specs: Mapping[str, ParameterSpec], parameters: Iterable[Pa
     """
     for parameter in parameters:
         spec = specs.get(parameter.name)
+        if spec is None and parameter.name in RCLPY_PARAMETERS:
+            msg = (f"{parameter.name} is rclpy's own parameter and cannot be changed on this "
+                   'node; leave it out of the request')
+            raise ParameterRejected(msg)
         if spec is None:
             msg = f'{parameter.name} is not a parameter of this node'
             raise ParameterRejected(msg)
@@ -381,6 +523,19 @@ def specs_by_name(specs: Iterable[ParameterSpec]) -> Mapping[str, ParameterSpec]
     return {spec.name: spec for spec in specs}
 
 
+def _dotless(item: Any) -> bool:
+    """Tell whether ``item`` is a string in Python's dot-less float notation (``1e-05``)."""
+    return isinstance(item, str) and _DOTLESS_FLOAT.fullmatch(item.strip()) is not None
+
+
+def _yaml_list(text: str) -> Optional[list]:
+    try:
+        value = yaml.safe_load(text)
+    except yaml.YAMLError:
+        return None
+    return value if isinstance(value, list) else None
+
+
 def _plain(value: Any) -> Any:
     """Turn rclpy's array values (array.array, tuples) into lists."""
     if value is None or isinstance(value, (bool, int, float, str)):
@@ -388,7 +543,66 @@ def _plain(value: Any) -> Any:
     return list(value)
 
 
-def harden_parameter_services(node: Node) -> None:
+def set_parameters_in_groups(node: Node, parameters: Sequence[Parameter], *,
+                             groups: Iterable[Iterable[str]] = (),
+                             specs: Optional[Mapping[str, ParameterSpec]] = None,
+                             ) -> List[SetParametersResult]:
+    """
+    Set parameters the way the ``set_parameters`` service does, keeping coupled keys together.
+
+    rclpy's ``set_parameters`` (the service behind ``ros2 param load`` and ``ros2 param
+    set``) sets one key at a time: the node's callbacks see the keys of a model one by one
+    and could only switch through mixed models.  Here the keys of the request that belong
+    to one group (e.g. all ``model.*`` keys) are set together in one
+    ``set_parameters_atomically`` call, at the position of the group's first key: they
+    succeed or fail together and every one of them gets that one result.  Every other key
+    is set on its own, as rclpy does; an undeclared key is answered with a refusal and the
+    request goes on.  A key given as YAML ``null`` (see :func:`is_null`) whose parameter is
+    unset already is answered "left unset" and not set (setting an unset value would
+    undeclare the parameter in rclpy).
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The node whose parameters to set.
+    parameters : sequence of rclpy.parameter.Parameter
+        The request, in order.
+    groups : iterable of iterable of str
+        Names that are set together (a key belongs to the first group naming it).
+    specs : mapping of str to ParameterSpec, optional
+        The node's specs by name, to recognise ``null``; None: no ``null`` handling.
+
+    Returns
+    -------
+    list of rcl_interfaces.msg.SetParametersResult
+        One result per parameter, in request order.
+
+    """
+    groups = [frozenset(group) for group in groups]
+    results: List[Optional[SetParametersResult]] = [None] * len(parameters)
+    for i, parameter in enumerate(parameters):
+        spec = specs.get(parameter.name) if specs is not None else None
+        if (spec is not None and is_null(spec, parameter) and node.has_parameter(parameter.name)
+                and node.get_parameter(parameter.name).type_ == Type.NOT_SET):
+            results[i] = SetParametersResult(
+                successful=True, reason=f'{parameter.name} is null: it stays unset')
+    for i, parameter in enumerate(parameters):
+        if results[i] is not None:
+            continue
+        group = next((g for g in groups if parameter.name in g), frozenset())
+        members = [j for j, other in enumerate(parameters)
+                   if results[j] is None and (j == i or other.name in group)]
+        try:
+            result = node.set_parameters_atomically([parameters[j] for j in members])
+        except ParameterNotDeclaredException as err:
+            result = SetParametersResult(successful=False, reason=str(err))
+        for j in members:
+            results[j] = result
+    return [result for result in results if result is not None]
+
+
+def harden_parameter_services(node: Node, *, groups: Iterable[Iterable[str]] = (),
+                              specs: Optional[Mapping[str, ParameterSpec]] = None) -> None:
     """
     Answer undecodable ``set_parameters*`` requests with a refusal instead of dying.
 
@@ -397,19 +611,39 @@ def harden_parameter_services(node: Node) -> None:
     ``ValueError`` out of the executor and ends the node.  The wrapped callbacks decode
     the whole request first; if any parameter cannot be decoded, every parameter of the
     request is refused with a reason and nothing is applied (``set_parameters`` would
-    otherwise apply the ones before the bad one).
+    otherwise apply the ones before the bad one).  A decoded ``set_parameters`` request
+    is then served by :func:`set_parameters_in_groups` with ``groups`` and ``specs``.
 
     Parameters
     ----------
     node : rclpy.node.Node
         Node whose parameter services to harden (call after the node is created).
+    groups : iterable of iterable of str
+        Coupled keys, set together within one ``set_parameters`` request.
+    specs : mapping of str to ParameterSpec, optional
+        The node's specs by name (``null`` handling); None: none.
 
     """
+    groups = [tuple(group) for group in groups]
     for service in node.services:
         name = service.srv_name.rsplit('/', 1)[-1]
         if name not in ('set_parameters', 'set_parameters_atomically'):
             continue
-        service.callback = _refusing_undecodable(service.callback, name)
+        callback = service.callback
+        if name == 'set_parameters':
+            callback = _grouped(node, groups, specs)
+        service.callback = _refusing_undecodable(callback, name)
+
+
+def _grouped(node: Node, groups: Sequence[Sequence[str]],
+             specs: Optional[Mapping[str, ParameterSpec]]) -> Any:
+    def serve(request: Any, response: Any) -> Any:
+        parameters = [Parameter.from_parameter_msg(message) for message in request.parameters]
+        response.results = set_parameters_in_groups(node, parameters, groups=groups,
+                                                    specs=specs)
+        return response
+
+    return serve
 
 
 def _refusing_undecodable(callback: Any, name: str) -> Any:

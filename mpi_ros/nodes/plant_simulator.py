@@ -17,8 +17,11 @@ Truth (``truth``, read-only)
     ``builtin``: :class:`mpi_ros.actuator.MagnetostrictiveActuator`, a Preisach-type
     actuator that is *not* an MPI model, configured by the ``actuator.*`` parameters
     (the fields of :class:`mpi_ros.actuator.ActuatorConfig`; every effect is off at 0).
-    ``mpi``: the MPI model given by the five ``model.*`` parameters (forward model,
-    streamed). ``noise_std`` adds seeded Gaussian sensor noise to either truth.
+    ``mpi``: the MPI model given by the five ``model.*`` parameters of Gamma and its
+    operating point ``model.input_offset`` [A], ``model.output_offset`` [m],
+    ``model.output_sign`` (+1/-1; defaults 0, 0, +1), the same keys as the compensator's:
+    ``y = y0 + sign * S[H[x - x0]]`` (forward model, streamed). ``noise_std`` adds
+    seeded Gaussian sensor noise to either truth.
 
 Excitation mode (``excitation.enabled:=true``)
     The node drives itself with :func:`mpi_ros.excitation.identification_excitation`
@@ -51,8 +54,8 @@ from std_msgs.msg import Float64
 from .loop import loop_qos
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, loop_qos_parameters,
-    MODEL_KEYS, MODEL_PARAMETERS, parameter_values, ParameterRejected, ParameterSpec,
-    specs_by_name,
+    MODEL_KEYS, MODEL_PARAMETERS, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
+    ParameterSpec, specs_by_name,
 )
 from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
@@ -170,7 +173,7 @@ class PlantSimulatorNode(Node):
         super().__init__(node_name, **kwargs)
         self.add_on_set_parameters_callback(self._validate_parameters)
         declare_parameters(self, PARAMETERS)
-        harden_parameter_services(self)
+        harden_parameter_services(self, specs=_SPECS)
         values = parameter_values(self, list(_SPECS))
         self._values = values
         self._rng = np.random.default_rng(values['seed'])
@@ -337,7 +340,8 @@ class PlantSimulatorNode(Node):
             if missing:
                 msg = f'truth:=mpi needs the model parameters; missing: {", ".join(missing)}'
                 raise ParameterRejected(msg)
-            return MPIModel.from_params({key: values[key] for key in MODEL_KEYS}).stream()
+            return MPIModel.from_params(
+                {key: values[key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}).stream()
         mapping = {name: value for name, value in values.items()
                    if name.startswith('actuator.')}
         for field_name in _NODE_OWNED_FIELDS:

@@ -134,6 +134,8 @@ def get_parameters(driver, names, node='/compensator'):
             values[name] = list(value.double_array_value)
         elif value.type == ParameterType.PARAMETER_DOUBLE:
             values[name] = value.double_value
+        elif value.type == ParameterType.PARAMETER_INTEGER:
+            values[name] = value.integer_value
         else:
             values[name] = value
     return values

@@ -12,7 +12,7 @@ import time
 
 from mpi_ros.model import MPIModel
 from mpi_ros.nodes.identifier import push_model_parameters
-from mpi_ros.nodes.parameters import MODEL_KEYS
+from mpi_ros.nodes.parameters import MODEL_KEYS, OPERATING_POINT_KEYS
 import numpy as np
 import pytest
 from std_msgs.msg import Float64
@@ -24,6 +24,8 @@ from .helpers import (
 
 EXACT = 1e-12        # [A] the node and the core run the same float64 code
 ORDER = '6,3'
+#: The keys of a plain model: Gamma and the operating point (all pushed by the identifier).
+KEYS = MODEL_KEYS + OPERATING_POINT_KEYS
 
 
 def _assert_safe(commands):
@@ -63,7 +65,7 @@ def test_compensator_first_then_identifier_pushes_from_a_bag(nodes, driver, bags
     ident = _identifier(nodes, bag_a, '-p', 'service_timeout:=20.0')
     assert wait_exit(ident, 60.0) == 0, log_text(ident)
     assert '/compensator accepted the model' in log_text(ident)
-    assert get_parameters(driver, MODEL_KEYS) == params_a
+    assert get_parameters(driver, KEYS) == params_a
     core = mirror(params_a)
     values = desired_values(params_a, 150, seed=1)
     assert first_command(driver, values[0]) == pytest.approx(core.command(values[0]), abs=EXACT)
@@ -131,13 +133,13 @@ def test_restarted_compensator_comes_back_with_its_configured_model(nodes, drive
         comp = nodes.compensator('--params-file', str(yaml_a))
         first = first_command(driver, values[0])
         runs.append(np.concatenate([[first], commands_for(driver, values[1:])]))
-        assert get_parameters(driver, MODEL_KEYS) == params_a
+        assert get_parameters(driver, KEYS) == params_a
         if run == 0:
             # A model pushed at run time is not persisted: after the crash the node
             # comes back with the model of its --params-file.
             with driver.detached():
                 push_model_parameters(driver, '/compensator', params_b, timeout=20.0)
-            assert get_parameters(driver, MODEL_KEYS) == params_b
+            assert get_parameters(driver, KEYS) == params_b
         comp.kill()                          # a crash, not a clean shutdown
     core = mirror(params_a)
     expected = [core.command(v) for v in values]
@@ -167,7 +169,7 @@ def test_identifier_killed_around_the_push_leaves_old_or_new_model(nodes, driver
         time.sleep(delay)
         ident.kill()
         time.sleep(0.5)                      # a request already sent is served meanwhile
-        held = get_parameters(driver, MODEL_KEYS)
+        held = get_parameters(driver, KEYS)
         assert held in (models[current], models[target]), 'a mix of two models'
         if held == models[target]:
             core.swap_model(MPIModel.from_params(models[target]))

@@ -123,12 +123,16 @@ def test_a_period_with_bad_input_is_warn_and_the_next_clean_one_ok(make_node, ba
 
 def test_clamping_alone_is_warn(make_node):
     node = make_node()
-    # The best linear map asks for less than output.min at the bottom of the range:
-    # clamped, although the desired displacement is in range and finite.
-    assert node.set_parameters([Parameter('enabled', value=False)])[0].successful
-    low = node.compensator.displacement_range[0]
+    # With S convex at the top, the best linear map (of the major loop) asks for more than
+    # output.max at the top of the range: clamped, although the desired displacement is in
+    # range and finite.
+    assert node.set_parameters([
+        Parameter('enabled', value=False),
+        Parameter('model.superposition.weights', value=[1.0e-5, 2.0e-5, 2.0e-5])])[0].successful
+    high = node.compensator.displacement_range[1]
+    assert node.compensator.linear_map(high) > node.compensator.output_max
     status_of(node)
-    node.command(low)
+    node.command(high)
     counters = node.counters
     assert counters['clamped'] == 1
     assert counters['out_of_range'] == counters['nonfinite_input'] == 0

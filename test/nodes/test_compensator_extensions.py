@@ -20,7 +20,7 @@ import rclpy
 from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
-from .test_compensator_node import MODEL_A, OUTPUT_MAX, OUTPUT_MIN
+from .test_compensator_node import MODEL_A, OPERATING_POINT, OUTPUT_MAX, OUTPUT_MIN
 
 CREEP = {'model.creep.time_constants': [0.01, 0.1, 1.0],
          'model.creep.weights': [0.05, 0.05, 0.1]}
@@ -39,6 +39,8 @@ def typed(mapping):
     for name, value in mapping.items():
         if isinstance(value, list):
             out.append(Parameter(name, Parameter.Type.DOUBLE_ARRAY, [float(v) for v in value]))
+        elif isinstance(value, int):
+            out.append(Parameter(name, Parameter.Type.INTEGER, value))
         else:
             out.append(Parameter(name, Parameter.Type.DOUBLE, float(value)))
     return out
@@ -95,6 +97,31 @@ def test_extended_set_is_accepted_and_used(make_node, extension):
     assert values['extension'] == next(iter(extension)).split('.')[1]
     assert values['bad_time'] == '0'
     assert len(values['slow_state'].split()) == node.compensator.slow_state.size
+
+
+@pytest.mark.parametrize('extension', [CREEP, RATE, THERMAL], ids=['creep', 'rate', 'thermal'])
+def test_extended_compensator_with_an_operating_point(make_node, extension):
+    """Issue 9: input bias, sensor zero and sign -1 with an extension: the core's commands."""
+    params = dict(MODEL_A, **extension, **OPERATING_POINT)
+    node = make_node(limits() + typed(params))
+    assert isinstance(node.compensator, ExtendedCompensator)
+    desired = 1.0e-4 - DESIRED
+    commands = run(node, desired)
+    reference = compensator_from_params(params, output_min=OUTPUT_MIN, output_max=OUTPUT_MAX,
+                                        sample_period=1e-3)
+    expected = [reference.command(float(d), time=float(t)) for d, t in zip(desired, STAMPS)]
+    np.testing.assert_allclose(commands, expected, rtol=0, atol=1e-12)
+    assert np.all((commands >= OUTPUT_MIN) & (commands <= OUTPUT_MAX))
+    # The operating point is used: the origin model's commands are about x0 = 0.4 A lower.
+    assert np.median(commands - core(dict(MODEL_A, **extension))) > 0.2
+    # A swap within the kind, at the operating point: the same compensator, swapped.
+    compensator = node.compensator
+    assert node.set_parameters_atomically(typed(params)).successful
+    assert node.compensator is compensator
+    if extension is not RATE:
+        # Bumpless (the rate inverse's derivative term restarts: not comparable this way).
+        after = node.command(float(desired[-1]), stamp=float(STAMPS[-1]) + 1e-6)
+        assert after == pytest.approx(commands[-1], abs=1e-6)
 
 
 def test_extended_model_from_the_params_file(make_node):

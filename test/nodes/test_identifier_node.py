@@ -3,14 +3,17 @@
 
 import threading
 
+from mpi_ros import identify
 from mpi_ros.actuator import MagnetostrictiveActuator
+from mpi_ros.errors import IdentificationError
 from mpi_ros.excitation import identification_excitation
 from mpi_ros.nodes import identifier
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import IdentifierNode, parse_order
-from mpi_ros.nodes.parameters import MODEL_KEYS, ParameterRejected
+from mpi_ros.nodes.parameters import MODEL_KEYS, OPERATING_POINT_KEYS, ParameterRejected
 from mpi_ros.params import read_params_yaml
-from mpi_ros.recordings import write_bag_signals
+from mpi_ros.recordings import read_bag_signals, write_bag_signals
+import numpy as np
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
@@ -68,9 +71,11 @@ def test_fit_and_push_applies_the_model(ros_context, compensator, excitation_bag
     applied = compensator.compensator.model.to_params()
     assert applied == fit.parameters
     written = read_params_yaml(params_file)
-    for key in MODEL_KEYS:
+    for key in MODEL_KEYS + OPERATING_POINT_KEYS:
         assert written[key] == pytest.approx(fit.parameters[key], rel=1e-12, abs=0.0)
-    assert set(fit.parameters) == set(MODEL_KEYS)
+    assert set(fit.parameters) == set(MODEL_KEYS + OPERATING_POINT_KEYS)
+    for key in OPERATING_POINT_KEYS:
+        assert compensator.get_parameter(key).value == fit.parameters[key]
 
 
 def _main(monkeypatch, capsys, *ros_args):
@@ -105,6 +110,48 @@ def test_missing_target_fails_with_bounded_wait(monkeypatch, capsys, excitation_
                         '-p', 'service_timeout:=0.5')
     assert status == 1
     assert 'no parameter service /nobody_here/set_parameters_atomically' in err
+
+
+def test_refused_data_logs_the_reason_and_pushes_nothing(ros_context, compensator, tmp_path,
+                                                         capfd):
+    """Issue 9: identify refuses a displacement unrelated to the current: no file, no push."""
+    t, current = identification_excitation(8.0, sample_rate=250.0, seed=2)
+    displacement = 1.0e-5 * np.random.default_rng(3).standard_normal(t.size)
+    bag = tmp_path / 'unrelated'
+    write_bag_signals(bag, t, current, displacement)
+    params_file = tmp_path / 'params.yaml'
+    node = IdentifierNode(context=ros_context, parameter_overrides=[
+        Parameter('bag', value=str(bag)), Parameter('order', value=ORDER),
+        Parameter('params_file', value=str(params_file)),
+        Parameter('service_timeout', value=10.0)])
+    try:
+        with pytest.raises(IdentificationError, match='monotone'):
+            node.run()
+    finally:
+        node.destroy_node()
+    assert compensator.model_version == 0
+    assert compensator.counters['rejected_updates'] == 0
+    assert not params_file.exists()
+    assert 'identification refused the data' in capfd.readouterr().err
+
+
+def test_pushes_the_operating_point(ros_context, compensator, excitation_bag):
+    """Issue 9: a model with a sensor zero, an input bias and a falling sensor: all 8 keys."""
+    recording = read_bag_signals(excitation_bag, input_topic='/current_command',
+                                 output_topic='/displacement')
+    fitted = identify(recording.current, recording.displacement, order=(6, 3)).model
+    parameters = fitted.with_operating_point(
+        input_offset=0.7, output_offset=-1.2e-4, output_sign=-1).to_params()
+    node = IdentifierNode(context=ros_context)
+    try:
+        identifier.push_model_parameters(node, '/compensator', parameters, timeout=10.0)
+    finally:
+        node.destroy_node()
+    applied = compensator.compensator.model
+    assert (applied.input_offset, applied.output_offset, applied.output_sign) == (
+        0.7, -1.2e-4, -1)
+    assert compensator.get_parameter('model.output_sign').value == -1
+    assert applied.to_params() == parameters
 
 
 # ------------------------------------------------------------------ data parameters

@@ -63,6 +63,20 @@ def test_mpi_truth_matches_the_model(make_plant):
                                rtol=0, atol=1e-15)
 
 
+def test_mpi_truth_reads_the_operating_point(make_plant):
+    """Issue 9: the same three keys as the compensator: y = y0 + sign S[H[x - x0]]."""
+    model = dict(MODEL, **{'model.input_offset': 0.5, 'model.output_offset': -2.0e-4,
+                           'model.output_sign': -1})
+    plant = make_plant(truth='mpi', **{key.replace('.', '__'): value
+                                       for key, value in model.items()})
+    current = 1.0 + 0.8 * np.sin(np.linspace(0.0, 9.0, 300))
+    measured = [plant.measure(0.0, float(i)) for i in current]
+    expected = MPIModel.from_params(model).simulate(current)
+    np.testing.assert_allclose(measured, expected, rtol=0, atol=1e-15)
+    origin = MPIModel.from_params(MODEL).simulate(current - 0.5)
+    np.testing.assert_allclose(measured, -2.0e-4 - origin, rtol=0, atol=1e-15)
+
+
 def test_noise_is_seeded(make_plant):
     first = make_plant(noise_std=1e-6, seed=5)
     second = make_plant(noise_std=1e-6, seed=5)
