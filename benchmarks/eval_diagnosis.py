@@ -9,7 +9,8 @@ hidden effect is switched on with a seeded, realistic strength, ``diagnose`` run
 identification-excitation training record and a diagnostic validation record, and the
 verdict, the gain, the re-estimated validation offset and every candidate's gain are printed.
 
-Run: ``python benchmarks/eval_diagnosis.py [--seeds 1 2 3] [--offset 7e-6]``.
+Run: ``python benchmarks/eval_diagnosis.py [--seeds 1 2 3] [--offset 7e-6] [--at-rest]``
+(``--at-rest --offset 0``: the scenario of test_diagnosis.py's original test).
 """
 
 import argparse
@@ -58,10 +59,10 @@ def zeroed_displacement(cfg):
     return float(MagnetostrictiveActuator(clean).simulate(np.arange(3.0), path)[-1])
 
 
-def experiment(cause, seed, validation_offset):
+def experiment(cause, seed, validation_offset, zeroed=True):
     """Return the training and the validation Recording of one cause and seed."""
     cfg = ActuatorConfig(noise_std_m=NOISE, **strength(cause, np.random.default_rng(seed)))
-    zero = zeroed_displacement(cfg)
+    zero = zeroed_displacement(cfg) if zeroed else 0.0
     t, x = identification_excitation(DURATION, seed=seed, **EXCITATION)
     tv, xv = diagnostic_excitation(sample_rate=1000.0, seed=seed + 10)
     recs = []
@@ -79,6 +80,8 @@ def main(argv=None):
     p.add_argument('--offset', type=float, default=7e-6,
                    help='validation sensor zero shift [m] (default 7e-6)')
     p.add_argument('--causes', nargs='+', default=list(CAUSES))
+    p.add_argument('--at-rest', action='store_true',
+                   help='keep the sensor zero at rest (0 A) instead of 0.2 A')
     args = p.parse_args(argv)
     print(f'# {platform.node()} {platform.processor() or platform.machine()},'
           f' {os.cpu_count()} CPUs, Python {sys.version.split()[0]}')
@@ -88,7 +91,7 @@ def main(argv=None):
     failures = 0
     for cause in args.causes:
         for seed in args.seeds:
-            train, val = experiment(cause, seed, args.offset)
+            train, val = experiment(cause, seed, args.offset, not args.at_rest)
             started = time.perf_counter()
             r = diagnose(train, validation=val)
             elapsed = time.perf_counter() - started
