@@ -75,3 +75,40 @@ def test_window_diagnoses_only_the_window(tmp_path, capsys):
         assert main(argv) == 1
         assert 'error: --window' in capsys.readouterr().err
     assert not (tmp_path / 'bad.json').exists()
+
+
+def test_rig_csv_with_a_falling_sensor_and_its_own_zero(tmp_path, capsys):
+    """Volts, nm, a sensor that counts down from -123 um: a report, or a clear refusal."""
+    cfg = ActuatorConfig(noise_std_m=2e-8, dead_time_s=0.01)
+    t, x = identification_excitation(20.0, sample_rate=1000.0, seed=1)
+    y = MagnetostrictiveActuator(cfg, seed=1).simulate(t, x)
+    tv, xv = diagnostic_excitation(sample_rate=1000.0, seed=2, repeats=1, hold_duration=1.5)
+    yv = MagnetostrictiveActuator(cfg, seed=2).simulate(tv, xv)
+    write_csv_columns(tmp_path / 'data.csv', {'time': t, 'volts': 10.0 * x,
+                                              'nm': (-123e-6 - y) * 1e9})
+    write_csv_columns(tmp_path / 'val.csv', {'time': tv, 'volts': 10.0 * xv,
+                                             'nm': (-116e-6 - yv) * 1e9})   # own zero
+    common = ['--input-column', 'volts', '--output-column', 'nm', '--input-scale', '0.1',
+              '--output-scale', '1e-9', '--order', '8', '4', '--report', str(tmp_path / 'r')]
+    argv = ['diagnose', str(tmp_path / 'data.csv'), '--validate', str(tmp_path / 'val.csv'),
+            '--json', str(tmp_path / 'report.json'), *common]
+    assert main(argv) == 0
+    report = json.loads((tmp_path / 'report.json').read_text())
+    assert report['cause'] == 'dead_time'
+    assert report['data']['output_sign'] == -1
+    baseline = report['baseline']
+    assert baseline['operating_point']['output_sign'] == -1
+    assert baseline['rms_error'] < 0.1 * baseline['linear_rms_error']
+    assert abs(baseline['validation_output_offset'] - 7e-6) < 1e-6   # -116 - (-123) um
+    assert 'sensor zero' in report['evidence']
+    capsys.readouterr()
+
+    # The same rig's validation column swapped for an unrelated linear sensor: refused.
+    write_csv_columns(tmp_path / 'line.csv', {'time': tv, 'volts': 10.0 * xv,
+                                              'nm': -2e4 * xv - 1.2e5})
+    argv = ['diagnose', str(tmp_path / 'data.csv'), '--validate', str(tmp_path / 'line.csv'),
+            '--json', str(tmp_path / 'bad.json'), *common]
+    assert main(argv) == 1
+    assert 'error: the baseline MPI model (n=8, l=4) is no better than a straight line' in \
+        capsys.readouterr().err
+    assert not (tmp_path / 'bad.json').exists()

@@ -9,11 +9,12 @@ from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import ModelError, MPIWarning
 from mpi_ros.excitation import identification_excitation
 from mpi_ros.extensions import compensator_from_params, CreepModel, DeadTimeModel, \
-    extended_model_from_params, ExtendedCompensator, fit_creep, fit_rate_dependence, \
-    RateDependentModel, ThermalDriftModel
+    extended_model_from_params, ExtendedCompensator, fit_creep, fit_dead_time, \
+    fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
 from mpi_ros.extensions._signals import delay, first_order_lag
 from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error
+from mpi_ros.params import OPERATING_POINT_KEYS
 import numpy as np
 import pytest
 
@@ -178,3 +179,70 @@ def test_extended_compensator_survives_extreme_finite_input():
     for desired in (1e308, -1e308, 1.7976931348623157e308, 5e-5, float('nan')):
         current = comp.command(desired)
         assert np.isfinite(current) and 0.2 <= current <= 1.8
+
+
+def _with_operating_point(model, gamma):
+    # The same extension around another Gamma.
+    params = {**model.to_params(), **gamma.to_params()}
+    return extended_model_from_params(params)
+
+
+@pytest.mark.parametrize('seed', range(3))
+def test_extended_models_carry_the_operating_point(seed):
+    # y = y0 + sign * (the model at the origin, fed x - x0); thermal drift heats with the
+    # absolute current.  The parameter form keeps the three operating-point keys.
+    rng = np.random.default_rng(seed)
+    t, x = _signal(rng)
+    x0, y0, sign = rng.uniform(-1.0, 1.0), rng.uniform(-1e-4, 1e-4), -1
+    creep, rate, thermal, dead = _models(np.random.default_rng(seed))
+    gamma = creep.model
+    shifted = gamma.with_operating_point(input_offset=x0, output_offset=y0, output_sign=sign)
+    for model in (creep, rate, dead):
+        moved = _with_operating_point(model, shifted)
+        params = moved.to_params()
+        assert (params['model.input_offset'], params['model.output_offset'],
+                params['model.output_sign']) == (x0, y0, sign)
+        again = extended_model_from_params(params)
+        np.testing.assert_array_equal(again.simulate(t, x), moved.simulate(t, x))
+        np.testing.assert_allclose(moved.simulate(t, x), y0 + sign * model.simulate(t, x - x0),
+                                   rtol=0.0, atol=1e-12 * np.ptp(model.simulate(t, x)))
+    moved = _with_operating_point(thermal, shifted)
+    assert extended_model_from_params(moved.to_params()).model.input_offset == x0
+    h, _ = gamma.hysteresis.apply(x - x0)
+    state = first_order_lag(t, x * x, 2.0)
+    np.testing.assert_allclose(moved.simulate(t, x),
+                               y0 + sign * gamma.superposition.apply(h + 0.05 * state),
+                               rtol=0.0, atol=1e-15)
+
+
+@pytest.mark.parametrize('fit, effect, bias', [
+    (fit_dead_time, {'dead_time_s': 0.01}, 0.7),
+    (fit_rate_dependence, {'eddy_time_constant_s': 0.005}, 0.7),
+    (fit_creep, {'creep_gain': 0.06}, 0.7),
+    (fit_thermal_drift, {'thermal_gain_m_per_a2': 1e-6, 'thermal_time_constant_s': 10.0}, 0.0),
+])
+def test_extension_fits_do_not_depend_on_the_operating_point(fit, effect, bias):
+    # Issue 9: a sensor zero, a falling sensor and (except for the Joule heating, which
+    # follows the absolute current) an input bias give the same extension and the same
+    # simulation up to the operating point.
+    t, x = identification_excitation(20.0, sample_rate=1000.0, burst_frequency=40.0,
+                                     hold_duration=3.0, seed=2)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8, **effect),
+                                 seed=1).simulate(t, x)
+    zero = 3e-5                          # [m] another sensor zero, counting down
+    plain = fit(t, x, y, order=(8, 4))
+    moved = fit(t, x + bias, zero - y, order=(8, 4))
+    assert (plain.model.output_sign, moved.model.output_sign) == (1, -1)
+    extension = {k: v for k, v in plain.to_params().items()
+                 if not k.startswith(('model.hysteresis', 'model.superposition'))
+                 and k not in OPERATING_POINT_KEYS}
+    assert extension
+    for key, value in extension.items():
+        np.testing.assert_allclose(moved.to_params()[key], value, rtol=1e-6, atol=1e-12,
+                                   err_msg=key)
+    span = np.ptp(y)
+    np.testing.assert_allclose(moved.simulate(t, x + bias), zero - plain.simulate(t, x),
+                               rtol=0.0, atol=1e-6 * span)
+    burn_in = 2000
+    error = np.sqrt(np.mean((plain.simulate(t, x) - y)[burn_in:] ** 2)) / span
+    assert error < 0.01, error           # 0.3 % measured: the fit itself is good

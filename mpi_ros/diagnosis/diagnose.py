@@ -4,18 +4,32 @@ Diagnosis: what the MPI model's simulation gets wrong, which extension explains 
 
 Procedure (documented in ``docs/diagnosis.md``):
 
-1. **Invertible class.**  :func:`check_invertible_class`; failing data get the verdict
-   ``outside_invertible_class`` and no fit.
-2. **Baseline.**  Gamma is identified on the training data with the order selection of
-   ``identify(order='auto')``.  Training/validation: the ``validation`` recording if given
-   (a separate experiment; best), else a split of the record at ``split`` (default 0.6):
-   the model is simulated over the *whole* record and scored only after the split, so the
-   validation part starts from the states the training part leaves.
+1. **Invertible class.**  :func:`check_invertible_class` on the output times the sign
+   detected on the training data (a falling sensor is fine: the model gets
+   ``model.output_sign = -1``); failing data get the verdict ``outside_invertible_class``
+   and no fit.  A separate validation record is checked on its own.
+2. **Baseline.**  Gamma is identified on the training data by
+   :func:`mpi_ros.identification.identify` (operating point, detected sign, burn-in, the
+   order selection of ``order='auto'``); a record it refuses (worse than a straight line,
+   too little excitation, ...) is refused here with its message.  Training/validation: the
+   ``validation`` recording if given (a separate experiment; best), else a split of the
+   record at ``split`` (default 0.6): the model is simulated over the *whole* record and
+   scored only after the split, so the validation part starts from the states the
+   training part leaves.  A separate validation record starts from an unknown state: it
+   is scored only after its own burn-in (its input covered its range), and it has its own
+   sensor zero: **only its output offset is re-estimated** (the least-squares constant, the
+   mean residual), for the baseline, the straight line and every candidate alike, and
+   reported (``baseline['validation_output_offset']``).  A baseline no better than the
+   straight line of the training data on the validation data is refused
+   (:class:`IdentificationError`).  All errors are fractions of the validation output's
+   range.
 3. **Residual structure** of the baseline on the validation data: (37), RMS, the noise
    floor, the response during input holds, correlation with the input rate, with the
    thermal proxy ``x^2`` (lagged) and the lag of the best cross-correlation.
 4. **Candidates** (:mod:`mpi_ros.extensions`) are fitted on the training data with the same
-   order and simulated on the validation data.
+   order and the same design as the baseline (operating point, sign, constant term,
+   burn-in) and simulated on the validation data, with their own re-estimated offset: a
+   candidate gains only by its physics, not by absorbing a sensor zero.
 5. **Decision** (two independent kinds of evidence, both on the validation data):
 
    - *significance*: the candidate's validation gain (relative RMS reduction) is at least
@@ -37,20 +51,22 @@ Procedure (documented in ``docs/diagnosis.md``):
    baseline residual does not exceed the noise floor by ``noise_factor``.
 """
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 import math
 from typing import Any, Callable
 
 import numpy as np
 import numpy.typing as npt
 
-from .invertibility import check_invertible_class, OUTSIDE_INVERTIBLE_CLASS
+from .invertibility import check_invertible_class, InvertibilityCheck, \
+    OUTSIDE_INVERTIBLE_CLASS
 from .signatures import burst_signature, hold_segments, hold_signature
-from ..errors import DataError
+from ..errors import DataError, IdentificationError
 from ..extensions import fit_creep, fit_dead_time, fit_rate_dependence, fit_thermal_drift
 from ..extensions._signals import first_order_lag
-from ..identification import identify
-from ..metrics import nonlinearity_error, relative_rms_error
+from ..identification import identify, output_sign, scaled_design
+from ..metrics import range_error, rms_range_error
+from ..params import OPERATING_POINT_KEYS
 
 __all__ = ['DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
 
@@ -75,13 +91,17 @@ class DiagnosisReport:
         ``creep``, ``rate_dependence``, ``thermal_drift``, ``dead_time``, ``none`` or
         ``outside_invertible_class``.
     baseline : dict
-        ``order``, ``rms_error``, ``nonlinearity_error`` of Gamma on the validation data.
+        ``order``, ``rms_error``, ``nonlinearity_error`` of Gamma on the validation data
+        (fractions of its output range), ``linear_rms_error`` (the training data's straight
+        line), ``validation_output_offset`` [m] (the re-estimated sensor zero of a separate
+        validation record; 0 for a split), ``training_rms_error``, ``operating_point``.
     extended : dict
         The same for the chosen model (the baseline for ``none``), plus ``parameters``.
     gain : float
         Relative reduction of the validation RMS error, 0..1 (0 for ``none``).
     candidates : list of dict
         Per candidate: ``cause``, ``rms_error``, ``nonlinearity_error``, ``gain``,
+        ``validation_output_offset``,
         ``z`` (Diebold-Mariano statistic), ``bandwidth`` (HAC lags), ``significant``,
         ``signature`` (``present``, ``absent`` or ``unavailable``), ``parameters``.
     evidence : str
@@ -91,7 +111,8 @@ class DiagnosisReport:
     decision : dict
         The rule's thresholds and the steps taken.
     data : dict
-        Sources, sample counts, split.
+        Sources, sample counts, split, ``output_sign``, burn-ins,
+        ``output_offset_reestimated``.
     model : object
         The extended model (or the baseline MPIModel); not serialised.
     series : dict
@@ -193,6 +214,9 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     ------
     DataError
         Malformed data, a bad option, or a record too short to split.
+    IdentificationError
+        When :func:`mpi_ros.identification.identify` refuses the training record, or the
+        baseline is no better than a straight line on the validation data.
 
     """
     say = progress or (lambda line: None)
@@ -207,25 +231,28 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
             raise DataError(msg)
         n_train = int(round(split * t.size))
         tt, xt, yt = t[:n_train], x[:n_train], y[:n_train]
-        tv, xv, yv, offset = t, x, y, n_train
+        tv, xv, yv, start = t, x, y, n_train
         data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
                 'split': split, 'training_samples': n_train,
                 'validation': f'samples {n_train}..{t.size - 1} of the same record'}
     else:
         tt, xt, yt = t, x, y
         tv, xv, yv = _arrays(validation, 'validation')
-        offset = 0
+        start = 0
         data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
                 'validation': getattr(validation, 'source', '') or 'separate recording',
                 'validation_samples': int(tv.size)}
-    if tt.size < 200 or tv.size - offset < 100:
-        msg = (f'too few samples to diagnose: {tt.size} for training and {tv.size - offset}'
+    if tt.size < 200 or tv.size - start < 100:
+        msg = (f'too few samples to diagnose: {tt.size} for training and {tv.size - start}'
                ' for validation; record at least a few loops (>= 300 samples)')
         raise DataError(msg)
-    check = check_invertible_class(np.concatenate([xt, xv[offset:]]),
-                                   np.concatenate([yt, yv[offset:]]))
+    # The sensor may fall as the actuator extends: the class check (a rising map) and the
+    # model (model.output_sign) use the sign detected on the training data.
+    sign, _ = output_sign(xt, yt)
+    data['output_sign'] = sign
     series: dict[str, Any] = {'time': tv, 'current': xv, 'displacement': yv,
-                              'offset': offset}
+                              'start': start}
+    check = _class_check(xt, sign * yt, xv[start:], sign * yv[start:], validation is not None)
     if not check.inside:
         say(f'outside the invertible class: {check.reason}')
         return DiagnosisReport(
@@ -240,15 +267,52 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     else:
         base = identify(xt, yt, n=int(order[0]), l=int(order[1]))
     n, l = base.order  # noqa: E741
+    data['training_burn_in'] = base.burn_in
+    if validation is not None:
+        # A separate experiment starts from its own (unknown) state: score it only once its
+        # input has covered its range (the burn-in identify uses, for the same order).
+        start = scaled_design(xv, yv, n, l).burn_in
+        if tv.size - start < 100:
+            msg = (f'the validation record covers its input range only at sample {start} of'
+                   f' {tv.size}: before that the states of the actuator and of the model are'
+                   ' unknown, leaving too little to score; record the validation with full'
+                   ' sweeps over the range early (e.g. mpi-ros diagnose --excitation)')
+            raise DataError(msg)
+        series['start'] = start
+        data['validation_burn_in'] = start
+    val = slice(start, None)
+    # Only the validation record's output offset (its sensor zero) is re-estimated, for the
+    # baseline, the straight line and every candidate alike; nothing else is refitted.
+    reestimate = validation is not None
+    data['output_offset_reestimated'] = reestimate
+    line = _linear_fit(xt[base.burn_in:], yt[base.burn_in:])
+    linear = np.polyval(line, xv)
+    linear_shift = _zero_shift(linear[val], yv[val], reestimate)
     sim0 = base.model.simulate(xv)
-    val = slice(offset, None)
+    shift0 = _zero_shift(sim0[val], yv[val], reestimate)
+    sim0 = sim0 + shift0
     r0 = yv[val] - sim0[val]
     sigma = noise_floor(yv[val])
     baseline = {'order': [n, l], **_errors(sim0[val], yv[val]),
-                'training_rms_error': base.rms_error}
-    say(f'baseline order n={n}, l={l}: validation RMS error {baseline["rms_error"]:.4f},'
-        f' (37) {baseline["nonlinearity_error"]:.4f}')
-    residual = _residual_structure(tv, xv, yv, sim0, offset, sigma)
+                'training_rms_error': base.rms_error,
+                'validation_output_offset': shift0,
+                'linear_rms_error': _errors(linear[val] + linear_shift, yv[val])['rms_error'],
+                'operating_point': {'input_offset': base.model.input_offset,
+                                    'output_offset': base.model.output_offset,
+                                    'output_sign': base.model.output_sign}}
+    say(f'baseline order n={n}, l={l}: validation RMS error {baseline["rms_error"]:.4f}'
+        f' of the output range (straight line {baseline["linear_rms_error"]:.4f}),'
+        f' (37) {baseline["nonlinearity_error"]:.4f}'
+        + (f'; validation output offset re-estimated: {shift0:+.4g} m' if reestimate else ''))
+    if not baseline['rms_error'] < baseline['linear_rms_error']:
+        msg = (f'the baseline MPI model (n={n}, l={l}) is no better than a straight line on'
+               f' the validation data: RMS error {100 * baseline["rms_error"]:.3g} % of the'
+               f' output range vs {100 * baseline["linear_rms_error"]:.3g} % for the line'
+               ' fitted on the training data; check that both records come from the same'
+               ' actuator, with the same columns/topics, units and sign, and that the'
+               ' validation record sweeps the range of the training record')
+        raise IdentificationError(msg)
+    residual = _residual_structure(tv, xv, yv, sim0, start, sigma)
     holds = hold_signature(tv[val], xv[val], r0)
     bursts = burst_signature(tv[val], xv[val], yv[val], sim0[val])
     residual['hold_signature'] = asdict(holds) if holds is not None else None
@@ -262,16 +326,20 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         say(f'fitting candidate {cause}')
         model = _FITTERS[cause](tt, xt, yt, order=(n, l))
         sim = model.simulate(tv, xv)
+        shift = _zero_shift(sim[val], yv[val], reestimate)
+        sim = sim + shift
         sims[cause] = sim
         rc = yv[val] - sim[val]
         errs = _errors(sim[val], yv[val])
         gain = 1.0 - errs['rms_error'] / baseline['rms_error']
         z, lags = _dm_statistic(r0, rc, bandwidth)
         params = {k: v for k, v in model.to_params().items()
-                  if not k.startswith(('model.hysteresis', 'model.superposition'))}
-        train = relative_rms_error(model.simulate(tt, xt), yt)
+                  if not k.startswith(('model.hysteresis', 'model.superposition'))
+                  and k not in OPERATING_POINT_KEYS}
+        determined = slice(base.burn_in, None)
+        train = rms_range_error(model.simulate(tt, xt)[determined], yt[determined])
         candidates.append({'cause': cause, **errs, 'gain': gain, 'z': z, 'bandwidth': lags,
-                           'training_rms_error': train,
+                           'training_rms_error': train, 'validation_output_offset': shift,
                            'parameter_count': _PARAMETER_COUNT[cause](params),
                            'parameters': params, 'model': model})
         say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
@@ -295,7 +363,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                     'nonlinearity_error': chosen['nonlinearity_error'],
                     'parameters': chosen['parameters']}
     extended.setdefault('parameters', {})
-    evidence = _evidence(cause, baseline, candidates, residual, sigma, yv[val])
+    evidence = _evidence(cause, baseline, candidates, residual, sigma, yv[val], data)
     say(f'verdict: {cause} (gain {gain:.3f})')
     public = [{k: v for k, v in c.items() if k != 'model'} for c in candidates]
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
@@ -324,8 +392,35 @@ def _arrays(rec: Any, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:
 
 
 def _errors(sim: FloatArray, measured: FloatArray) -> dict[str, float]:
-    return {'rms_error': relative_rms_error(sim, measured),
-            'nonlinearity_error': nonlinearity_error(sim, measured)}
+    # Over the measured output's range: independent of the sensor's zero and sign.
+    return {'rms_error': rms_range_error(sim, measured),
+            'nonlinearity_error': range_error(sim, measured)}
+
+
+def _zero_shift(sim: FloatArray, measured: FloatArray, reestimate: bool) -> float:
+    # The least-squares output offset of a model on a record with its own sensor zero
+    # (the mean residual); 0 when the record shares the training record's zero.
+    return float(np.mean(measured - sim)) if reestimate else 0.0
+
+
+def _linear_fit(x: FloatArray, y: FloatArray) -> FloatArray:
+    # Coefficients of the best straight line y = a x + b (np.polyval order).
+    return np.asarray(np.polyfit(x, y, 1), dtype=np.float64)
+
+
+def _class_check(xt: FloatArray, yt: FloatArray, xv: FloatArray, yv: FloatArray,
+                 separate: bool) -> InvertibilityCheck:
+    # A separate validation record has its own sensor zero: each record is checked on its
+    # own (joined, its zero jump would count as output travel); the worse verdict wins.
+    if not separate:
+        return check_invertible_class(np.concatenate([xt, xv]), np.concatenate([yt, yv]))
+    checks = [check_invertible_class(xt, yt), check_invertible_class(xv, yv)]
+    failed = [(name, c) for name, c in zip(('training', 'validation'), checks)
+              if not c.inside]
+    if failed:
+        name, c = failed[0]
+        return replace(c, reason=f'in the {name} record, {c.reason}')
+    return max(checks, key=lambda c: c.reversal_ratio)
 
 
 #: Free parameters of each extension (creep time constants are fixed by the record).
@@ -396,11 +491,11 @@ def _decide(candidates: list[dict[str, Any]], excess: bool,
 
 
 def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatArray,
-                        offset: int, sigma: float) -> dict[str, Any]:
-    val = slice(offset, None)
+                        start: int, sigma: float) -> dict[str, Any]:
+    val = slice(start, None)
     r = (y - sim)[val]
     tv, xv = t[val], x[val]
-    scale = float(np.sqrt(np.mean(y[val] ** 2)))
+    scale = float(np.ptp(y[val]))
     out: dict[str, Any] = {'rms': float(np.sqrt(np.mean(r ** 2))), 'noise_floor': sigma,
                            'noise_floor_relative': sigma / scale if scale else 0.0}
     holds = hold_segments(tv, xv, 0.5)
@@ -436,10 +531,15 @@ def _corr(a: FloatArray, b: FloatArray) -> float:
 
 
 def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, Any]],
-              residual: dict[str, Any], sigma: float, y: FloatArray) -> str:
-    rms_y = float(np.sqrt(np.mean(y ** 2)))
-    base = (f'The MPI simulation misses {100 * baseline["rms_error"]:.2f} % RMS on validation'
-            f' data (noise floor {100 * sigma / rms_y:.2f} %)')
+              residual: dict[str, Any], sigma: float, y: FloatArray,
+              data: dict[str, Any]) -> str:
+    span = float(np.ptp(y))
+    shift = baseline.get('validation_output_offset', 0.0)
+    zero = (f'; the validation record has its own sensor zero: only its output offset was'
+            f' re-estimated, for every model alike (baseline {shift:+.3g} m)'
+            if data.get('output_offset_reestimated') else '')
+    base = (f'The MPI simulation misses {100 * baseline["rms_error"]:.2f} % of the output range'
+            f' (RMS) on validation data (noise floor {100 * sigma / span:.2f} %{zero})')
     ranked = sorted(candidates, key=lambda c: -c['gain'])
     listing = ', '.join(f'{c["cause"]} {100 * c["gain"]:+.0f} %' for c in ranked)
     if cause == 'none':

@@ -73,7 +73,7 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str]) -> 
     out.mkdir(parents=True, exist_ok=True)
     s = report.series
     written = []
-    t, x, y, k0 = s['time'], s['current'], s['displacement'], s['offset']
+    t, x, y, k0 = s['time'], s['current'], s['displacement'], s['start']
     val = slice(k0, None)
     sims = {'baseline MPI': s.get('baseline')}
     if report.cause in s.get('candidates', {}):

@@ -5,11 +5,17 @@ Physically motivated extensions of the MPI model, one module per cause.
 =====================  ==========================================  ===========================
 cause                  model                                       extra parameter keys
 =====================  ==========================================  ===========================
-``creep``              ``S[H[x] + sum_j w_Cj C_j[x]]``             ``model.creep.*``
+``creep``              ``y0 + sign S[H[u] + sum_j w_Cj C_j[u]]``   ``model.creep.*``
 ``rate_dependence``    ``Gamma[L_tau_e[x]]``                       ``model.rate_dependence.*``
-``thermal_drift``      ``Gamma[x] + k_T L_tau_T[x^2]``             ``model.thermal_drift.*``
+``thermal_drift``      ``y0 + sign S[H[u] + w_T L_tau_T[x^2]]``    ``model.thermal_drift.*``
 ``dead_time``          ``Gamma[x](t - L)``                         ``model.dead_time``
 =====================  ==========================================  ===========================
+
+``u = x - x0``; Gamma carries the operating point (``model.input_offset`` ``x0``,
+``model.output_offset`` ``y0``, ``model.output_sign``), and every extended model keeps it
+in ``simulate`` and in its parameter form.  The fits use
+:func:`mpi_ros.identification.identify`'s design (operating point, detected sign, constant
+term, burn-in), so an extension is fitted on the same samples as the plain model.
 
 Every model has ``simulate(time, current)``, ``to_params()``, ``from_params(mapping)`` and a
 ``cause`` name; :func:`extended_model_from_params` picks the class from the keys present.
@@ -57,7 +63,7 @@ def extended_model_from_params(mapping: Mapping[str, Any]) -> 'ExtendedModel | M
     Parameters
     ----------
     mapping : Mapping[str, Any]
-        Flat parameters (Gamma's five ``model.*`` keys plus at most one extension's keys).
+        Flat parameters (Gamma's ``model.*`` keys plus at most one extension's keys).
 
     Returns
     -------

@@ -1,5 +1,12 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
-"""Helpers shared by the model extensions: argument checks, parameter reading, 1-D search."""
+"""
+Helpers shared by the model extensions: argument checks, parameter reading, 1-D search.
+
+Every extension is fitted with :func:`mpi_ros.identification.identify`'s design: input and
+output centred on the record's operating point, the output's sign detected, a constant term
+in the generalised error, and only the samples after the burn-in (the plays' and the
+actuator's states are determined by the data) in the fit and in the trial errors.
+"""
 
 from collections.abc import Callable, Mapping
 import math
@@ -10,12 +17,12 @@ import numpy.typing as npt
 from scipy.optimize import minimize_scalar
 
 from ..errors import DataError, ModelError
-from ..identification import fit_model
-from ..metrics import relative_rms_error
+from ..identification import fit_model, scaled_design
+from ..metrics import rms_range_error
 from ..model import MPIModel
 
-__all__ = ['check_series', 'fit_gamma', 'lag_search_limits', 'scalar_parameter', 'search_fit',
-           'vector_parameter']
+__all__ = ['check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
+           'scalar_parameter', 'search_fit', 'vector_parameter']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -137,9 +144,15 @@ def search_fit(fit: Callable[[float], tuple[Any, float]], grid: FloatArray, *,
 
 
 def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, int],
-              epsilon: float) -> tuple[MPIModel, float]:
+              epsilon: float, *, start: int = 0) -> tuple[MPIModel, float]:
     """
     Identify Gamma on a (possibly transformed) current and return it with its error.
+
+    The design is :func:`mpi_ros.identification.identify`'s (operating point, detected
+    sign, constant term); the generalised error and the returned error cover the samples
+    from ``start`` on (see :func:`determined_start`), so trials on differently
+    transformed inputs are compared on the same samples; a trial input whose own burn-in is
+    later (a long lag that reaches its extremes late) is scored from there.
 
     Parameters
     ----------
@@ -151,17 +164,56 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
         ``(n, l)`` of Gamma.
     epsilon : float
         Bound of (8)/(19).
+    start : int
+        First sample of the fit and of the error (see :func:`determined_start`).
 
     Returns
     -------
     model, error : MPIModel, float
-        The fit and its relative RMS error on the given data.
+        The fit and its RMS error over the output's range on the determined samples.
 
     """
     n, l = order  # noqa: E741
-    model, design, _ = fit_model(current, displacement, n, l, epsilon=epsilon)
-    keep = slice(design.burn_in, None)
-    return model, relative_rms_error(model.simulate(current)[keep], displacement[keep])
+    rows = np.arange(current.size) >= start
+    model, design, _ = fit_model(current, displacement, n, l, epsilon=epsilon, rows=rows)
+    keep = slice(max(start, design.burn_in), None)
+    return model, rms_range_error(model.simulate(current)[keep], displacement[keep])
+
+
+def determined_start(time: FloatArray, current: FloatArray, displacement: FloatArray,
+                     order: tuple[int, int], *, settle: float = 0.0) -> int:
+    """
+    Return the first sample the data determine, for the raw current and its transforms.
+
+    The burn-in of :func:`mpi_ros.identification.scaled_design` on the raw current (before
+    it, the plays' and the actuator's states are unknown; see
+    :mod:`mpi_ros.identification`), plus ``settle`` seconds for a delayed or lagged
+    version of it to have forgotten its own start.
+
+    Parameters
+    ----------
+    time : ndarray of float, shape (N,)
+        Sample times [s].
+    current : ndarray of float, shape (N,)
+        Coil current [A].
+    displacement : ndarray of float, shape (N,)
+        Measured displacement [m].
+    order : (int, int)
+        ``(n, l)`` of Gamma.
+    settle : float
+        Extra time [s] (e.g. the longest trial delay, or a few lag time constants).
+
+    Returns
+    -------
+    int
+        Sample index (at most N).
+
+    """
+    n, l = order  # noqa: E741
+    start = scaled_design(current, displacement, n, l).burn_in
+    if start >= time.size:
+        return int(time.size)
+    return int(np.searchsorted(time, time[start] + settle))
 
 
 def lag_search_limits(time: FloatArray) -> tuple[float, float]:

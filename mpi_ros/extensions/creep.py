@@ -2,8 +2,9 @@
 """
 Creep extension: Kuhnen-style linear creep operators added to the hysteresis operator.
 
-The extended operator is ``s = y0 + sign S[H[x - x0] + sum_j w_Cj C_j[x - x0]]`` where each
-creep operator ``C_j`` is a first-order lag ``tau_j dc_j/dt = x - c_j`` of the input (see
+The extended operator is ``s = y0 + sign S[H[x - x0] + sum_j w_Cj C_j[x - x0]]`` (the
+operating point ``x0``, ``y0``, ``sign`` is Gamma's) where each creep operator ``C_j`` is a
+first-order lag ``tau_j dc_j/dt = x - c_j`` of the input (see
 :mod:`mpi_ros.extensions._signals`) and the time constants ``tau_j`` are spaced
 logarithmically over the record's time scales.  After a step of the input the lags
 settle one after the other, which gives the ``log t``-like creep of the output.
@@ -16,7 +17,7 @@ the present input enters ``C_j`` with a positive gain ``b_j``, so the step map
 ``w_H0 + sum_j w_Cj b_j > 0``: (8) holds and the inverse follows from the laws
 (12)-(14) at every step (see :class:`mpi_ros.extensions.ExtendedCompensator`).
 
-Parameter keys (besides the five ``model.*`` keys of Gamma):
+Parameter keys (besides Gamma's ``model.*`` keys):
 
 - ``model.creep.time_constants``: ``tau_j`` [s], ascending, > 0;
 - ``model.creep.weights``: ``w_Cj`` [1] (H-output per input unit, like ``w_H``), >= 0.
@@ -48,7 +49,7 @@ CREEP_WEIGHTS = 'model.creep.weights'
 @dataclass(frozen=True, eq=False)
 class CreepModel:
     """
-    MPI model with creep operators: ``s = S[H[x] + sum_j w_Cj C_j[x]]``.
+    MPI model with creep operators: ``s = y0 + sign S[H[u] + sum_j w_Cj C_j[u]]``, ``u = x - x0``.
 
     Parameters
     ----------
@@ -82,7 +83,7 @@ class CreepModel:
     @classmethod
     def from_params(cls, mapping: Mapping[str, Any]) -> 'CreepModel':
         """
-        Build from the parameter form (the five ``model.*`` keys plus ``model.creep.*``).
+        Build from the parameter form (Gamma's ``model.*`` keys plus ``model.creep.*``).
 
         Parameters
         ----------
@@ -107,7 +108,7 @@ class CreepModel:
         return params
 
     def creep_term(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
-        """Return ``sum_j w_Cj C_j[x - x0]`` [A] (lags start in steady state at sample 0)."""
+        """Return ``sum_j w_Cj C_j[x - x0]`` [A]; the lags start settled at the first sample."""
         t, x = check_series(time, current)
         return lag_bank(t, x - self.model.input_offset, self.time_constants) @ self.weights
 

@@ -8,7 +8,8 @@ sample before the record) and Gamma identified on it.  ``L`` is found by a 1-D s
 (grid of lags, then bounded refinement), one QP identification per trial.  A compensator
 cannot undo a dead time (it would need the future); it can only be told about it.
 
-Parameter key (besides Gamma's five keys): ``model.dead_time`` (``L`` [s], >= 0).
+Parameter key (besides Gamma's ``model.*`` keys, operating point included):
+``model.dead_time`` (``L`` [s], >= 0).
 """
 
 from collections.abc import Mapping
@@ -18,7 +19,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, fit_gamma, lag_search_limits, scalar_parameter, search_fit
+from ._common import check_series, determined_start, fit_gamma, lag_search_limits, \
+    scalar_parameter, search_fit
 from ._signals import delay
 from ..model import MPIModel
 
@@ -90,7 +92,9 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     Identify Gamma and the dead time (search over lags, one QP per trial).
 
     Trial lags: 0 and log-spaced from one sample interval to the smaller of 200 intervals
-    and 5 % of the record; the objective is the relative RMS error on the given data.
+    and 5 % of the record; the objective is the RMS error on the samples determined for every
+    trial (after the raw current's burn-in and the longest trial lag), with
+    :func:`mpi_ros.identification.identify`'s design (operating point, sign, constant term).
 
     Parameters
     ----------
@@ -113,6 +117,10 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     """
     t, x, y = check_series(time, current, displacement)
     dt, longest = lag_search_limits(t)
-    lag, model, _ = search_fit(lambda v: fit_gamma(delay(t, x, v), y, order, epsilon),
-                               np.concatenate([[0.0], np.geomspace(dt, longest, 10)]))
+    # Every trial lag is scored on the same determined samples: after the raw current's
+    # burn-in and the longest trial lag.
+    start = determined_start(t, x, y, order, settle=longest)
+    lag, model, _ = search_fit(
+        lambda v: fit_gamma(delay(t, x, v), y, order, epsilon, start=start),
+        np.concatenate([[0.0], np.geomspace(dt, longest, 10)]))
     return DeadTimeModel(model, lag)

@@ -8,8 +8,8 @@ with eddy currents in a magnetostrictive core; loops widen and round off as
 with a full QP identification of Gamma on the lagged current per trial.  The compensator
 inverts the lag by the lead filter ``x = x_e + tau_e dx_e/dt`` (backward difference).
 
-Parameter key (besides Gamma's five keys): ``model.rate_dependence.time_constant``
-(``tau_e`` [s], >= 0).
+Parameter key (besides Gamma's ``model.*`` keys, operating point included):
+``model.rate_dependence.time_constant`` (``tau_e`` [s], >= 0).
 """
 
 from collections.abc import Callable, Mapping
@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, fit_gamma, lag_search_limits, scalar_parameter, search_fit
+from ._common import check_series, determined_start, fit_gamma, lag_search_limits, \
+    scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
 from ..model import MPIModel
 
@@ -151,7 +152,9 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     Identify Gamma and the input-lag time constant (1-D search, one QP per trial).
 
     The trial range is half a sample interval to the smaller of 200 intervals and 5 % of
-    the record, log-spaced; the objective is the relative RMS error on the given data.
+    the record, log-spaced; the objective is the RMS error on the samples determined for every
+    trial (after the raw current's burn-in and three of the longest trial lags), with
+    :func:`mpi_ros.identification.identify`'s design (operating point, sign, constant term).
 
     Parameters
     ----------
@@ -174,10 +177,13 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     """
     t, x, y = check_series(time, current, displacement)
     dt, longest = lag_search_limits(t)
+    # Every trial (and the lag-free fit) is scored on the same determined samples: after
+    # the raw current's burn-in and three of the longest trial time constants.
+    start = determined_start(t, x, y, order, settle=3.0 * longest)
     tau, model, error = search_fit(
-        lambda v: fit_gamma(first_order_lag(t, x, v), y, order, epsilon),
+        lambda v: fit_gamma(first_order_lag(t, x, v), y, order, epsilon, start=start),
         np.geomspace(0.5 * dt, longest, 10))
-    base, base_error = fit_gamma(x, y, order, epsilon)
+    base, base_error = fit_gamma(x, y, order, epsilon, start=start)
     if base_error <= error:
         return RateDependentModel(base, 0.0)
     return RateDependentModel(model, tau)

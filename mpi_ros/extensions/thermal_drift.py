@@ -2,8 +2,9 @@
 """
 Thermal-drift extension: a drift driven by a thermal state that integrates I^2.
 
-``s = S[H[x] + w_T T]`` with ``tau_T dT/dt = x^2 - T`` (Joule heating of the coil; ``T`` in
-A^2 starts in steady state at the first sample, ``x_0^2``).  The drift enters before the
+``s = y0 + sign S[H[x - x0] + w_T T]`` with ``tau_T dT/dt = x^2 - T`` (Joule heating of the
+coil, from the absolute current, not the one relative to the operating point ``x0``; ``T``
+in A^2 starts in steady state at the first sample, ``x(t_0)^2``).  The drift enters before the
 superposition operator S, in H's output unit (A), so that ``w_H``, ``w'_S`` and ``w_T``
 (any sign) are found together in one convex QP (34)-(36) for each trial ``tau_T``: ``T``
 is one more column of the generalised error (33).  Near an operating point the output
@@ -13,7 +14,7 @@ and the alternation stalls far from the joint optimum.  ``tau_T`` is found by a 
 over slow time constants (a twentieth of the record to five records).  With the thermal
 state fixed, the step map is Gamma shifted inside, so (8)/(19) and the inverse still hold.
 
-Parameter keys (besides Gamma's five keys): ``model.thermal_drift.time_constant``
+Parameter keys (besides Gamma's ``model.*`` keys): ``model.thermal_drift.time_constant``
 (``tau_T`` [s], > 0) and ``model.thermal_drift.weight`` (``w_T`` [1/A], any sign).
 """
 
@@ -42,7 +43,7 @@ THERMAL_WEIGHT = 'model.thermal_drift.weight'
 @dataclass(frozen=True, eq=False)
 class ThermalDriftModel:
     """
-    MPI model with a thermal drift: ``s = S[H[x] + w_T L_tau_T[x^2]]``.
+    MPI model with a thermal drift: ``s = y0 + sign S[H[x - x0] + w_T L_tau_T[x^2]]``.
 
     Parameters
     ----------
@@ -179,7 +180,10 @@ def _fit_at(t: FloatArray, x: FloatArray, y: FloatArray, n: int, l: int,  # noqa
         extra_lower=np.array([-np.inf]))
     model = ThermalDriftModel(design.model(w_h, w_s_inv, constant), tau,
                               float(w_t[0]) / design.x_scale)
-    error = float(np.mean((model.simulate(t, x) - y) ** 2))
+    # Scored like the fit, after the burn-in (the same samples for every trial: the
+    # design depends on the current and the displacement only).
+    keep = slice(design.burn_in, None)
+    error = float(np.mean((model.simulate(t, x)[keep] - y[keep]) ** 2))
     return model, error
 
 
