@@ -26,9 +26,10 @@ Real records (documented in docs/design.md, "Identification on real records"):
   straight-line fit), and (29)-(31) place S' thresholds on both sides.  A constant term
   ``c`` in the generalised error, ``E = w_H^T H[x - x0] - w'_S^T S'[v] + c``, keeps the
   QP convex (it is eliminated exactly: the columns' covariance replaces their Gram
-  matrix, and ``c = -mean(columns) . w``); since ``H[u] + c = H[u + c / sum w_H]`` once the plays' states are set by
-  the data, it is an exact shift of the input offset.  The result is invariant to a
-  constant added to the displacement or the current and to the output's sign.
+  matrix, and ``c = -mean(columns) . w``); since ``H[u] + c = H[u + c / sum w_H]`` once
+  the plays' states are set by the data, it is an exact shift of the input offset.  The
+  result is invariant to a constant added to the displacement or the current and to the
+  output's sign.
   ``anchor='origin'`` is the paper's design as printed (for data that start at rest at
   the origin).
 - **Unknown start state.** The plays start at the centre (``z = 0``), which is almost
@@ -37,7 +38,13 @@ Real records (documented in docs/design.md, "Identification on real records"):
   range of ``2 r``, and so does the actuator (any hysteresis with that property) once
   the input has visited both extremes of the record; the generalised error is
   therefore minimised only over the samples after the input first covered its range
-  (99 %): the fit uses only what the data determine, not the initial loading curve.  The returned model's initial states are the centre (0).
+  (99 %): the fit uses only what the data determine, not the initial loading curve.
+  The returned model's initial states are the centre (0).
+- **Refusals.** A record whose output is not monotone in the input (correlation below
+  0.3, or, anywhere in the record, burn-in included, a move against the input within one
+  sweep of more than 15 % of the output range beyond the noise: butterfly loops), too
+  little excitation for the order, or a fit no better than a straight line on the same
+  samples or absurd is refused with :class:`IdentificationError`.
 - The data are scaled internally; all thresholds follow the data, so results do not
   depend on units.
 - A branch of S' the output never reaches (the output stays on one side of
@@ -55,6 +62,7 @@ import math
 import time
 from typing import Any, Callable
 
+import numba
 import numpy as np
 import numpy.typing as npt
 import osqp
@@ -89,6 +97,15 @@ ANCHORS = ('operating_point', 'origin')
 #: Below this |correlation| between input and output the output is not monotone in the
 #: input (e.g. a ferroelectric butterfly loop, a wrong column): refused.
 _MIN_CORRELATION = 0.3
+
+#: Largest excursion of the output against the input's direction within one monotone
+#: sweep of the input (beyond 4 noise standard deviations), as a fraction of the output
+#: range.  Hysteresis loops (also with creep, dead time, rate dependence) stay below 0.1;
+#: butterfly loops (ferroelectric switching) reach 0.2-0.9.
+_MAX_COUNTER_MOVE = 0.15
+
+#: A turning point of the input: it retreats by this fraction of its range.
+_TURN_FRACTION = 0.05
 
 #: A play whose standard deviation after the burn-in is below this fraction of the first
 #: play's is idle: its weight is fixed at 0.
@@ -233,7 +250,7 @@ def _check_signals(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple
 def _check_monotone(x: FloatArray, y: FloatArray) -> None:
     if np.ptp(x) <= 1e-9 * np.max(np.abs(x)) or not np.ptp(y) > 0.0:
         return                                   # _check_excitation says what is wrong
-    _, correlation = output_sign(x, y)
+    sign, correlation = output_sign(x, y)
     if abs(correlation) < _MIN_CORRELATION:
         msg = (f'the output is not monotone in the input (correlation {correlation:.2f}):'
                ' the MPI model needs a displacement that rises (or falls) with the input'
@@ -241,6 +258,72 @@ def _check_monotone(x: FloatArray, y: FloatArray) -> None:
                ' for a butterfly loop (ferroelectric switching), lower the amplitude below'
                ' the coercive field')
         raise IdentificationError(msg)
+    # The whole record, burn-in included: a butterfly whose determined part happens to be
+    # monotone must not pass.  Noise (robust estimate from second differences) is allowed.
+    span = float(np.ptp(y))
+    move, first, last = _counter_move(x, sign * y, _TURN_FRACTION * float(np.ptp(x)))
+    excess = (move - 4.0 * _noise_std(y)) / span
+    if excess > _MAX_COUNTER_MOVE:
+        msg = (f'the output is not monotone in the input: within one sweep of the input'
+               f' (samples {first} to {last}) it moves against the input by'
+               f' {100 * move / span:.3g} % of its range (a hysteresis loop: at most'
+               f' {100 * _MAX_COUNTER_MOVE:.3g} % beyond the noise);'
+               ' this is a butterfly loop (ferroelectric switching: lower the amplitude below'
+               ' the coercive field) or a record dominated by drift or switching transients;'
+               ' the MPI model cannot represent it')
+        raise IdentificationError(msg)
+
+
+def _noise_std(y: FloatArray) -> float:
+    # Robust noise estimate: MAD of the second differences (std of white noise * sqrt 6).
+    if y.size < 3:
+        return 0.0
+    d2 = np.diff(y, 2)
+    return 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+
+
+@numba.njit(cache=True, nogil=True)
+def _counter_move(x, v, tolerance):  # pragma: no cover - compiled
+    # Largest fall of v from its running maximum within one monotone sweep of x (v is the
+    # output times its sign, so it should rise with x); the sweep's direction flips v.
+    # A turning point is the extreme of x before x retreats from it by `tolerance`.
+    n = x.shape[0]
+    turns = np.empty(n + 1, dtype=np.int64)
+    count = 1
+    turns[0] = 0
+    direction = 0
+    extreme = 0
+    for k in range(1, n):
+        if direction == 0:
+            if abs(x[k] - x[0]) > tolerance:
+                direction = 1 if x[k] > x[0] else -1
+                extreme = k
+            continue
+        if direction * (x[k] - x[extreme]) > 0.0:
+            extreme = k
+        elif direction * (x[extreme] - x[k]) > tolerance:
+            turns[count] = extreme
+            count += 1
+            direction = -direction
+            extreme = k
+    turns[count] = n - 1
+    count += 1
+    worst = 0.0
+    first = 0
+    last = 0
+    for b in range(count - 1):
+        a, e = turns[b], turns[b + 1]
+        s = 1.0 if x[e] >= x[a] else -1.0
+        peak = s * v[a]
+        for k in range(a, e + 1):
+            value = s * v[k]
+            if value > peak:
+                peak = value
+            elif peak - value > worst:
+                worst = peak - value
+                first = a
+                last = e
+    return worst, first, last
 
 
 def _check_excitation(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
