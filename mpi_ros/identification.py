@@ -109,7 +109,7 @@ _TURN_FRACTION = 0.05
 
 #: A play whose standard deviation after the burn-in is below this fraction of the first
 #: play's is idle: its weight is fixed at 0.
-_IDLE_PLAY = 0.01
+_IDLE_PLAY = 0.05
 
 #: The burn-in lasts until the input covered this fraction of its range (2 = full range).
 _FULL_SWEEP = 2.0 * 0.99
@@ -932,8 +932,8 @@ def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,
     when ``patience`` successive orders fail to improve the best error by more than the
     tolerance: the error has saturated.  The tolerance is the larger
     of ``tolerance`` (relative) and ``absolute_tolerance`` (fraction of the output
-    range: differences below it are noise).  The chosen order is the smallest whose
-    held-out error is within the tolerance of the best.
+    range: differences below it are noise) for the stop.  The chosen order is the
+    smallest whose held-out error is within ``tolerance`` (relative) of the best.
 
     Parameters
     ----------
@@ -1000,8 +1000,10 @@ def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,
     if not table:
         msg = 'no order could be evaluated: the record is too short for a held-out part'
         raise IdentificationError(msg)
-    margin = max(tolerance * best, absolute_tolerance)
-    chosen = next(r for r in table if r['nonlinearity_error'] <= best + margin)
+    # The choice is relative only: with a noisy output the held-out errors of the good
+    # orders are all near the noise's peak, and an absolute margin would pick an order
+    # whose error is well above the best one's.
+    chosen = next(r for r in table if r['nonlinearity_error'] <= best * (1.0 + tolerance))
     return (chosen['n'], chosen['l']), table
 
 
