@@ -26,7 +26,7 @@ SAME_ERROR = 0.02
 LOWEST, HIGHEST = 0.2, 1.8
 RANGE_M = 3.4e-5       # about the displacement range of the default actuator on that range
 
-ZEROED = dict(sensor_zero_current_a=LOWEST, sensor_zero_peak_current_a=HIGHEST)
+ZEROED = {'sensor_zero_current_a': LOWEST, 'sensor_zero_peak_current_a': HIGHEST}
 
 #: Three plants: the default shape and two others (narrower/wider loops, other static map).
 PLANTS = (
