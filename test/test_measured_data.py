@@ -102,3 +102,14 @@ def test_800v_repeats_after_switching_never_give_a_model_worse_than_the_line(tab
     else:
         assert table in ('09', '10')
         assert result.rms_error < result.linear_rms_error
+
+
+def test_sma_reversal_curves_auto_order_never_worse_than_the_line():
+    # input_data: the held-out peak error picks (0, 0), whose fit is worse than the line:
+    # refused, while (14, 7) is better than the line (the descending reversal curves are
+    # not congruent, which a PI model cannot follow: 14 % vs 20 % RMS).
+    current, displacement = _sma('input_data')
+    with pytest.raises(IdentificationError, match='order auto chose n=0, l=0'):
+        identify(current, displacement, order='auto')
+    result = identify(current, displacement, n=14, l=7)
+    assert result.rms_error < result.linear_rms_error
