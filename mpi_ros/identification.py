@@ -114,6 +114,9 @@ _IDLE_PLAY = 0.05
 #: The burn-in lasts until the input covered this fraction of its range (2 = full range).
 _FULL_SWEEP = 2.0 * 0.99
 
+#: After the burn-in the input must rise and fall over this fraction of its range.
+_MIN_LOOP_SWEEP = 0.25
+
 #: At least this fraction of the record must remain after the burn-in.
 _MIN_DETERMINED_FRACTION = 0.2
 
@@ -372,6 +375,30 @@ def _check_excitation(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: 
                    ' leaving too little data to fit; record more cycles over the full'
                    ' range')
             raise IdentificationError(msg)
+        rise, fall = _largest_sweeps(x[start:])
+        span = float(np.ptp(x))
+        if min(rise, fall) < _MIN_LOOP_SWEEP * span:
+            msg = (f'after the burn-in (samples {start} to {x.size}, where the states of the'
+                   ' plays and of the actuator are known) the input sweeps at most'
+                   f' {100 * rise / span:.3g} % of its range upwards and'
+                   f' {100 * fall / span:.3g} % downwards: the loops (both branches) are not'
+                   ' determined and a model fitted there is arbitrary elsewhere; record'
+                   ' at least two full cycles over the range (a single cycle from an'
+                   ' unknown state is not enough)')
+            raise IdentificationError(msg)
+
+
+def _largest_sweeps(x: FloatArray) -> tuple[float, float]:
+    # Largest monotone rise and fall between successive turning points of x.
+    step = np.diff(x)
+    step = step[step != 0.0]
+    if step.size == 0:
+        return 0.0, 0.0
+    turns = np.flatnonzero(np.sign(step[1:]) != np.sign(step[:-1])) + 1
+    levels = np.concatenate([[0.0], np.cumsum(step)])[np.concatenate([[0], turns,
+                                                                       [step.size]])]
+    moves = np.diff(levels)
+    return float(max(np.max(moves), 0.0)), float(max(-np.min(moves), 0.0))
 
 
 def _largest_reversal(x: FloatArray) -> float:
