@@ -211,7 +211,8 @@ def plot(records, path):
         sim = result.model.simulate(x)
         k = result.burn_in
         ax.plot(x, y, color='0.6', lw=1, label='measured')
-        ax.plot(x[k:], sim[k:], 'r-', lw=1, label=f'MPI (14, 7), RMS {100 * result.rms_error:.1f} %')
+        ax.plot(x[k:], sim[k:], 'r-', lw=1,
+                label=f'MPI (14, 7), RMS {100 * result.rms_error:.1f} %')
         ax.set_title(f'{name}: reversal curves (line {100 * result.linear_rms_error:.1f} %)',
                      fontsize=9)
         ax.set_xlabel('input (units not stated)')

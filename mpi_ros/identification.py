@@ -395,8 +395,8 @@ def _largest_sweeps(x: FloatArray) -> tuple[float, float]:
     if step.size == 0:
         return 0.0, 0.0
     turns = np.flatnonzero(np.sign(step[1:]) != np.sign(step[:-1])) + 1
-    levels = np.concatenate([[0.0], np.cumsum(step)])[np.concatenate([[0], turns,
-                                                                       [step.size]])]
+    ends = np.concatenate([[0], turns, [step.size]])
+    levels = np.concatenate([[0.0], np.cumsum(step)])[ends]
     moves = np.diff(levels)
     return float(max(np.max(moves), 0.0)), float(max(-np.min(moves), 0.0))
 
