@@ -13,10 +13,17 @@ model on its data is a fair test.  The coil current ``i`` [A] drives
 3. a magnetization-like state ``y = (1 - r) P + r i_e / i_r`` (``r`` reversible fraction);
 4. a strictly increasing, non-convex, asymmetric static map (magnetostriction with
    saturation) ``s_h = s_max g(y)``;
-5. optional slow effects (creep, thermal drift), a dead time and sensor noise.
+5. optional slow effects (creep, thermal drift), a dead time and sensor noise;
+6. a sensor zero: the reading is ``s - s_0 + sensor_offset_m``, where ``s_0`` is the
+   displacement where the sensor was zeroed (0 at rest by default, see below).
 
 At 0 A the actuator is at rest with displacement 0: every relay is 'down' and the
 current history starts at 0 A.  The paper's operating range is 1 A +- 0.8 A (section 5).
+A rig's sensor is zeroed in operation instead: with ``sensor_zero_peak_current_a=1.8`` and
+``sensor_zero_current_a=0.2`` the sensor was zeroed after the current went from rest up to
+1.8 A and back down to 0.2 A, so the actuator reads 0 m at the lowest current of that range
+on its major loop (by the wiping-out property, every later return from a 1.8 A peak to
+0.2 A reads 0 again); ``sensor_offset_m`` shifts the zero further.
 
 Notes
 -----
@@ -120,6 +127,15 @@ class ActuatorConfig:
         ``L >= 0`` [s]: pure delay between current and measured displacement.
     noise_std_m : float
         Standard deviation [m] of additive Gaussian sensor noise.  0 switches it off.
+    sensor_zero_current_a : float
+        Current [A] at which the sensor was zeroed: the reading is shifted by minus the
+        rate-independent displacement after the current went from rest (0 A) to
+        ``sensor_zero_peak_current_a`` and then to this current.  With both 0 (the
+        default) the sensor reads 0 m at rest.
+    sensor_zero_peak_current_a : float
+        Peak current [A] visited before zeroing (a conditioning half cycle); 0 for none.
+    sensor_offset_m : float
+        Further constant added to every reading [m] (a shifted sensor zero).
 
     Notes
     -----
@@ -189,6 +205,13 @@ class ActuatorConfig:
         default=0.0, metadata=_describe('dead time of the measurement, 0 = off [s]'))
     noise_std_m: float = field(
         default=0.0, metadata=_describe('sensor noise standard deviation, 0 = off [m]'))
+    sensor_zero_current_a: float = field(
+        default=0.0, metadata=_describe('current where the sensor was zeroed [A]'))
+    sensor_zero_peak_current_a: float = field(
+        default=0.0, metadata=_describe('peak current visited from rest before zeroing,'
+                                        ' 0 = none [A]'))
+    sensor_offset_m: float = field(
+        default=0.0, metadata=_describe('constant added to every reading [m]'))
 
     def __post_init__(self) -> None:
         """Check every field; raise ModelError naming the first bad one."""
@@ -347,6 +370,7 @@ class MagnetostrictiveActuator:
         self._creep_taus = np.geomspace(cfg.creep_time_constant_min_s,
                                         cfg.creep_time_constant_max_s, cfg.creep_lag_count)
         self._map_norm = 1.0 - math.exp(-1.0 / cfg.map_knee ** 2)
+        self._sensor_shift = cfg.sensor_offset_m - self._zeroed_displacement()
         self._state = self._initial_state()
 
     @property
@@ -459,6 +483,22 @@ class MagnetostrictiveActuator:
         g = cfg.map_linear_fraction * y + (1 - cfg.map_linear_fraction) * h / self._map_norm
         return cfg.displacement_scale_m * g
 
+    def _zeroed_displacement(self) -> float:
+        # Rate-independent displacement where the sensor was zeroed: from rest (0 A) to the
+        # peak current, then to the zero current.
+        cfg = self._config
+        if cfg.sensor_zero_current_a == 0.0 and cfg.sensor_zero_peak_current_a == 0.0:
+            return 0.0
+        state = self._initial_state()
+        path = np.array([0.0, cfg.sensor_zero_peak_current_a, cfg.sensor_zero_current_a])
+        return float(_kernel(np.arange(3.0), path, self._table,
+                             self._grid_lo, self._grid_step, cfg.reversible_fraction,
+                             cfg.reversible_current_scale_a, cfg.map_linear_fraction,
+                             cfg.map_knee, self._map_norm, cfg.displacement_scale_m, 0.0, 0.0,
+                             self._creep_taus, 0.0, cfg.thermal_time_constant_s,
+                             state['scalars'], state['maxima'], state['minima'],
+                             state['creep'])[-1])
+
     def _initial_state(self) -> dict[str, Any]:
         scalars = np.zeros(_N_SCALARS)
         scalars[_COUNT] = 1.0  # one rising extremum pair (0 A, 0 A): all relays down
@@ -482,6 +522,8 @@ class MagnetostrictiveActuator:
                       state['scalars'], state['maxima'], state['minima'], state['creep'])
         if cfg.dead_time_s > 0:
             out = _delay(state, t, out, cfg.dead_time_s)
+        if self._sensor_shift != 0.0:
+            out = out + self._sensor_shift
         if cfg.noise_std_m > 0:
             out = out + cfg.noise_std_m * state['rng'].standard_normal(out.shape[0])
         return out
