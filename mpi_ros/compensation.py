@@ -404,6 +404,11 @@ class Compensator:
         self.version += 1
 
     @property
+    def has_effect(self) -> bool:
+        """Tell whether an effect's per-step inverse is in use (its lags need times)."""
+        return self._step is not None
+
+    @property
     def kind(self) -> str:
         """Name the installed model's effect: ``none``, a cause, or ``... (not compensated)``."""
         return kind_of(self.model)

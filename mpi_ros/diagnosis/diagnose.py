@@ -62,7 +62,7 @@ from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .signatures import burst_signature, hold_segments, hold_signature
 from ..errors import DataError, IdentificationError
-from ..extensions import fit_creep, fit_dead_time, fit_rate_dependence, fit_thermal_drift
+from ..extensions import EFFECTS
 from ..extensions._signals import first_order_lag
 from ..identification import identify, output_sign, scaled_design
 from ..metrics import range_error, rms_range_error
@@ -72,12 +72,9 @@ __all__ = ['DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Causes in the catalogue, then the two other verdicts.
-CAUSES = ('creep', 'rate_dependence', 'thermal_drift', 'dead_time')
-
-_FITTERS: dict[str, Callable[..., Any]] = {
-    'creep': fit_creep, 'rate_dependence': fit_rate_dependence,
-    'thermal_drift': fit_thermal_drift, 'dead_time': fit_dead_time}
+#: The built-in causes (the catalogue is the registry :data:`mpi_ros.extensions.EFFECTS`,
+#: which may hold more).
+CAUSES = tuple(EFFECTS)
 
 
 @dataclass
@@ -170,7 +167,7 @@ def noise_floor(displacement: npt.ArrayLike) -> float:
 
 
 def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
-             order: str | tuple[int, int] = 'auto', causes: tuple[str, ...] = CAUSES,
+             order: str | tuple[int, int] = 'auto', causes: tuple[str, ...] | None = None,
              min_gain: float = 0.05, z_critical: float = 1.645, alpha: float = 0.05,
              bandwidth: int | None = None, noise_factor: float = 1.2,
              progress: Callable[[str], None] | None = None
@@ -189,14 +186,15 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         Fraction of the record used for training when no validation is given, in (0, 1).
     order : 'auto' or (int, int)
         Model order of Gamma (``'auto'``: the order selection of :func:`identify`).
-    causes : tuple of str
-        Candidates to try (default: the whole catalogue).
+    causes : tuple of str, optional
+        Candidates to try (default: every registered effect, :data:`mpi_ros.extensions.EFFECTS`).
     min_gain : float
         Smallest validation gain that counts.
     z_critical : float
         Critical value of the Diebold-Mariano statistic (one-sided; 1.645 is p = 0.05).
     alpha : float
-        Family-wise level of the four signature tests (each runs at ``alpha / 4``).
+        Family-wise level of the signature tests (each runs at ``alpha`` over the number
+        of registered effects: ``alpha / 4`` for the built-in four).
     bandwidth : int, optional
         HAC bandwidth [samples] of the Diebold-Mariano test; by default chosen from the
         autocorrelation of the loss difference (Andrews' AR(1) plug-in).
@@ -220,9 +218,11 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
 
     """
     say = progress or (lambda line: None)
-    unknown = [c for c in causes if c not in CAUSES]
+    catalogue = tuple(EFFECTS)
+    causes = catalogue if causes is None else tuple(causes)
+    unknown = [c for c in causes if c not in catalogue]
     if unknown:
-        msg = f'unknown cause(s) {unknown}; the catalogue is {", ".join(CAUSES)}'
+        msg = f'unknown cause(s) {unknown}; the catalogue is {", ".join(catalogue)}'
         raise DataError(msg)
     t, x, y = _arrays(recording, 'recording')
     if validation is None:
@@ -324,7 +324,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     sims = {}
     for cause in causes:
         say(f'fitting candidate {cause}')
-        model = _FITTERS[cause](tt, xt, yt, order=(n, l))
+        model = EFFECTS[cause].fit(tt, xt, yt, order=(n, l))
         sim = model.simulate(tv, xv)
         shift = _zero_shift(sim[val], yv[val], reestimate)
         sim = sim + shift
@@ -340,17 +340,18 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         train = rms_range_error(model.simulate(tt, xt)[determined], yt[determined])
         candidates.append({'cause': cause, **errs, 'gain': gain, 'z': z, 'bandwidth': lags,
                            'training_rms_error': train, 'validation_output_offset': shift,
-                           'parameter_count': _PARAMETER_COUNT[cause](params),
+                           'parameter_count': EFFECTS[cause].parameter_count(params),
                            'parameters': params, 'model': model})
         say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
             f' z {z:.1f}')
     excess = math.sqrt(float(np.mean(r0 ** 2))) > noise_factor * sigma
-    verdicts = _signature_verdicts(residual, alpha / len(CAUSES))
+    level = alpha / len(catalogue)               # Bonferroni over the catalogue
+    verdicts = {cause: EFFECTS[cause].signature(residual, level) for cause in causes}
     for c in candidates:
         c['signature'] = verdicts[c['cause']]
         c['significant'] = bool(excess and c['gain'] >= min_gain and c['z'] >= z_critical)
     decision = {'min_gain': min_gain, 'z_critical': z_critical, 'alpha': alpha,
-                'signature_level': alpha / len(CAUSES), 'bandwidth': bandwidth,
+                'signature_level': level, 'bandwidth': bandwidth,
                 'noise_factor': noise_factor, 'noise_floor': sigma,
                 'baseline_above_noise': bool(excess), 'steps': []}
     chosen = _decide(candidates, excess, decision['steps'])
@@ -423,12 +424,6 @@ def _class_check(xt: FloatArray, yt: FloatArray, xv: FloatArray, yv: FloatArray,
     return max(checks, key=lambda c: c.reversal_ratio)
 
 
-#: Free parameters of each extension (creep time constants are fixed by the record).
-_PARAMETER_COUNT: dict[str, Callable[[dict[str, Any]], int]] = {
-    'creep': lambda p: len(p['model.creep.weights']),
-    'rate_dependence': lambda p: 1, 'thermal_drift': lambda p: 2, 'dead_time': lambda p: 1}
-
-
 def _dm_statistic(r_a: FloatArray, r_b: FloatArray,
                   bandwidth: int | None) -> tuple[float, int]:
     """Diebold-Mariano z of ``mean(r_a^2 - r_b^2) > 0`` with a Newey-West variance."""
@@ -448,25 +443,6 @@ def _dm_statistic(r_a: FloatArray, r_b: FloatArray,
     for k in range(1, lags + 1):
         variance += 2.0 * (1.0 - k / (lags + 1.0)) * float(np.dot(e[k:], e[:-k])) / n
     return float(d.mean() / math.sqrt(max(variance, 1e-300) / n)), lags
-
-
-def _signature_verdicts(residual: dict[str, Any], level: float) -> dict[str, str]:
-    holds, bursts = residual['hold_signature'], residual['burst_signature']
-    out = {}
-    if holds is None:
-        out['creep'] = out['thermal_drift'] = 'unavailable'
-    else:
-        creep = holds['log_p'] < level
-        out['creep'] = 'present' if creep else 'absent'
-        out['thermal_drift'] = ('present' if holds['drift_p'] < level and not creep
-                                else 'absent')
-    if bursts is None:
-        out['rate_dependence'] = out['dead_time'] = 'unavailable'
-    else:
-        fast = bursts['p'] < level
-        out['rate_dependence'] = 'present' if fast and bursts['law'] == 'lag' else 'absent'
-        out['dead_time'] = 'present' if fast and bursts['law'] == 'delay' else 'absent'
-    return out
 
 
 def _decide(candidates: list[dict[str, Any]], excess: bool,
@@ -545,24 +521,8 @@ def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, A
     if cause == 'none':
         return f'{base}; no extension reduces it significantly ({listing}).'
     c = next(c for c in candidates if c['cause'] == cause)
-    holds, bursts = residual['hold_signature'], residual['burst_signature']
-    if cause in ('creep', 'thermal_drift') and holds is not None:
-        detail = (f'during {holds["holds"]} input holds the residual has a log(t) component'
-                  f' of {holds["log_amplitude"]:.3g} m RMS (chi2 p = {holds["log_p"]:.2g})'
-                  f' and drifts by {holds["drift_amplitude"]:.3g} m RMS (p ='
-                  f' {holds["drift_p"]:.2g})')
-        if cause == 'thermal_drift':
-            detail += ': a smooth drift without the log(t) shape of creep'
-    elif cause in ('rate_dependence', 'dead_time') and bursts is not None:
-        freqs = bursts['frequencies']
-        detail = (f'over bursts at {freqs[0]:.3g}-{freqs[-1]:.3g} Hz the phase of the'
-                  f' measured/simulated response follows the '
-                  + (f'lag law atan(w tau) with tau = {1e3 * bursts["lag_time_constant"]:.2f}'
-                     ' ms' if cause == 'rate_dependence' else
-                     f'delay law w L with L = {1e3 * bursts["delay"]:.2f} ms')
-                  + f' (residual {min(bursts["lag_sse"], bursts["delay_sse"]):.2g} against'
-                  f' {max(bursts["lag_sse"], bursts["delay_sse"]):.2g} for the other law)')
-    else:
+    detail = EFFECTS[cause].evidence(residual) if cause in EFFECTS else None
+    if detail is None:
         detail = 'the record has no holds or bursts to check the physical signature'
     return (f'{base}; the {cause} extension cuts it by {100 * c["gain"]:.0f} % (z ='
             f' {c["z"]:.1f}; all: {listing}), and {detail}.')

@@ -14,10 +14,9 @@ import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 
 from .diagnose import DiagnosisReport
-from ..extensions._signals import first_order_lag
+from ..extensions import EFFECTS
 from ..params import write_params_yaml
 
 __all__ = ['write_report', 'write_json', 'write_extended_params']
@@ -100,8 +99,10 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str]) -> 
         ax.legend(fontsize=8)
         written.append(_save(fig, out / 'residual.png', plt))
         for cause, sim in s.get('candidates', {}).items():
-            written.append(_signature(cause, t, x, y, sims['baseline MPI'], sim, k0,
-                                      out / f'signature_{cause}.png', plt))
+            plot = _signature(cause, t, x, y, sims['baseline MPI'], sim, k0,
+                              out / f'signature_{cause}.png', plt)
+            if plot is not None:
+                written.append(plot)
     summary = out / 'summary.md'
     summary.write_text(_markdown(report, [p.name for p in written]), encoding='utf-8')
     written.append(summary)
@@ -116,46 +117,13 @@ def _save(fig: Any, path: Path, plt: Any) -> Path:
 
 
 def _signature(cause: str, t: Any, x: Any, y: Any, base: Any, sim: Any, k0: int,
-               path: Path, plt: Any) -> Path:
-    val = slice(k0, None)
-    r0, rc = (y - base)[val], (y - sim)[val]
-    tv, xv = t[val], x[val]
+               path: Path, plt: Any) -> Path | None:
+    # Each effect draws its own signature plot (mpi_ros.extensions.effect.Effect.plot).
+    effect = EFFECTS.get(cause)
+    if effect is None or effect.plot is None:
+        return None
     fig, ax = plt.subplots(figsize=(6, 4))
-    if cause == 'creep':
-        ax2 = ax.twinx()
-        ax2.plot(tv, xv, color='0.7', lw=0.6)
-        ax2.set_ylabel('input [A]', color='0.5')
-        ax.plot(tv, r0, lw=0.6, label='baseline residual')
-        ax.plot(tv, rc, lw=0.6, label='creep model residual')
-        ax.set_xlabel('time [s]')
-        ax.set_ylabel('residual [m]')
-        ax.set_title('creep: residual keeps moving while the input holds')
-    elif cause == 'rate_dependence':
-        rate = np.gradient(xv, tv)
-        ax.plot(rate, r0, '.', ms=1, label='baseline residual')
-        ax.plot(rate, rc, '.', ms=1, label='rate model residual')
-        ax.set_xlabel('input rate [A/s]')
-        ax.set_ylabel('residual [m]')
-        ax.set_title('rate dependence: residual vs input rate')
-    elif cause == 'thermal_drift':
-        power = first_order_lag(t, x * x, float(t[-1] - t[0]) / 3.0)[val]
-        ax.plot(power, r0, '.', ms=1, label='baseline residual')
-        ax.plot(power, rc, '.', ms=1, label='thermal model residual')
-        ax.set_xlabel('lagged input power x^2 [A^2] (time constant = record / 3)')
-        ax.set_ylabel('residual [m]')
-        ax.set_title('thermal drift: residual vs heating')
-    else:
-        dt = float(np.median(np.diff(tv)))
-        dy, ds = np.gradient(y[val], tv), np.gradient(base[val], tv)
-        m = max(int(0.1 / dt), 2)
-        lags = np.arange(-m, m + 1)
-        xc = [np.corrcoef(dy[max(0, k):dy.size + min(0, k)],
-                          ds[max(0, -k):ds.size - max(0, k)])[0, 1] for k in lags]
-        ax.plot(lags * dt * 1e3, xc, label='corr(measured rate, simulated rate)')
-        ax.axvline(0.0, color='0.6', lw=0.6)
-        ax.set_xlabel('shift of the measured output [ms]')
-        ax.set_ylabel('correlation')
-        ax.set_title('dead time: lag of the best match')
+    effect.plot(ax, t, x, y, base, sim, k0)
     ax.legend(fontsize=8, markerscale=6)
     return _save(fig, path, plt)
 

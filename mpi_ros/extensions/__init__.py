@@ -17,22 +17,26 @@ in ``simulate`` and in its parameter form.  The fits use
 :func:`mpi_ros.identification.identify`'s design (operating point, detected sign, constant
 term, burn-in), so an extension is fitted on the same samples as the plain model.
 
-Every model has ``simulate(time, current)``, ``to_params()``, ``from_params(mapping)`` and a
-``cause`` name; :func:`extended_model_from_params` picks the class from the keys present.
-:class:`ExtendedCompensator` inverts creep, rate dependence and thermal drift step by step;
-:func:`compensator_from_params` builds the right compensator from a parameter set.
+Every module owns everything about its effect and describes it by one
+:class:`~mpi_ros.extensions.effect.Effect` (parameter keys and "off" values, model class,
+fit, exact per-step inverse, diagnosis signature, evidence, report plot); they are found
+through one registry, :data:`EFFECTS`, filled below (one line per effect).  Every model has
+``simulate(time, current)``, ``to_params()``, ``from_params(mapping)`` and a ``cause``
+name; :func:`extended_model_from_params` picks the class from the keys present.
+:func:`compensator_from_params` builds the compensator for a parameter set.
 """
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
+from . import creep, dead_time, rate_dependence, thermal_drift
 from .compensation import compensator_from_params, ExtendedCompensator
-from .creep import CREEP_TIME_CONSTANTS, creep_time_constants, CREEP_WEIGHTS, CreepModel, \
-    fit_creep
-from .dead_time import DEAD_TIME, DeadTimeModel, fit_dead_time
-from .rate_dependence import fit_rate_dependence, RATE_TIME_CONSTANT, RateDependentModel
-from .thermal_drift import fit_thermal_drift, THERMAL_TIME_CONSTANT, THERMAL_WEIGHT, \
-    ThermalDriftModel
+from .creep import creep_time_constants, CreepModel, fit_creep
+from .dead_time import DeadTimeModel, fit_dead_time
+from .effect import Effect, EffectParameter, EFFECTS, effects_present, register_effect, \
+    unregister_effect
+from .rate_dependence import fit_rate_dependence, RateDependentModel
+from .thermal_drift import fit_thermal_drift, ThermalDriftModel
 from ..errors import ModelError
 from ..model import MPIModel
 
@@ -40,23 +44,36 @@ __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeMod
            'ExtendedModel', 'fit_creep', 'fit_rate_dependence',
            'fit_thermal_drift', 'fit_dead_time', 'creep_time_constants',
            'extended_model_from_params', 'EXTENSION_KEYS', 'ExtendedCompensator',
-           'compensator_from_params']
+           'compensator_from_params', 'Effect', 'EffectParameter', 'EFFECTS',
+           'register_effect', 'unregister_effect']
 
 ExtendedModel = CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
 
+# The registry of effects: one line per effect module.
+register_effect(creep.EFFECT)
+register_effect(rate_dependence.EFFECT)
+register_effect(thermal_drift.EFFECT)
+register_effect(dead_time.EFFECT)
+
+
+class _ExtensionKeys(Mapping[str, tuple[str, ...]]):
+    """Effect name -> its parameter keys, read from the registry (effects added later too)."""
+
+    def __getitem__(self, name: str) -> tuple[str, ...]:
+        return EFFECTS[name].keys
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(EFFECTS)
+
+    def __len__(self) -> int:
+        return len(EFFECTS)
+
+
 #: Parameter keys that mark each extension (used by :func:`extended_model_from_params`).
-EXTENSION_KEYS: dict[str, tuple[str, ...]] = {
-    'creep': (CREEP_TIME_CONSTANTS, CREEP_WEIGHTS),
-    'rate_dependence': (RATE_TIME_CONSTANT,),
-    'thermal_drift': (THERMAL_TIME_CONSTANT, THERMAL_WEIGHT),
-    'dead_time': (DEAD_TIME,),
-}
-
-_CLASSES: dict[str, Any] = {'creep': CreepModel, 'rate_dependence': RateDependentModel,
-                            'thermal_drift': ThermalDriftModel, 'dead_time': DeadTimeModel}
+EXTENSION_KEYS: Mapping[str, tuple[str, ...]] = _ExtensionKeys()
 
 
-def extended_model_from_params(mapping: Mapping[str, Any]) -> 'ExtendedModel | MPIModel':
+def extended_model_from_params(mapping: Mapping[str, Any]) -> Any:
     """
     Build the model a parameter set describes: Gamma alone or Gamma with one extension.
 
@@ -76,12 +93,12 @@ def extended_model_from_params(mapping: Mapping[str, Any]) -> 'ExtendedModel | M
         When keys of more than one extension are present, or a value is invalid.
 
     """
-    present = [cause for cause, keys in EXTENSION_KEYS.items()
-               if any(k in mapping for k in keys)]
+    present = effects_present(mapping)
     if len(present) > 1:
-        msg = (f'parameters hold keys of several model extensions ({", ".join(present)});'
+        names = ', '.join(effect.name for effect in present)
+        msg = (f'parameters hold keys of several model extensions ({names});'
                ' a model has at most one extension, keep the keys of one')
         raise ModelError(msg)
     if not present:
         return MPIModel.from_params(mapping)
-    return _CLASSES[present[0]].from_params(mapping)  # type: ignore[no-any-return]
+    return present[0].model_class.from_params(mapping)

@@ -236,3 +236,76 @@ def lag_search_limits(time: FloatArray) -> tuple[float, float]:
     """
     dt = float(np.median(np.diff(time)))
     return dt, max(min(200.0 * dt, 0.05 * float(time[-1] - time[0])), 2.0 * dt)
+
+
+def hold_evidence(residual: Mapping[str, Any]) -> str | None:
+    """
+    Describe the residual during input holds (creep and thermal drift evidence).
+
+    Parameters
+    ----------
+    residual : Mapping
+        The diagnosis' residual signatures (``hold_signature``).
+
+    Returns
+    -------
+    str or None
+        The sentence, or None when the record has no holds.
+
+    """
+    holds = residual.get('hold_signature')
+    if holds is None:
+        return None
+    return (f'during {holds["holds"]} input holds the residual has a log(t) component'
+            f' of {holds["log_amplitude"]:.3g} m RMS (chi2 p = {holds["log_p"]:.2g})'
+            f' and drifts by {holds["drift_amplitude"]:.3g} m RMS (p ='
+            f' {holds["drift_p"]:.2g})')
+
+
+def burst_evidence(residual: Mapping[str, Any], law: str) -> str | None:
+    """
+    Describe the phase of the response over bursts (rate dependence and dead time).
+
+    Parameters
+    ----------
+    residual : Mapping
+        The diagnosis' residual signatures (``burst_signature``).
+    law : {'lag', 'delay'}
+        The law the effect predicts.
+
+    Returns
+    -------
+    str or None
+        The sentence, or None when the record has no bursts.
+
+    """
+    bursts = residual.get('burst_signature')
+    if bursts is None:
+        return None
+    freqs = bursts['frequencies']
+    fitted = (f'lag law atan(w tau) with tau = {1e3 * bursts["lag_time_constant"]:.2f} ms'
+              if law == 'lag' else f'delay law w L with L = {1e3 * bursts["delay"]:.2f} ms')
+    return (f'over bursts at {freqs[0]:.3g}-{freqs[-1]:.3g} Hz the phase of the'
+            f' measured/simulated response follows the {fitted} (residual'
+            f' {min(bursts["lag_sse"], bursts["delay_sse"]):.2g} against'
+            f' {max(bursts["lag_sse"], bursts["delay_sse"]):.2g} for the other law)')
+
+
+def burst_verdict(residual: Mapping[str, Any], level: float, law: str) -> str:
+    """Return whether the bursts show a fast effect following ``law`` ('lag'/'delay')."""
+    bursts = residual.get('burst_signature')
+    if bursts is None:
+        return 'unavailable'
+    return 'present' if bursts['p'] < level and bursts['law'] == law else 'absent'
+
+
+def residual_axes(ax: Any, time: FloatArray, measured: FloatArray, baseline: FloatArray,
+                  extended: FloatArray, start: int, label: str,
+                  against: FloatArray | None = None) -> None:
+    """Plot the baseline's and an extension's residual (after ``start``) on ``ax``."""
+    val = slice(start, None)
+    abscissa = time[val] if against is None else against
+    style = {'lw': 0.6} if against is None else {'ls': '', 'marker': '.', 'ms': 1}
+    ax.plot(abscissa, (measured - baseline)[val], label='baseline residual', **style)
+    ax.plot(abscissa, (measured - extended)[val], label=f'{label} residual', **style)
+    ax.set_ylabel('residual [m]')

@@ -31,8 +31,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, vector_parameter
+from ._common import check_series, hold_evidence, residual_axes, vector_parameter
 from ._signals import lag_bank, lag_coefficients
+from .effect import Effect, EffectParameter
 from ..errors import ModelError
 from ..identification import identify_weights
 from ..model import MPIModel
@@ -264,3 +265,35 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     # The lags shift with the input like the plays: the constant moves x0 by c / (sum w).
     return CreepModel(design.model(w_h, w_s_inv, constant, shift_weight=float(np.sum(w_c))),
                       taus, w_c)
+
+
+def _signature(residual: Mapping[str, Any], level: float) -> str:
+    holds = residual.get('hold_signature')
+    if holds is None:
+        return 'unavailable'
+    return 'present' if holds['log_p'] < level else 'absent'
+
+
+def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
+          baseline: FloatArray, extended: FloatArray, start: int) -> None:
+    ax2 = ax.twinx()
+    ax2.plot(time[start:], current[start:], color='0.7', lw=0.6)
+    ax2.set_ylabel('input [A]', color='0.5')
+    residual_axes(ax, time, measured, baseline, extended, start, 'creep model')
+    ax.set_xlabel('time [s]')
+    ax.set_title('creep: residual keeps moving while the input holds')
+
+
+#: The creep effect, for the registry (:mod:`mpi_ros.extensions.effect`).
+EFFECT = Effect(
+    name='creep', formula='S[H[x - x0] + sum_j w_Cj C_j[x - x0]]',
+    parameters=(
+        EffectParameter(CREEP_TIME_CONSTANTS, 'double_array', (),
+                        'Creep extension: time constants tau_j of the creep lags, ascending,'
+                        ' > 0; empty: no creep', 's'),
+        EffectParameter(CREEP_WEIGHTS, 'double_array', (),
+                        'Creep extension: weights w_Cj >= 0 of the creep lags (H output per'
+                        ' input unit, like w_H), one per time constant; empty: no creep')),
+    model_class=CreepModel, fit=fit_creep,
+    parameter_count=lambda p: len(p[CREEP_WEIGHTS]),
+    signature=_signature, evidence=hold_evidence, plot=_plot)

@@ -19,9 +19,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, determined_start, fit_gamma, lag_search_limits, \
-    scalar_parameter, search_fit
+from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
+    fit_gamma, lag_search_limits, scalar_parameter, search_fit
 from ._signals import delay
+from .effect import Effect, EffectParameter
 from ..model import MPIModel
 
 __all__ = ['DeadTimeModel', 'fit_dead_time', 'DEAD_TIME']
@@ -124,3 +125,33 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
         lambda v: fit_gamma(delay(t, x, v), y, order, epsilon, start=start),
         np.concatenate([[0.0], np.geomspace(dt, longest, 10)]))
     return DeadTimeModel(model, lag)
+
+
+def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
+          baseline: FloatArray, extended: FloatArray, start: int) -> None:
+    tv = time[start:]
+    dt = float(np.median(np.diff(tv)))
+    dy, ds = np.gradient(measured[start:], tv), np.gradient(baseline[start:], tv)
+    m = max(int(0.1 / dt), 2)
+    lags = np.arange(-m, m + 1)
+    xc = [np.corrcoef(dy[max(0, k):dy.size + min(0, k)],
+                      ds[max(0, -k):ds.size - max(0, k)])[0, 1] for k in lags]
+    ax.plot(lags * dt * 1e3, xc, label='corr(measured rate, simulated rate)')
+    ax.axvline(0.0, color='0.6', lw=0.6)
+    ax.set_xlabel('shift of the measured output [ms]')
+    ax.set_ylabel('correlation')
+    ax.set_title('dead time: lag of the best match')
+
+
+#: The dead-time effect, for the registry (:mod:`mpi_ros.extensions.effect`).  It has no
+#: ``inverse_step``: a delay cannot be inverted causally.
+EFFECT = Effect(
+    name='dead_time', formula='Gamma[x](t - L)',
+    parameters=(
+        EffectParameter(DEAD_TIME, 'double', 0.0,
+                        'Dead-time extension: delay L between command and displacement (not'
+                        ' invertible: the compensator inverts Gamma only and warns); 0: no'
+                        ' delay', 's', (0.0, 1.0e3)),),
+    model_class=DeadTimeModel, fit=fit_dead_time, parameter_count=lambda p: 1,
+    signature=lambda residual, level: burst_verdict(residual, level, 'delay'),
+    evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot)

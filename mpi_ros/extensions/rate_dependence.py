@@ -19,9 +19,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, determined_start, fit_gamma, lag_search_limits, \
-    scalar_parameter, search_fit
+from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
+    fit_gamma, lag_search_limits, residual_axes, scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
+from .effect import Effect, EffectParameter
 from ..model import MPIModel
 
 __all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',
@@ -187,3 +188,24 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     if base_error <= error:
         return RateDependentModel(base, 0.0)
     return RateDependentModel(model, tau)
+
+
+def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
+          baseline: FloatArray, extended: FloatArray, start: int) -> None:
+    rate = np.gradient(current[start:], time[start:])
+    residual_axes(ax, time, measured, baseline, extended, start, 'rate model', against=rate)
+    ax.set_xlabel('input rate [A/s]')
+    ax.set_title('rate dependence: residual vs input rate')
+
+
+#: The rate-dependence effect, for the registry (:mod:`mpi_ros.extensions.effect`).
+EFFECT = Effect(
+    name='rate_dependence', formula='Gamma[L_tau_e[x]]',
+    parameters=(
+        EffectParameter(RATE_TIME_CONSTANT, 'double', 0.0,
+                        'Rate-dependence extension: time constant tau_e of the input'
+                        ' (eddy-current) lag; 0: no lag', 's', (0.0, 1.0e3)),),
+    model_class=RateDependentModel, fit=fit_rate_dependence,
+    parameter_count=lambda p: 1,
+    signature=lambda residual, level: burst_verdict(residual, level, 'lag'),
+    evidence=lambda residual: burst_evidence(residual, 'lag'), plot=_plot)

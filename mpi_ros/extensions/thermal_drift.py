@@ -26,8 +26,10 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, scalar_parameter, search_fit
+from ._common import check_series, hold_evidence, residual_axes, scalar_parameter, \
+    search_fit
 from ._signals import first_order_lag, lag_coefficients
+from .effect import Effect, EffectParameter
 from ..identification import identify_weights
 from ..model import MPIModel
 
@@ -218,3 +220,42 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
     _, model, _ = search_fit(lambda v: _fit_at(t, x, y, n, l, v, epsilon),
                              np.geomspace(duration / 20.0, 5.0 * duration, 5), refine=4)
     return model
+
+
+def _signature(residual: Mapping[str, Any], level: float) -> str:
+    holds = residual.get('hold_signature')
+    if holds is None:
+        return 'unavailable'
+    drift = holds['drift_p'] < level and not holds['log_p'] < level
+    return 'present' if drift else 'absent'
+
+
+def _evidence(residual: Mapping[str, Any]) -> str | None:
+    detail = hold_evidence(residual)
+    if detail is None:
+        return None
+    return detail + ': a smooth drift without the log(t) shape of creep'
+
+
+def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
+          baseline: FloatArray, extended: FloatArray, start: int) -> None:
+    power = first_order_lag(time, current * current, float(time[-1] - time[0]) / 3.0)[start:]
+    residual_axes(ax, time, measured, baseline, extended, start, 'thermal model',
+                  against=power)
+    ax.set_xlabel('lagged input power x^2 [A^2] (time constant = record / 3)')
+    ax.set_title('thermal drift: residual vs heating')
+
+
+#: The thermal-drift effect, for the registry (:mod:`mpi_ros.extensions.effect`).
+EFFECT = Effect(
+    name='thermal_drift', formula='S[H[x - x0] + w_T L_tau_T[x^2]]',
+    parameters=(
+        EffectParameter(THERMAL_TIME_CONSTANT, 'double', 0.0,
+                        'Thermal-drift extension: time constant tau_T of the thermal state'
+                        ' (I^2 lag), > 0; 0 together with a 0 weight: no drift', 's',
+                        (0.0, 1.0e6)),
+        EffectParameter(THERMAL_WEIGHT, 'double', 0.0,
+                        'Thermal-drift extension: weight w_T of the thermal state (H output'
+                        ' per A^2, any sign); 0: no drift', '1/A', (-1.0e6, 1.0e6))),
+    model_class=ThermalDriftModel, fit=fit_thermal_drift,
+    parameter_count=lambda p: 2, signature=_signature, evidence=_evidence, plot=_plot)

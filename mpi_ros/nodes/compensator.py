@@ -72,8 +72,7 @@ nobody asked for.
 
 import math
 import time
-from typing import Any, Dict, List, Optional, Union
-import warnings
+from typing import Any, Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
@@ -89,12 +88,9 @@ from .parameters import (
     set_parameters_in_groups, specs_by_name,
 )
 from .spinning import run_node_main
-from ..compensation import FeedforwardCompensator
-from ..errors import MPIError, MPIWarning
-from ..extensions import (
-    compensator_from_params, DeadTimeModel, extended_model_from_params, ExtendedCompensator,
-    EXTENSION_KEYS,
-)
+from ..compensation import Compensator, gamma_of, inverse_step_of
+from ..errors import MPIError
+from ..extensions import extended_model_from_params, EXTENSION_KEYS
 from ..model import MPIModel
 from ..params import OPERATING_POINT_DEFAULTS
 
@@ -144,8 +140,6 @@ _EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
 _ALL_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + _EXTENSION_KEYS
 #: Keys set together within one set_parameters request (set_parameters_in_groups).
 _GROUPS = (_ALL_MODEL_KEYS, _LIMIT_KEYS)
-
-Compensator = Union[FeedforwardCompensator, ExtendedCompensator]
 
 
 class CompensatorNode(Node):
@@ -267,9 +261,7 @@ class CompensatorNode(Node):
         if compensator is None:
             self._dropped_unconfigured += 1
             return None
-        if self._extended:
-            return compensator.command(desired_displacement, time=stamp)
-        return compensator.command(desired_displacement)
+        return compensator.command(desired_displacement, time=stamp)
 
     # -- message path -----------------------------------------------------------------
     def _on_desired_displacement(self, msg: Optional[Float64]) -> None:
@@ -403,9 +395,8 @@ class CompensatorNode(Node):
                        f'Gamma; missing: {missing}')
                 raise ParameterRejected(msg)
             model = extended_model_from_params(params)
-            gamma = model if isinstance(model, MPIModel) else model.model
-            gamma.inverse()  # (12)-(14), (22)-(25) must exist before the swap is promised
-            prepared['model'] = (model, params)
+            gamma_of(model).inverse()  # (12)-(14), (22)-(25) must exist before the swap
+            prepared['model'] = model
         if names.intersection(_LIMIT_KEYS):
             prepared['limits'] = _ordered_limits(values['output.min'], values['output.max'])
         if 'enabled' in names:
@@ -428,7 +419,7 @@ class CompensatorNode(Node):
         if 'sample_period' in prepared and self._extended:
             self._compensator.sample_period = prepared['sample_period']
         if 'model' in prepared:
-            self._install_model(*prepared['model'])
+            self._install_model(prepared['model'])
         if 'diagnostics_period' in prepared:
             self.destroy_timer(self._timer)
             self._timer = self.create_timer(
@@ -454,50 +445,27 @@ class CompensatorNode(Node):
             msg = f'incomplete model in the parameters: missing {missing}'
             raise ParameterRejected(msg)
         params = _model_params(values)
-        self._install_model(extended_model_from_params(params), params)
+        self._install_model(extended_model_from_params(params))
 
-    def _install_model(self, model: Any, params: Dict[str, Any]) -> None:
-        """Apply a validated model: swap within the same kind, else build a new compensator."""
-        old = self._compensator
-        if isinstance(model, DeadTimeModel):
+    def _install_model(self, model: Any) -> None:
+        """Apply a validated model of any kind: the core compensator swaps it in bumplessly."""
+        if inverse_step_of(model) is None and not isinstance(model, MPIModel):
             self.get_logger().warning(
-                f'model.dead_time = {model.dead_time:g} s cannot be inverted causally: '
-                'compensating Gamma only; the displacement lags the desired one by it')
-        if isinstance(old, FeedforwardCompensator) and isinstance(
-                model, (MPIModel, DeadTimeModel)):
-            old.swap_model(model if isinstance(model, MPIModel) else model.model)
-        elif isinstance(old, ExtendedCompensator) and type(model) is type(old.model):
-            old.swap_model(model)
-        else:
-            self._compensator = self._build_compensator(params, old)
-            self._extended = isinstance(self._compensator, ExtendedCompensator)
-        self._model_version += 1
-        self._model_kind = _kind(model)
-        self.get_logger().info(
-            f'model version {self._model_version} applied ({self._model_kind})')
-
-    def _build_compensator(self, params: Dict[str, Any],
-                           old: Optional[Compensator]) -> Compensator:
-        """Build the compensator for ``params``; take over ``old``'s operating point."""
-        with warnings.catch_warnings():
-            # The dead-time MPIWarning is logged by _install_model.
-            warnings.simplefilter('ignore', MPIWarning)
-            new = compensator_from_params(
-                params, output_min=self.get_parameter('output.min').value,
+                f'{model.cause} cannot be inverted causally: compensating Gamma only; the '
+                'displacement lags the desired one by it')
+        if self._compensator is None:
+            self._compensator = Compensator(
+                model, output_min=self.get_parameter('output.min').value,
                 output_max=self.get_parameter('output.max').value,
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value)
-        if old is not None:
-            # Bumpless across kinds: the new compensator starts from the applied current's
-            # turning points (its play state replayed through the new H, (14)) and the last
-            # command; its lag states start settled at that command.  Counters go on.
-            new.memory = old.memory
-            new.last_command = old.last_command
-            for key, value in old.counters.items():
-                if key in new.counters:
-                    new.counters[key] = value
-            new.swap_model(new.model)
-        return new
+        else:
+            self._compensator.install(model)
+        self._extended = self._compensator.has_effect
+        self._model_version += 1
+        self._model_kind = self._compensator.kind
+        self.get_logger().info(
+            f'model version {self._model_version} applied ({self._model_kind})')
 
     # -- diagnostics --------------------------------------------------------------------
     def _publish_diagnostics(self) -> None:
@@ -663,15 +631,6 @@ def _resolve_null(spec: ParameterSpec, parameter: Parameter,
     if spec.name in OPERATING_POINT_DEFAULTS:
         return Parameter(spec.name, spec.type_, OPERATING_POINT_DEFAULTS[spec.name])
     return parameter
-
-
-def _kind(model: Any) -> str:
-    """Name the extension of a model: none, creep, ..., or dead_time (not compensated)."""
-    if isinstance(model, MPIModel):
-        return 'none'
-    if isinstance(model, DeadTimeModel):
-        return 'dead_time (not compensated)'
-    return str(model.cause)
 
 
 def _ordered_limits(output_min: float, output_max: float) -> tuple:

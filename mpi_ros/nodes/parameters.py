@@ -24,10 +24,8 @@ from rclpy.parameter import Parameter
 import yaml
 
 from .loop import RELIABILITY
-from ..extensions.creep import CREEP_TIME_CONSTANTS, CREEP_WEIGHTS
-from ..extensions.dead_time import DEAD_TIME
-from ..extensions.rate_dependence import RATE_TIME_CONSTANT
-from ..extensions.thermal_drift import THERMAL_TIME_CONSTANT, THERMAL_WEIGHT
+from ..extensions import EFFECTS
+from ..extensions.effect import effect_off_values
 from ..params import (INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS,
                       OUTPUT_OFFSET, OUTPUT_SIGN)
 
@@ -35,6 +33,7 @@ __all__ = [
     'harden_parameter_services',
     'EXTENSION_OFF',
     'EXTENSION_PARAMETERS',
+    'extension_parameters',
     'MODEL_KEYS',
     'MODEL_PARAMETERS',
     'NULL_STRINGS',
@@ -211,45 +210,32 @@ MODEL_PARAMETERS = (
         constraints='1 or -1; part of the model: validated with the other model.* keys'),
 )
 
+
+def extension_parameters() -> Tuple[ParameterSpec, ...]:
+    """
+    Return the node parameters of every registered effect (declared unset).
+
+    Read from the registry :data:`mpi_ros.extensions.EFFECTS`: each effect module states
+    its keys, types, units, ranges and "off" values once.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        One per effect key, in registry order.
+
+    """
+    types = {'double': Type.DOUBLE, 'double_array': Type.DOUBLE_ARRAY}
+    return tuple(ParameterSpec(p.key, types[p.kind], None, p.description, p.unit,
+                               value_range=p.value_range)
+                 for effect in EFFECTS.values() for p in effect.parameters)
+
+
 #: Keys of the model extensions (:mod:`mpi_ros.extensions`), each declared unset.  An
 #: extension is off while all its keys are unset or hold the value in :data:`EXTENSION_OFF`.
-EXTENSION_PARAMETERS = (
-    ParameterSpec(
-        CREEP_TIME_CONSTANTS, Type.DOUBLE_ARRAY, None,
-        'Creep extension: time constants tau_j of the creep lags, ascending, > 0; '
-        'empty: no creep', 's'),
-    ParameterSpec(
-        CREEP_WEIGHTS, Type.DOUBLE_ARRAY, None,
-        'Creep extension: weights w_Cj >= 0 of the creep lags (H output per input unit, '
-        'like w_H), one per time constant; empty: no creep', ''),
-    ParameterSpec(
-        RATE_TIME_CONSTANT, Type.DOUBLE, None,
-        'Rate-dependence extension: time constant tau_e of the input (eddy-current) lag; '
-        '0: no lag', 's', value_range=(0.0, 1.0e3)),
-    ParameterSpec(
-        THERMAL_TIME_CONSTANT, Type.DOUBLE, None,
-        'Thermal-drift extension: time constant tau_T of the thermal state (I^2 lag), '
-        '> 0; 0 together with a 0 weight: no drift', 's', value_range=(0.0, 1.0e6)),
-    ParameterSpec(
-        THERMAL_WEIGHT, Type.DOUBLE, None,
-        'Thermal-drift extension: weight w_T of the thermal state (H output per A^2, '
-        'any sign); 0: no drift', '1/A', value_range=(-1.0e6, 1.0e6)),
-    ParameterSpec(
-        DEAD_TIME, Type.DOUBLE, None,
-        'Dead-time extension: delay L between command and displacement (not invertible: '
-        'the compensator inverts Gamma only and warns); 0: no delay', 's',
-        value_range=(0.0, 1.0e3)),
-)
+EXTENSION_PARAMETERS = extension_parameters()
 
 #: The value that switches each extension key off (written by a complete model push).
-EXTENSION_OFF: Mapping[str, Any] = {
-    CREEP_TIME_CONSTANTS: [],
-    CREEP_WEIGHTS: [],
-    RATE_TIME_CONSTANT: 0.0,
-    THERMAL_TIME_CONSTANT: 0.0,
-    THERMAL_WEIGHT: 0.0,
-    DEAD_TIME: 0.0,
-}
+EXTENSION_OFF: Mapping[str, Any] = effect_off_values()
 
 
 def loop_qos_parameters(topics: str) -> Tuple[ParameterSpec, ParameterSpec]:

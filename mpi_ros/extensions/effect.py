@@ -1,0 +1,180 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The interface of a physical effect, and the registry that finds every effect.
+
+One module per effect (``creep.py``, ``rate_dependence.py``, ``thermal_drift.py``,
+``dead_time.py``) owns everything about it and describes it by one :class:`Effect`:
+
+- its parameter keys, their units and the values that switch it off
+  (:class:`EffectParameter`; the compensator node declares them from here);
+- its extended model class: ``from_params``, ``to_params``, ``simulate(time, current)``,
+  the Gamma it extends (``.model``) and, when the effect can be inverted causally,
+  ``inverse_step()``, the exact per-step inverse :class:`~mpi_ros.compensation.Compensator`
+  plugs in;
+- its fit (``fit(time, current, displacement, order=(n, l))``) and free-parameter count;
+- its diagnosis signature (a verdict from the residual signatures), the evidence sentence
+  and the report plot.
+
+:func:`register_effect` adds an effect to :data:`EFFECTS`; the built-in ones are registered
+in :mod:`mpi_ros.extensions` (one line each).  The identification, the compensators, the
+diagnosis, its report and the compensator node's parameters all read the registry, never a
+list of names.  Adding an effect is one new module and one registry line (docs/design.md).
+"""
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import ModelError
+
+__all__ = ['Effect', 'EffectParameter', 'EFFECTS', 'register_effect', 'unregister_effect',
+           'effect_keys', 'effect_off_values', 'effects_present']
+
+
+@dataclass(frozen=True)
+class EffectParameter:
+    """
+    One parameter key of an effect.
+
+    Attributes
+    ----------
+    key : str
+        Parameter name, e.g. ``model.creep.weights``.
+    kind : {'double', 'double_array'}
+        Its type.
+    off : float or tuple of float
+        The value that switches the effect off (0.0, or an empty tuple).
+    description : str
+        What it is, shown by ``ros2 param describe``.
+    unit : str
+        SI unit, empty when dimensionless.
+    value_range : (float, float) or None
+        Inclusive range of a double.
+
+    """
+
+    key: str
+    kind: str
+    off: float | tuple[float, ...]
+    description: str
+    unit: str = ''
+    value_range: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Effect:
+    """
+    Everything about one physical effect, for the registry.
+
+    Attributes
+    ----------
+    name : str
+        The cause's name (``creep``): the diagnosis verdict, the compensator's ``kind``.
+    formula : str
+        The extended model in words (docs, reports).
+    parameters : tuple of EffectParameter
+        Its parameter keys (besides Gamma's).
+    model_class : type
+        The extended model: ``from_params(mapping)``, ``to_params()``, ``simulate(time,
+        current)``, ``model`` (Gamma), ``cause``; ``inverse_step()`` when invertible.
+    fit : callable
+        ``fit(time, current, displacement, *, order)`` -> extended model.
+    parameter_count : callable
+        Free parameters of a fitted model's parameter form (for the diagnosis).
+    signature : callable
+        ``signature(residual, level)`` -> ``'present'``, ``'absent'`` or ``'unavailable'``:
+        whether the residual of Gamma shows the effect's physical signature (``residual``
+        holds ``hold_signature`` and ``burst_signature``, see :mod:`mpi_ros.diagnosis`).
+    evidence : callable
+        ``evidence(residual)`` -> the sentence that names the physical evidence, or None.
+    plot : callable or None
+        ``plot(ax, time, current, measured, baseline, extended, start)`` draws the
+        effect's signature plot on a matplotlib axes (for the report).
+
+    """
+
+    name: str
+    formula: str
+    parameters: tuple[EffectParameter, ...]
+    model_class: type
+    fit: Callable[..., Any]
+    parameter_count: Callable[[Mapping[str, Any]], int]
+    signature: Callable[[Mapping[str, Any], float], str] = field(
+        default=lambda residual, level: 'unavailable')
+    evidence: Callable[[Mapping[str, Any]], 'str | None'] = field(
+        default=lambda residual: None)
+    plot: Callable[..., None] | None = None
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """Return the effect's parameter keys."""
+        return tuple(p.key for p in self.parameters)
+
+    def is_off(self, mapping: Mapping[str, Any]) -> bool:
+        """Tell whether every key of the effect is absent, None or at its "off" value."""
+        return all(_is_off(mapping.get(p.key)) for p in self.parameters)
+
+
+#: The registry: effect name -> :class:`Effect` (built-ins registered by mpi_ros.extensions).
+EFFECTS: dict[str, Effect] = {}
+
+
+def register_effect(effect: Effect) -> Effect:
+    """
+    Add an effect to :data:`EFFECTS`.
+
+    Parameters
+    ----------
+    effect : Effect
+        The effect; its name and keys must be new.
+
+    Returns
+    -------
+    Effect
+        The same effect.
+
+    Raises
+    ------
+    ModelError
+        When the name or a key is taken already.
+
+    """
+    if effect.name in EFFECTS:
+        msg = f'an effect named {effect.name!r} is registered already'
+        raise ModelError(msg)
+    taken = set(effect_keys())
+    clash = [key for key in effect.keys if key in taken]
+    if clash:
+        msg = f'effect {effect.name!r}: parameter keys {clash} belong to another effect'
+        raise ModelError(msg)
+    EFFECTS[effect.name] = effect
+    return effect
+
+
+def unregister_effect(name: str) -> None:
+    """Remove an effect from :data:`EFFECTS` (tests and plug-in hosts)."""
+    EFFECTS.pop(name, None)
+
+
+def effect_keys() -> tuple[str, ...]:
+    """Return every registered effect's parameter keys."""
+    return tuple(key for effect in EFFECTS.values() for key in effect.keys)
+
+
+def effect_off_values() -> dict[str, Any]:
+    """Return each effect key's "off" value (a list for arrays, a float otherwise)."""
+    return {p.key: list(p.off) if isinstance(p.off, tuple) else p.off
+            for effect in EFFECTS.values() for p in effect.parameters}
+
+
+def effects_present(mapping: Mapping[str, Any]) -> list[Effect]:
+    """Return the effects some of whose keys the mapping holds."""
+    return [effect for effect in EFFECTS.values() if any(k in mapping for k in effect.keys)]
+
+
+def _is_off(value: Any) -> bool:
+    if value is None:
+        return True
+    if isinstance(value, (int, float)):
+        return value == 0.0
+    return len(value) == 0
