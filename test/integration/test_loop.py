@@ -49,8 +49,14 @@ def loop(ros_env, tmp_path):
         rclpy.try_shutdown(context=context)
 
 
-def _record(driver, start, duration=20.0):
-    plant = start('plant-simulator', '-p', 'noise_std:=4e-08', '-p', 'seed:=3')
+#: Issue 9's reconfigured actuator: its sensor was zeroed in operation, after rest -> 1.8 A
+#: -> 0.2 A, so it reads 0 m at the lowest current of the range (not at the model's origin).
+ZEROED = ('-p', 'actuator.sensor_zero_current_a:=0.2',
+          '-p', 'actuator.sensor_zero_peak_current_a:=1.8')
+
+
+def _record(driver, start, duration=20.0, plant_args=()):
+    plant = start('plant-simulator', '-p', 'noise_std:=4e-08', '-p', 'seed:=3', *plant_args)
     driver.wait_for(lambda: driver.current_pub.get_subscription_count() > 0, 'plant', 60.0)
     t, current = identification_excitation(duration, sample_rate=RATE, seed=3, holds=False,
                                            bursts=False)
@@ -67,8 +73,8 @@ def _push(driver, model_or_params, timeout=30.0):
         push_model_parameters(driver, '/compensator', params, timeout=timeout)
 
 
-def _start_loop(driver, start, enabled=True):
-    start('plant-simulator', '-p', 'noise_std:=4e-08', '-p', 'seed:=4')
+def _start_loop(driver, start, enabled=True, plant_args=()):
+    start('plant-simulator', '-p', 'noise_std:=4e-08', '-p', 'seed:=4', *plant_args)
     start('compensator', '-p', f'output.min:={LIMITS[0]}', '-p', f'output.max:={LIMITS[1]}',
           '-p', f'enabled:={str(enabled).lower()}')
 
@@ -89,19 +95,22 @@ def _trajectory(model, duration=6.0):
     return np.concatenate([np.linspace(0.0, desired[0], int(RATE)), desired]), int(RATE)
 
 
-def test_closed_loop_reaches_the_papers_control_error(loop):
+@pytest.mark.parametrize('plant_args', [(), ZEROED], ids=['origin', 'zeroed_in_operation'])
+def test_closed_loop_reaches_the_papers_control_error(loop, plant_args):
     driver, start = loop
-    current, measured = _record(driver, start)
+    current, measured = _record(driver, start, plant_args=plant_args)
     model = identify(current, measured, n=14, l=7).model
     desired, lead = _trajectory(model)
     errors = {}
     for enabled in (False, True):
-        _start_loop(driver, start, enabled)
+        _start_loop(driver, start, enabled, plant_args)
         _push(driver, model)
         s = _track(driver, desired)
         errors[enabled] = control_error(desired[lead:], s[lead:])
         start.stop_all()
-    assert errors[False] >= 0.20          # best linear map
+    print(f'control error (38): linear {100 * errors[False]:.2f} %,'
+          f' MPI (14, 7) {100 * errors[True]:.2f} %')
+    assert errors[False] >= 0.20          # best linear map (issue 9 asks >= 15 %)
     assert errors[True] <= 0.03           # the paper's ~3 %
 
 
