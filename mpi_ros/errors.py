@@ -7,7 +7,8 @@ built-in type users expect (``ValueError`` for bad data or parameters,
 ``RuntimeError`` for a failed identification).
 """
 
-__all__ = ['MPIError', 'ModelError', 'IdentificationError', 'DataError', 'MPIWarning']
+__all__ = ['MPIError', 'ModelError', 'IdentificationError', 'DataError', 'ParameterRejected',
+           'ParameterPushError', 'MPIWarning']
 
 
 class MPIError(Exception):
@@ -24,6 +25,14 @@ class IdentificationError(MPIError, RuntimeError):
 
 class DataError(MPIError, ValueError):
     """Recorded data (bag, CSV, arrays) is missing, malformed or unusable."""
+
+
+class ParameterRejected(MPIError, ValueError):
+    """A node parameter value failed validation; the message names the parameter."""
+
+
+class ParameterPushError(MPIError, RuntimeError):
+    """A model could not be pushed to a node: target missing, request rejected or unanswered."""
 
 
 class MPIWarning(UserWarning):

@@ -7,6 +7,9 @@ decaying-amplitude oscillation around the bias current with nested minor loops, 
 major loop, the internal minor loops and their branchings are all excited, plus optional holds
 (creep) and high-frequency bursts (rate dependence).  :func:`tracking_trajectory` produces a
 smooth desired displacement with minor loops for measuring the control error (38).
+:func:`diagnostic_excitation` produces a validation input with the structure the diagnosis'
+signatures need (major loops, holds approached from both sides, bursts); the plant simulator
+plays it too.
 
 Both signals are piecewise defined through knots joined by half-cosine segments,
 ``x(t) = x_k + (x_{k+1} - x_k) (1 - cos(pi (t - t_k) / (t_{k+1} - t_k))) / 2``, or as sums of
@@ -21,7 +24,7 @@ import numpy.typing as npt
 
 from .errors import DataError
 
-__all__ = ['identification_excitation', 'tracking_trajectory']
+__all__ = ['diagnostic_excitation', 'identification_excitation', 'tracking_trajectory']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -253,6 +256,99 @@ def tracking_trajectory(duration: float, *, sample_rate: float, low: float, high
     fade = 0.5 * (1.0 - np.cos(np.pi * np.clip(time / ramp_duration, 0.0, 1.0)))
     desired = low + (high - low) * fade * (1.0 + np.clip(envelope * carrier, -1.0, 1.0)) / 2
     return time, np.clip(desired, low, high)
+
+
+def diagnostic_excitation(*, sample_rate: float, bias: float = 1.0, amplitude: float = 0.8,
+                          seed: int | None = None, hold_duration: float = 4.0,
+                          burst_frequencies: tuple[float, ...] = (
+                              5.0, 7.0, 10.0, 14.0, 20.0, 28.0, 40.0),
+                          burst_cycles: int = 6, loop_frequency: float = 0.5,
+                          repeats: int = 2) -> tuple[FloatArray, FloatArray]:
+    """
+    Build a validation input with the structure the signatures need (about 50 s).
+
+    ``repeats`` times: two quasi-static major loops, then holds at a low and a high level,
+    each approached once from below and once from above (order drawn from ``seed``).  Then
+    sinusoidal bursts
+    of a quarter of ``amplitude`` around ``bias`` at log-spaced frequencies, each followed
+    by a short hold.
+
+    Parameters
+    ----------
+    sample_rate : float
+        Samples per second [Hz]; at least 20 per period of the fastest burst.
+    bias : float
+        Centre current [A].
+    amplitude : float
+        Half-width of the range [A].
+    seed : int or None
+        Seed of :func:`numpy.random.default_rng` (order of the approaches).
+    hold_duration : float
+        Length of each hold [s].
+    burst_frequencies : tuple of float
+        Burst frequencies [Hz] (three or more for the frequency-response test).
+    burst_cycles : int
+        Cycles per burst.
+    loop_frequency : float
+        Frequency of the major loops [Hz].
+    repeats : int
+        Number of loop-and-hold blocks (slow effects need a record longer than their time
+        constant to be tested).
+
+    Returns
+    -------
+    time : ndarray of float, shape (N,)
+        Sample times [s], ``arange(N) / sample_rate``.
+    current : ndarray of float, shape (N,)
+        Input [A], from 0 (rest) within ``[bias - amplitude, bias + amplitude]``.
+
+    Raises
+    ------
+    DataError
+        A non-positive setting or too low a sample rate.
+
+    """
+    values = (sample_rate, amplitude, hold_duration, loop_frequency, burst_cycles, repeats,
+              *burst_frequencies)
+    if not all(math.isfinite(v) and v > 0 for v in values):
+        msg = 'diagnostic_excitation settings must be finite and > 0'
+        raise DataError(msg)
+    if sample_rate < 20.0 * max(burst_frequencies, default=0.0):
+        msg = (f'sample_rate must be >= 20 x the fastest burst frequency'
+               f' ({max(burst_frequencies)} Hz); found {sample_rate}')
+        raise DataError(msg)
+    rng = np.random.default_rng(seed)
+    h = 1.0 / sample_rate
+    rate = 4.0 * amplitude * loop_frequency
+    knots_t, knots_x = [0.0], [0.0]
+
+    def move(target: float, duration: float | None = None) -> None:
+        d = abs(target - knots_x[-1]) / rate if duration is None else duration
+        knots_t.append(knots_t[-1] + max(d, h))
+        knots_x.append(target)
+
+    move(bias)
+    step = 0.3 * amplitude
+    for _ in range(int(repeats)):
+        for _ in range(2):
+            move(bias + amplitude)
+            move(bias - amplitude)
+        for level in (bias - 0.6 * amplitude, bias + 0.6 * amplitude):
+            first_up = bool(rng.integers(2))
+            for up in (first_up, not first_up):
+                move(level - step if up else level + step)
+                move(level)
+                move(level, hold_duration)
+    move(bias)
+    move(bias, 0.3)
+    t = np.arange(0.0, knots_t[-1] + h / 2, h)
+    parts = [np.interp(t, knots_t, knots_x)]
+    for f in burst_frequencies:
+        tt = np.arange(1, int(round(burst_cycles / f * sample_rate)) + 1) * h
+        parts.append(bias + 0.25 * amplitude * np.sin(2.0 * math.pi * f * tt))
+        parts.append(np.full(int(0.3 * sample_rate), bias))
+    current = np.concatenate(parts)
+    return np.arange(current.size) * h, current
 
 
 def _branch(start: float, target: float, rng: np.random.Generator) -> list[float]:

@@ -43,7 +43,7 @@ import numpy.typing as npt
 from scipy import stats
 
 from .invertibility import _branches
-from ..errors import DataError
+from ..excitation import diagnostic_excitation
 
 __all__ = ['HoldSignature', 'BurstSignature', 'hold_signature', 'burst_signature',
            'hold_segments', 'burst_segments', 'diagnostic_excitation']
@@ -279,99 +279,6 @@ def burst_signature(time: FloatArray, current: FloatArray, measured: FloatArray,
     return BurstSignature([float(v) for v in f], [complex(v) for v in g], lag, lag_sse,
                           delay, delay_sse, constant, float(stat),
                           float(stats.f.sf(stat, 1, dof)))
-
-
-def diagnostic_excitation(*, sample_rate: float, bias: float = 1.0, amplitude: float = 0.8,
-                          seed: int | None = None, hold_duration: float = 4.0,
-                          burst_frequencies: tuple[float, ...] = (
-                              5.0, 7.0, 10.0, 14.0, 20.0, 28.0, 40.0),
-                          burst_cycles: int = 6, loop_frequency: float = 0.5,
-                          repeats: int = 2) -> tuple[FloatArray, FloatArray]:
-    """
-    Build a validation input with the structure the signatures need (about 50 s).
-
-    ``repeats`` times: two quasi-static major loops, then holds at a low and a high level,
-    each approached once from below and once from above (order drawn from ``seed``).  Then
-    sinusoidal bursts
-    of a quarter of ``amplitude`` around ``bias`` at log-spaced frequencies, each followed
-    by a short hold.
-
-    Parameters
-    ----------
-    sample_rate : float
-        Samples per second [Hz]; at least 20 per period of the fastest burst.
-    bias : float
-        Centre current [A].
-    amplitude : float
-        Half-width of the range [A].
-    seed : int or None
-        Seed of :func:`numpy.random.default_rng` (order of the approaches).
-    hold_duration : float
-        Length of each hold [s].
-    burst_frequencies : tuple of float
-        Burst frequencies [Hz] (three or more for the frequency-response test).
-    burst_cycles : int
-        Cycles per burst.
-    loop_frequency : float
-        Frequency of the major loops [Hz].
-    repeats : int
-        Number of loop-and-hold blocks (slow effects need a record longer than their time
-        constant to be tested).
-
-    Returns
-    -------
-    time : ndarray of float, shape (N,)
-        Sample times [s], ``arange(N) / sample_rate``.
-    current : ndarray of float, shape (N,)
-        Input [A], from 0 (rest) within ``[bias - amplitude, bias + amplitude]``.
-
-    Raises
-    ------
-    DataError
-        A non-positive setting or too low a sample rate.
-
-    """
-    values = (sample_rate, amplitude, hold_duration, loop_frequency, burst_cycles, repeats,
-              *burst_frequencies)
-    if not all(math.isfinite(v) and v > 0 for v in values):
-        msg = 'diagnostic_excitation settings must be finite and > 0'
-        raise DataError(msg)
-    if sample_rate < 20.0 * max(burst_frequencies, default=0.0):
-        msg = (f'sample_rate must be >= 20 x the fastest burst frequency'
-               f' ({max(burst_frequencies)} Hz); found {sample_rate}')
-        raise DataError(msg)
-    rng = np.random.default_rng(seed)
-    h = 1.0 / sample_rate
-    rate = 4.0 * amplitude * loop_frequency
-    knots_t, knots_x = [0.0], [0.0]
-
-    def move(target: float, duration: float | None = None) -> None:
-        d = abs(target - knots_x[-1]) / rate if duration is None else duration
-        knots_t.append(knots_t[-1] + max(d, h))
-        knots_x.append(target)
-
-    move(bias)
-    step = 0.3 * amplitude
-    for _ in range(int(repeats)):
-        for _ in range(2):
-            move(bias + amplitude)
-            move(bias - amplitude)
-        for level in (bias - 0.6 * amplitude, bias + 0.6 * amplitude):
-            first_up = bool(rng.integers(2))
-            for up in (first_up, not first_up):
-                move(level - step if up else level + step)
-                move(level)
-                move(level, hold_duration)
-    move(bias)
-    move(bias, 0.3)
-    t = np.arange(0.0, knots_t[-1] + h / 2, h)
-    parts = [np.interp(t, knots_t, knots_x)]
-    for f in burst_frequencies:
-        tt = np.arange(1, int(round(burst_cycles / f * sample_rate)) + 1) * h
-        parts.append(bias + 0.25 * amplitude * np.sin(2.0 * math.pi * f * tt))
-        parts.append(np.full(int(0.3 * sample_rate), bias))
-    current = np.concatenate(parts)
-    return np.arange(current.size) * h, current
 
 
 def _coefficient(design: FloatArray, r: FloatArray, index: int) -> tuple[float, float]:

@@ -47,7 +47,7 @@ from .parameters import (
 )
 from .spinning import shutdown, StopSignals
 from .. import IdentificationResult, identify
-from ..errors import DataError, IdentificationError, MPIError
+from ..errors import DataError, IdentificationError, MPIError, ParameterPushError
 from ..order import format_order, Order, parse_order as parse_order_text
 from ..params import write_params_yaml
 from ..recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording
@@ -102,10 +102,6 @@ PARAMETERS = (
 
 _SPECS = specs_by_name(PARAMETERS)
 _DATA_NAMES = frozenset(spec.name for spec in DATA_PARAMETERS)
-
-
-class ParameterPushError(MPIError, RuntimeError):
-    """The model could not be pushed: target missing, request rejected or unanswered."""
 
 
 @dataclass(frozen=True)

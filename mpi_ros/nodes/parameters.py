@@ -24,6 +24,7 @@ from rclpy.parameter import Parameter
 import yaml
 
 from .loop import RELIABILITY
+from ..errors import ParameterRejected
 from ..extensions import EFFECTS
 from ..extensions.effect import effect_off_values
 from ..params import (INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS,
@@ -85,10 +86,6 @@ _DOTLESS_FLOAT = re.compile(r'[-+]?[0-9]+e[-+]?[0-9]+')
 
 _ARRAY_TYPES = (Type.BYTE_ARRAY, Type.BOOL_ARRAY, Type.INTEGER_ARRAY, Type.DOUBLE_ARRAY,
                 Type.STRING_ARRAY)
-
-
-class ParameterRejected(Exception):
-    """A parameter value failed validation; the message names the parameter."""
 
 
 @dataclass(frozen=True)
