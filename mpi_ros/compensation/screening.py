@@ -1,0 +1,134 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+What the compensator does around the inverse.
+
+Screening of the desired values, the model's operating range over the safe current range,
+and the best linear map (the uncompensated baseline).
+"""
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from ..model import MPIModel
+
+__all__ = ['screen_desired', 'LinearMap', 'operating_range', 'best_linear_map']
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def screen_desired(desired: object, counters: dict[str, int],
+                   displacement_range: tuple[float, float]) -> float | None:
+    """
+    Screen one desired displacement before inversion; count what is wrong with it.
+
+    Parameters
+    ----------
+    desired : object
+        The incoming value (anything: NaN, Inf, text, None are possible).
+    counters : dict[str, int]
+        ``messages``, ``nonfinite_input`` and ``out_of_range`` are incremented here.
+    displacement_range : (float, float)
+        The model's operating range [m].
+
+    Returns
+    -------
+    float or None
+        The value to invert, or None when it is not a finite number (hold the last
+        command).  Values far outside the range are saturated: Gamma^-1 is increasing,
+        so the clamped command is the same, and the arithmetic stays finite (1e308
+        would otherwise give inf - inf = NaN inside the inverse).
+
+    """
+    counters['messages'] += 1
+    try:
+        s_c = float(desired)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        s_c = math.nan
+    if not math.isfinite(s_c):
+        counters['nonfinite_input'] += 1
+        return None
+    lo, hi = displacement_range
+    if s_c < lo or s_c > hi:
+        counters['out_of_range'] += 1
+        margin = 10.0 * (hi - lo)
+        s_c = min(max(s_c, lo - margin), hi + margin)
+    return s_c
+
+
+@dataclass(frozen=True)
+class LinearMap:
+    """
+    Affine map ``current = gain * displacement + offset`` (the uncompensated baseline).
+
+    Attributes
+    ----------
+    gain : float
+        [A/m].
+    offset : float
+        [A].
+
+    """
+
+    gain: float
+    offset: float
+
+    def __call__(self, displacement: float) -> float:
+        """Return the current [A] for a displacement [m]."""
+        return self.gain * displacement + self.offset
+
+
+def _major_loop(current_min: float, current_max: float,
+                points: int = 401) -> tuple[FloatArray, slice]:
+    # Up and down once to set the plays (whatever the model's initial states: a model
+    # identified on a record that starts mid-history has none it can vouch for), then the
+    # major loop proper: up, down, up.  Returns the currents and the part to use.
+    up = np.linspace(current_min, current_max, points)
+    return np.concatenate([up, up[::-1], up, up[::-1], up]), slice(2 * points, None)
+
+
+def operating_range(model: MPIModel, current_min: float,
+                    current_max: float) -> tuple[float, float]:
+    """
+    Return the displacement range the model reaches for currents in the given range.
+
+    Parameters
+    ----------
+    model : MPIModel
+        Forward model.
+    current_min, current_max : float
+        Current range [A].
+
+    Returns
+    -------
+    (float, float)
+        Lowest and highest displacement [m] on the major loop.
+
+    """
+    x, keep = _major_loop(current_min, current_max)
+    s = model.simulate(x)[keep]
+    return float(np.min(s)), float(np.max(s))
+
+
+def best_linear_map(model: MPIModel, current_min: float, current_max: float) -> LinearMap:
+    """
+    Best affine inverse of the model over its major loop (least squares), the baseline.
+
+    Parameters
+    ----------
+    model : MPIModel
+        Forward model.
+    current_min, current_max : float
+        Current range of the major loop [A].
+
+    Returns
+    -------
+    LinearMap
+        ``current ~ gain * displacement + offset``.
+
+    """
+    x, keep = _major_loop(current_min, current_max)
+    gain, offset = np.polyfit(model.simulate(x)[keep], x[keep], 1)
+    return LinearMap(float(gain), float(offset))
