@@ -2,6 +2,9 @@
 """
 ``mpi-ros demo``: the whole product in one run, over DDS, with separate processes.
 
+(Somewhat over 500 lines: the two demo paths, plain and with an effect, share one process
+harness and one report; splitting them would scatter one script.)
+
 1. Start the plant simulator (built-in magnetostrictive-like actuator, not an MPI
    model, with sensor noise) as its own process.
 2. Drive it with the identification excitation and record ``current_command`` and

@@ -2,6 +2,10 @@
 """
 Diagnosis: what the MPI model's simulation gets wrong, which extension explains it, the gain.
 
+(Somewhat over 500 lines: the procedure below, its significance test and its residual
+statistics are one decision; the effects' own parts live in their modules, the signature
+tests in :mod:`mpi_ros.diagnosis.signatures`, the report in :mod:`mpi_ros.diagnosis.report`.)
+
 Procedure (documented in ``docs/diagnosis.md``):
 
 1. **Invertible class.**  :func:`check_invertible_class` on the output times the sign
