@@ -55,18 +55,18 @@ def _check_output(path: str | None, option: str) -> None:
 
 def _cmd_identify(args: argparse.Namespace) -> int:
     from .cli_options import data_options, order_option
-    from .identification import identify
     from .order import format_order
     from .params import write_params_yaml
-    from .recordings import atomic_write
+    from .pipeline import fit_recording
+    from .recordings import atomic_write, read_recording
     _check_output(args.output, '--output')
     _check_output(args.json, '--json')
-    data_options(args)                       # refuse bad options before reading
+    options = data_options(args)             # refuse bad options before reading
     order = order_option(args)
-    data = _read_data(args.data, args)
-    _progress(f'identifying from {len(data.time)} samples of {args.data} '
+    recording = read_recording(args.data, options)
+    _progress(f'identifying from {len(recording.time)} samples of {args.data} '
               f'(order {format_order(order)}) ...')
-    result = identify(data.current, data.displacement, order=order, anchor=args.anchor)
+    result = fit_recording(recording, order=order, anchor=args.anchor).result
     for row in result.order_table:
         _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out nonlinearity error "
                   f"{100 * row['nonlinearity_error']:6.2f} % of the output range")

@@ -49,6 +49,7 @@ HYSTERESIS_WEIGHTS = 'model.hysteresis.weights'
 HYSTERESIS_INITIAL_STATES = 'model.hysteresis.initial_states'
 SUPERPOSITION_THRESHOLDS = 'model.superposition.thresholds'
 SUPERPOSITION_WEIGHTS = 'model.superposition.weights'
+#: Gamma's five arrays (the nodes and every tool use this one definition).
 MODEL_KEYS = (HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS, HYSTERESIS_INITIAL_STATES,
               SUPERPOSITION_THRESHOLDS, SUPERPOSITION_WEIGHTS)
 INPUT_OFFSET = 'model.input_offset'

@@ -251,3 +251,17 @@ def test_node_name_is_honoured(recording, capsys):
     assert capsys.readouterr().err.strip().splitlines()[-1] == (
         f"error: --node-name bar: parameter file {tmp / 'foo.yaml'} has no entry for node "
         "'bar'; entries found: foo; pass --node-name with one of them, or leave it out")
+
+
+def test_identify_cli_and_pipeline_give_the_same_model(recording):
+    # One pipeline: the CLI's model is fit_recording's, key for key.
+    from mpi_ros.pipeline import fit_recording
+    tmp, _, _, _ = recording
+    assert main(['identify', str(tmp / 'rec.csv'), '--order', '4,2', '-o',
+                 str(tmp / 'p.yaml')]) == 0
+    from mpi_ros.recordings import DataOptions
+    fit = fit_recording(tmp / 'rec.csv', DataOptions(), order=(4, 2))
+    written, fitted = read_params_yaml(tmp / 'p.yaml'), fit.result.model.to_params()
+    assert set(written) == set(fitted)
+    for key, value in fitted.items():
+        np.testing.assert_allclose(written[key], value, rtol=1e-12, err_msg=key)

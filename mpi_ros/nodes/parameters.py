@@ -27,7 +27,7 @@ from .loop import RELIABILITY
 from ..errors import ParameterRejected
 from ..extensions import EFFECTS
 from ..extensions.effect import effect_off_values
-from ..params import (INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS,
+from ..params import (INPUT_OFFSET, MODEL_KEYS, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS,
                       OUTPUT_OFFSET, OUTPUT_SIGN)
 
 __all__ = [
@@ -164,13 +164,6 @@ class ParameterSpec:
 
 
 #: The five keys of Gamma = S o H; a model needs all of them (no defaults).
-MODEL_KEYS = (
-    'model.hysteresis.thresholds',
-    'model.hysteresis.weights',
-    'model.hysteresis.initial_states',
-    'model.superposition.thresholds',
-    'model.superposition.weights',
-)
 
 MODEL_PARAMETERS = (
     ParameterSpec(
