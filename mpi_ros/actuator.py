@@ -222,6 +222,7 @@ class ActuatorConfig:
             value = getattr(self, f.name)
             number = (isinstance(value, (int, float, np.integer, np.floating))
                       and not isinstance(value, bool))
+            convert: type[int] | type[float]
             if f.type in (int, 'int'):
                 # Integral floats are accepted: YAML and ROS tools may write 81.0 for 81.
                 ok = number and math.isfinite(value) and float(value).is_integer()
@@ -538,7 +539,7 @@ def _delay(state: dict[str, Any], t: FloatArray, out: FloatArray, dead_time: flo
     values: deque[float] = state['delay_value']
     hist_t = np.concatenate([np.fromiter(times, float, len(times)), t])
     hist_v = np.concatenate([np.fromiter(values, float, len(values)), out])
-    delayed = np.interp(t - dead_time, hist_t, hist_v, left=0.0)
+    delayed: FloatArray = np.interp(t - dead_time, hist_t, hist_v, left=0.0)
     # Keep only what later samples can still need: the last point at or before t[-1] - L.
     keep_from = max(int(np.searchsorted(hist_t, t[-1] - dead_time, side='right')) - 1, 0)
     times.clear()
@@ -612,7 +613,8 @@ def _everett_table(cfg: ActuatorConfig) -> FloatArray:
 
 
 @numba.njit(cache=True, nogil=True)
-def _everett(table, lo, step, a, b):  # pragma: no cover - compiled
+def _everett(table: FloatArray, lo: float, step: float, a: float,
+             b: float) -> float:  # pragma: no cover - compiled
     """Bilinear interpolation of the Everett table, clamped to the grid."""
     n = table.shape[0]
     fa = (a - lo) / step
@@ -623,12 +625,14 @@ def _everett(table, lo, step, a, b):  # pragma: no cover - compiled
     ib = min(int(fb), n - 2)
     ta = fa - ia
     tb = fb - ib
-    return ((1.0 - ta) * ((1.0 - tb) * table[ia, ib] + tb * table[ia, ib + 1])
-            + ta * ((1.0 - tb) * table[ia + 1, ib] + tb * table[ia + 1, ib + 1]))
+    value: float = ((1.0 - ta) * ((1.0 - tb) * table[ia, ib] + tb * table[ia, ib + 1])
+                    + ta * ((1.0 - tb) * table[ia + 1, ib] + tb * table[ia + 1, ib + 1]))
+    return value
 
 
 @numba.njit(cache=True, nogil=True)
-def _lag(y0, u0, u1, h, tau):  # pragma: no cover - compiled
+def _lag(y0: float, u0: float, u1: float, h: float,
+         tau: float) -> float:  # pragma: no cover - compiled
     """Exact first-order-lag update for an input linear between samples (first-order hold)."""
     a = math.exp(-h / tau)
     one_minus_a = -math.expm1(-h / tau)
@@ -637,9 +641,12 @@ def _lag(y0, u0, u1, h, tau):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _kernel(time, current, table, grid_lo, grid_step, rev_frac, rev_scale, lin, knee,
-            map_norm, scale, eddy_tau, creep_gain, creep_taus, thermal_gain, thermal_tau,
-            scalars, maxima, minima, creep):  # pragma: no cover - compiled
+def _kernel(time: FloatArray, current: FloatArray, table: FloatArray, grid_lo: float,
+            grid_step: float, rev_frac: float, rev_scale: float, lin: float, knee: float,
+            map_norm: float, scale: float, eddy_tau: float, creep_gain: float,
+            creep_taus: FloatArray, thermal_gain: float, thermal_tau: float,
+            scalars: FloatArray, maxima: FloatArray, minima: FloatArray,
+            creep: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     """Advance the actuator state over the samples; return the undelayed, noiseless output."""
     n_samples = time.shape[0]
     n_creep = creep_taus.shape[0]

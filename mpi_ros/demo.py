@@ -35,18 +35,24 @@ by the demo. The bag has real time stamps (the wall clock from the start of the 
 """
 
 import argparse
+from collections.abc import Callable
 import json
 import os
 from pathlib import Path
 import random
 import sys
 import time
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
 from .cli_options import ArgumentParser
 from .errors import MPIError
+
+if TYPE_CHECKING:  # the nodes (and rclpy) are imported only when the demo runs
+    from .extensions import EffectModel
+    from .model import MPIModel
+    from .nodes.loop import NodeProcess
 
 __all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']
 
@@ -66,8 +72,8 @@ def _progress(text: str) -> None:
 class _DemoLoop:
     """Starts and stops the demo's node processes (by PID) around one driver."""
 
-    def __init__(self, driver: Any, out: Path, processes: list, plant_args: list[str],
-                 args: argparse.Namespace) -> None:
+    def __init__(self, driver: Any, out: Path, processes: list['NodeProcess'],
+                 plant_args: list[str], args: argparse.Namespace) -> None:
         self.driver, self.out, self.processes = driver, out, processes
         self.plant_args, self.args = plant_args, args
 
@@ -81,7 +87,7 @@ class _DemoLoop:
                              'the plant simulator to start', 60.0)
         return plant
 
-    def start_compensated(self, params: dict, compensator_args: list[str],
+    def start_compensated(self, params: dict[str, Any], compensator_args: list[str],
                           first: float) -> tuple[Any, Any]:
         """Start a fresh plant and compensator, push ``params``, handshake with ``first``."""
         from .nodes.identifier import push_model_parameters
@@ -202,6 +208,7 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
     from .recordings import BagRecorder, read_bag_signals
 
     n, l = ORDERS[-1]  # noqa: E741
+    fit: Callable[..., EffectModel]
     if args.effect == 'creep':
         strength = {'actuator.creep_gain': args.creep_gain}
         fit = fit_creep
@@ -336,8 +343,9 @@ def _report_effect(out: Path, t: np.ndarray, desired: np.ndarray,
               '', '![tracking error](tracking_error.png)', '']
     (out / 'report.md').write_text('\n'.join(lines))
     (out / 'results.json').write_text(json.dumps(results, indent=2))
-    np.savez(out / 'tracking.npz', time=t, desired=desired,
-             **{f'measured_{k}': v for k, v in enumerate(traces.values())})
+    arrays: dict[str, Any] = {'time': t, 'desired': desired,
+                              **{f'measured_{k}': v for k, v in enumerate(traces.values())}}
+    np.savez(out / 'tracking.npz', **arrays)
 
 
 def _desired_trajectory(model: Any, args: argparse.Namespace) -> tuple[
@@ -368,8 +376,9 @@ def _desired_trajectory(model: Any, args: argparse.Namespace) -> tuple[
     return t_track, desired, np.linspace(0.0, desired[0], int(args.sample_rate))
 
 
-def _report(out: Path, data: Any, models: dict, t: np.ndarray, desired: np.ndarray,
-            traces: dict[str, np.ndarray], results: dict[str, Any]) -> None:
+def _report(out: Path, data: Any, models: dict[tuple[int, int], 'MPIModel'], t: np.ndarray,
+            desired: np.ndarray, traces: dict[str, np.ndarray],
+            results: dict[str, Any]) -> None:
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt

@@ -347,8 +347,8 @@ def diagnostic_excitation(*, sample_rate: float, bias: float = 1.0, amplitude: f
         tt = np.arange(1, int(round(burst_cycles / f * sample_rate)) + 1) * h
         parts.append(bias + 0.25 * amplitude * np.sin(2.0 * math.pi * f * tt))
         parts.append(np.full(int(0.3 * sample_rate), bias))
-    current = np.concatenate(parts)
-    return np.arange(current.size) * h, current
+    current = np.concatenate(parts, dtype=np.float64)
+    return np.arange(current.size, dtype=np.float64) * h, current
 
 
 def _branch(start: float, target: float, rng: np.random.Generator) -> list[float]:

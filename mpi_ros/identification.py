@@ -288,7 +288,8 @@ def _noise_std(y: FloatArray) -> float:
 
 
 @numba.njit(cache=True, nogil=True)
-def _counter_move(x, v, tolerance):  # pragma: no cover - compiled
+def _counter_move(x: FloatArray, v: FloatArray,
+                  tolerance: float) -> tuple[float, int, int]:  # pragma: no cover - compiled
     # Largest fall of v from its running maximum within one monotone sweep of x (v is the
     # output times its sign, so it should rise with x); the sweep's direction flips v.
     # A turning point is the extreme of x before x retreats from it by `tolerance`.
@@ -432,7 +433,8 @@ def generalized_error_gram(*blocks: FloatArray) -> FloatArray:
 
     """
     phi = np.hstack(blocks)
-    return (phi.T @ phi) / phi.shape[0]
+    quadratic: FloatArray = (phi.T @ phi) / phi.shape[0]
+    return quadratic
 
 
 def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
@@ -937,7 +939,8 @@ def _errors(sim: FloatArray, y: FloatArray,
 
 def _linear_fit(x: FloatArray, y: FloatArray) -> FloatArray:
     slope, intercept = np.polyfit(x, y, 1)
-    return slope * x + intercept
+    line: FloatArray = slope * x + intercept
+    return line
 
 
 def _held_out_rows(start: int, size: int, holdout: float,

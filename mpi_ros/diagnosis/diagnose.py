@@ -135,10 +135,12 @@ class DiagnosisReport:
 
     def to_json(self) -> dict[str, Any]:
         """Return the JSON-ready dictionary (no arrays, no model objects)."""
-        return _jsonable({'cause': self.cause, 'gain': self.gain, 'evidence': self.evidence,
-                          'baseline': self.baseline, 'extended': self.extended,
-                          'candidates': self.candidates, 'residual': self.residual,
-                          'decision': self.decision, 'data': self.data})
+        form: dict[str, Any] = _jsonable({
+            'cause': self.cause, 'gain': self.gain, 'evidence': self.evidence,
+            'baseline': self.baseline, 'extended': self.extended,
+            'candidates': self.candidates, 'residual': self.residual,
+            'decision': self.decision, 'data': self.data})
+        return form
 
     def parameters(self) -> dict[str, Any]:
         """Return the flat parameters of the extended model (what the compensator reads)."""
@@ -290,13 +292,14 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     reestimate = validation is not None
     data['output_offset_reestimated'] = reestimate
     line = _linear_fit(xt[base.burn_in:], yt[base.burn_in:])
-    linear = np.polyval(line, xv)
+    linear = np.asarray(np.polyval(line, xv), dtype=np.float64)
     linear_shift = _zero_shift(linear[val], yv[val], reestimate)
     sim0 = base.model.simulate(xv)
     shift0 = _zero_shift(sim0[val], yv[val], reestimate)
     sim0 = sim0 + shift0
     r0 = yv[val] - sim0[val]
     sigma = noise_floor(yv[val])
+    baseline: dict[str, Any]
     baseline = {'order': [n, l], **_errors(sim0[val], yv[val]),
                 'training_rms_error': base.rms_error,
                 'validation_output_offset': shift0,
@@ -354,6 +357,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     for c in candidates:
         c['signature'] = verdicts[c['cause']]
         c['significant'] = bool(excess and c['gain'] >= min_gain and c['z'] >= z_critical)
+    decision: dict[str, Any]
     decision = {'min_gain': min_gain, 'z_critical': z_critical, 'alpha': alpha,
                 'signature_level': level, 'bandwidth': bandwidth,
                 'noise_factor': noise_factor, 'noise_floor': sigma,
@@ -499,7 +503,7 @@ def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatA
     max_lag = max(int(min(0.2, 0.05 * duration) / dt), 1)
     lags = np.arange(-max_lag, max_lag + 1)
     xc = [_corr(dy[max(0, k):dy.size + min(0, k)], ds[max(0, -k):ds.size - max(0, k)])
-          for k in lags]
+          for k in range(-max_lag, max_lag + 1)]
     out['lag_of_best_correlation'] = float(lags[int(np.nanargmax(xc))] * dt)
     return out
 

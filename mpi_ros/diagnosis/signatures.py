@@ -265,18 +265,18 @@ def burst_signature(time: FloatArray, current: FloatArray, measured: FloatArray,
             rows[round(f, 6)] = ratio
     if len(rows) < 3:
         return None
-    f = np.array(sorted(rows))
-    g = np.log(np.array([rows[k] for k in f]))
+    freqs = np.array(sorted(rows))
+    g = np.log(np.array([rows[k] for k in freqs]))
     g = g.real + 1j * np.unwrap(g.imag)
-    w = 2.0 * math.pi * f
+    omega = 2.0 * math.pi * freqs
     constant = float(np.sum(np.abs(g - g.mean()) ** 2))
-    grid = np.concatenate([[0.0], np.geomspace(1e-2 / w[-1], 10.0 / w[0], 600)])
-    lag, lag_sse = _fit_law(g, [-np.log(1.0 + 1j * w * p) for p in grid], grid)
-    delay, delay_sse = _fit_law(g, [-1j * w * p for p in grid], grid)
-    dof = 2 * f.size - 3
+    grid = np.concatenate([[0.0], np.geomspace(1e-2 / omega[-1], 10.0 / omega[0], 600)])
+    lag, lag_sse = _fit_law(g, [-np.log(1.0 + 1j * omega * p) for p in grid], grid)
+    delay, delay_sse = _fit_law(g, [-1j * omega * p for p in grid], grid)
+    dof = 2 * freqs.size - 3
     best = min(lag_sse, delay_sse)
     stat = (constant - best) / max(best / dof, 1e-300)
-    return BurstSignature([float(v) for v in f], [complex(v) for v in g], lag, lag_sse,
+    return BurstSignature([float(v) for v in freqs], [complex(v) for v in g], lag, lag_sse,
                           delay, delay_sse, constant, float(stat),
                           float(stats.f.sf(stat, 1, dof)))
 

@@ -33,8 +33,8 @@ from . import creep, dead_time, rate_dependence, thermal_drift
 from .compensation import compensator_from_params, ExtendedCompensator
 from .creep import creep_time_constants, CreepModel, fit_creep
 from .dead_time import DeadTimeModel, fit_dead_time
-from .effect import Effect, EffectParameter, EFFECTS, effects_present, register_effect, \
-    unregister_effect
+from .effect import Effect, EffectModel, EffectParameter, EFFECTS, effects_present, \
+    register_effect, unregister_effect
 from .rate_dependence import fit_rate_dependence, RateDependentModel
 from .thermal_drift import fit_thermal_drift, ThermalDriftModel
 from ..errors import ModelError
@@ -44,7 +44,7 @@ __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeMod
            'ExtendedModel', 'fit_creep', 'fit_rate_dependence',
            'fit_thermal_drift', 'fit_dead_time', 'creep_time_constants',
            'extended_model_from_params', 'EXTENSION_KEYS', 'ExtendedCompensator',
-           'compensator_from_params', 'Effect', 'EffectParameter', 'EFFECTS',
+           'compensator_from_params', 'Effect', 'EffectModel', 'EffectParameter', 'EFFECTS',
            'register_effect', 'unregister_effect']
 
 ExtendedModel = CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
@@ -73,7 +73,7 @@ class _ExtensionKeys(Mapping[str, tuple[str, ...]]):
 EXTENSION_KEYS: Mapping[str, tuple[str, ...]] = _ExtensionKeys()
 
 
-def extended_model_from_params(mapping: Mapping[str, Any]) -> Any:
+def extended_model_from_params(mapping: Mapping[str, Any]) -> MPIModel | EffectModel:
     """
     Build the model a parameter set describes: Gamma alone or Gamma with one extension.
 

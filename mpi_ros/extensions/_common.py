@@ -10,7 +10,7 @@ actuator's states are determined by the data) in the fit and in the trial errors
 
 from collections.abc import Callable, Mapping
 import math
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +25,8 @@ __all__ = ['check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
            'scalar_parameter', 'search_fit', 'vector_parameter']
 
 FloatArray = npt.NDArray[np.float64]
+#: The result of one trial fit in :func:`search_fit` (a model).
+ResultT = TypeVar('ResultT')
 
 
 def check_series(time: npt.ArrayLike, *signals: npt.ArrayLike) -> tuple[FloatArray, ...]:
@@ -97,8 +99,8 @@ def vector_parameter(mapping: Mapping[str, Any], key: str, *, minimum: float = 0
     return out
 
 
-def search_fit(fit: Callable[[float], tuple[Any, float]], grid: FloatArray, *,
-               refine: int = 8) -> tuple[float, Any, float]:
+def search_fit(fit: Callable[[float], tuple[ResultT, float]], grid: FloatArray, *,
+               refine: int = 8) -> tuple[float, ResultT, float]:
     """
     Minimise a 1-D fit error: a grid scan, then a bounded search between the neighbours.
 
@@ -119,7 +121,7 @@ def search_fit(fit: Callable[[float], tuple[Any, float]], grid: FloatArray, *,
         Minimiser, its fit and the minimum found.
 
     """
-    fits: dict[float, Any] = {}
+    fits: dict[float, ResultT] = {}
 
     def objective(value: float) -> float:
         fits[value], error = fit(value)

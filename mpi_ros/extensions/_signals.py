@@ -46,7 +46,8 @@ def lag_coefficients(h: float, tau: float) -> tuple[float, float]:
 
 
 @numba.njit(cache=True, nogil=True)
-def _lag_bank(t, u, taus):  # pragma: no cover - compiled
+def _lag_bank(t: FloatArray, u: FloatArray,
+              taus: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     n = t.shape[0]
     k = taus.shape[0]
     out = np.empty((n, k))
@@ -135,4 +136,5 @@ def delay(time: npt.ArrayLike, signal: npt.ArrayLike, dead_time: float) -> Float
     u = np.asarray(signal, dtype=np.float64)
     if dead_time <= 0.0:
         return u.copy()
-    return np.interp(t - dead_time, t, u, left=u[0])
+    delayed: FloatArray = np.interp(t - dead_time, t, u, left=u[0])
+    return delayed

@@ -135,7 +135,7 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
     m = max(int(0.1 / dt), 2)
     lags = np.arange(-m, m + 1)
     xc = [np.corrcoef(dy[max(0, k):dy.size + min(0, k)],
-                      ds[max(0, -k):ds.size - max(0, k)])[0, 1] for k in lags]
+                      ds[max(0, -k):ds.size - max(0, k)])[0, 1] for k in range(-m, m + 1)]
     ax.plot(lags * dt * 1e3, xc, label='corr(measured rate, simulated rate)')
     ax.axvline(0.0, color='0.6', lw=0.6)
     ax.set_xlabel('shift of the measured output [ms]')

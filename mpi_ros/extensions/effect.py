@@ -23,12 +23,45 @@ list of names.  Adding an effect is one new module and one registry line (docs/d
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
+
+import numpy as np
+import numpy.typing as npt
 
 from ..errors import ModelError
+from ..model import MPIModel
 
-__all__ = ['Effect', 'EffectParameter', 'EFFECTS', 'register_effect', 'unregister_effect',
-           'effect_keys', 'effect_off_values', 'effects_present']
+__all__ = ['Effect', 'EffectModel', 'EffectParameter', 'EFFECTS', 'register_effect',
+           'unregister_effect', 'effect_keys', 'effect_off_values', 'effects_present']
+
+
+class EffectModel(Protocol):
+    """
+    The extended model of an effect: Gamma plus the effect, with its parameter form.
+
+    An effect that can be inverted causally also has ``inverse_step()`` (see
+    :func:`mpi_ros.extensions.compensation.inverse_step_of`).
+
+    """
+
+    @property
+    def model(self) -> MPIModel:
+        """Return the Gamma the effect extends."""
+
+    @property
+    def cause(self) -> str:
+        """Return the effect's name, as in :attr:`Effect.name`."""
+
+    @classmethod
+    def from_params(cls, mapping: Mapping[str, Any]) -> 'EffectModel':
+        """Build the model from flat parameters (Gamma's ``model.*`` plus the effect's)."""
+
+    def to_params(self) -> dict[str, Any]:
+        """Return the flat parameter form that :meth:`from_params` reads."""
+
+    def simulate(self, time: npt.ArrayLike,
+                 current: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Return the output [m] for a current [A] sampled at ``time`` [s]."""
 
 
 @dataclass(frozen=True)
@@ -74,7 +107,7 @@ class Effect:
         The extended model in words (docs, reports).
     parameters : tuple of EffectParameter
         Its parameter keys (besides Gamma's).
-    model_class : type
+    model_class : type of EffectModel
         The extended model: ``from_params(mapping)``, ``to_params()``, ``simulate(time,
         current)``, ``model`` (Gamma), ``cause``; ``inverse_step()`` when invertible.
     fit : callable
@@ -96,7 +129,7 @@ class Effect:
     name: str
     formula: str
     parameters: tuple[EffectParameter, ...]
-    model_class: type
+    model_class: type[EffectModel]
     fit: Callable[..., Any]
     parameter_count: Callable[[Mapping[str, Any]], int]
     signature: Callable[[Mapping[str, Any], float], str] = field(

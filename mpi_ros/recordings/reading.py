@@ -128,6 +128,7 @@ def read_signals(path: PathLike, **options: Any) -> Recording:
 
     """
     source = Path(path)
+    accepted: tuple[str, ...]
     if source_kind(source) == 'bag':
         accepted, kind = BAG_KEYWORDS, 'rosbag2 bag'
         unknown = sorted(set(options) - set(accepted))
