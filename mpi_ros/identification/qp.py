@@ -1,0 +1,307 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The convex QP (34)-(36).
+
+The generalised error's Gram matrix (with the constant term eliminated), OSQP, the weights.
+"""
+
+from typing import Any, Callable
+
+import numpy as np
+import numpy.typing as npt
+import osqp
+import scipy.sparse as sp
+
+from .design import _IDLE_PLAY, FloatArray, scaled_design, ScaledDesign
+from ..deadzone import dead_zone_operator
+from ..errors import IdentificationError
+from ..model import MPIModel
+from ..play import play_operator
+
+__all__ = ['fit_generalized_error', 'fit_model', 'generalized_error_gram', 'identify_weights']
+
+
+def generalized_error_gram(*blocks: FloatArray) -> FloatArray:
+    """
+    Return the normalised Gram matrix ``Phi^T Phi / N`` of column blocks ``Phi = [B1, B2, ...]``.
+
+    Parameters
+    ----------
+    *blocks : ndarray of float, shape (N, k_i)
+        Regressor blocks with a common number of rows.
+
+    Returns
+    -------
+    ndarray of float, shape (sum k_i, sum k_i)
+        The matrix of the quadratic form (34).
+
+    """
+    phi = np.hstack(blocks)
+    quadratic: FloatArray = (phi.T @ phi) / phi.shape[0]
+    return quadratic
+
+
+def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
+                          n_hysteresis: int, n_superposition: int,
+                          superposition_center: int, epsilon: float = 1e-6,
+                          extra_lower: FloatArray | None = None,
+                          fixed_zero: npt.ArrayLike | None = None) -> tuple[
+                              FloatArray, FloatArray, FloatArray, Any]:
+    """
+    Solve the QP (34)-(36) for the weights ``w_H``, ``w'_S`` (and optional extras).
+
+    Minimises ``v^T G v`` with ``v = [w_H; w'_S; w_X]`` and ``G`` the Gram matrix
+    of ``[H_rH[x], -S_r'S[y], X]`` (see :func:`generalized_error_gram`), where X
+    holds optional extra regressors that enter the generalised error like H's
+    plays (e.g. creep operators), subject to (8) on ``w_H``, (19) on ``w'_S``,
+    ``w_X >= extra_lower`` and the equality (36) ``equality_row . w_H = 1``.
+
+    Parameters
+    ----------
+    gram : ndarray of float, shape (nv, nv)
+        Gram matrix of the regressors, in the order H, S', extras.
+    equality_row : ndarray of float, shape (n+1,)
+        Coefficients of (36), normalised so the right-hand side is 1.
+    n_hysteresis : int
+        Number of plays (n+1); the first is the identity (r_H0 = 0).
+    n_superposition : int
+        Number of dead-zone operators of S'.
+    superposition_center : int
+        Index (within S') of the zero threshold.
+    epsilon : float
+        The positive bound of (8) and (19) (scaled units).
+    extra_lower : ndarray of float, shape (k,), optional
+        Lower bounds of the extra weights (default 0).
+    fixed_zero : array_like of int, optional
+        Indices of plays (other than the first) whose weight is fixed at 0.
+
+    Returns
+    -------
+    w_h, w_s_inv, w_extra : ndarray of float
+        The weights (after a check of every constraint).
+    info : object
+        OSQP's info structure.
+
+    Raises
+    ------
+    IdentificationError
+        When OSQP does not report ``solved`` or the result violates a constraint.
+
+    """
+    n1, m = n_hysteresis, n_superposition
+    nv = gram.shape[0]
+    k = nv - n1 - m
+    gram = np.array(gram, dtype=np.float64)
+    ridge = 1e-9 * max(float(np.mean(np.diag(gram))), 1e-300)
+    gram[np.diag_indices(nv)] += ridge
+    hysteresis_center = 0
+    # Constraint rows: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
+    rows = [np.concatenate([equality_row, np.zeros(m + k)])]
+    lower = [1.0]
+    upper = [1.0]
+    zero = set() if fixed_zero is None else {int(i) for i in np.ravel(fixed_zero)} - {0}
+    for i in range(n1):                                    # (8): U_H w_H <= u_H
+        row = np.zeros(nv)
+        row[i] = 1.0
+        rows.append(row)
+        lower.append(epsilon if i == hysteresis_center else 0.0)
+        upper.append(0.0 if i in zero else np.inf)
+    c = superposition_center
+    for i in range(m):                                     # (19): slopes outward from 0
+        row = np.zeros(nv)
+        if i >= c:
+            row[n1 + c:n1 + i + 1] = 1.0
+        else:
+            row[n1 + i:n1 + c + 1] = 1.0
+        rows.append(row)
+        lower.append(epsilon)
+        upper.append(np.inf)
+    x_lower = np.zeros(k) if extra_lower is None else np.asarray(extra_lower, dtype=float)
+    for i in range(k):
+        row = np.zeros(nv)
+        row[n1 + m + i] = 1.0
+        rows.append(row)
+        lower.append(float(x_lower[i]))
+        upper.append(np.inf)
+    a_mat = sp.csc_matrix(np.array(rows))
+    lo = np.array(lower)
+    hi = np.array(upper)
+    solver = osqp.OSQP()
+    solver.setup(P=sp.csc_matrix(np.triu(gram)), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
+                 verbose=False, eps_abs=1e-9, eps_rel=1e-9, max_iter=200000,
+                 polishing=True, polish_refine_iter=10)
+    res = solver.solve(raise_error=False)
+    # 'solved inaccurate' and 'maximum iterations reached' (tolerances of 1e-9 not met,
+    # typical when the data determine some weights only weakly, e.g. no hysteresis) are
+    # accepted when the result is finite and feasible: the constraints are re-checked and
+    # projected below, and identify() judges the fit by its output error against a
+    # straight line.  Infeasible or diverged solves are refused.
+    if res.info.status_val not in (osqp.SolverStatus.OSQP_SOLVED,
+                                   osqp.SolverStatus.OSQP_SOLVED_INACCURATE,
+                                   osqp.SolverStatus.OSQP_MAX_ITER_REACHED):
+        msg = (f'the identification QP was not solved (OSQP status: {res.info.status!r},'
+               f' {res.info.iter} iterations); check that the data excite the actuator over'
+               ' its range, or lower the model order')
+        raise IdentificationError(msg)
+    v = np.array(res.x, dtype=np.float64)
+    if not np.all(np.isfinite(v)):
+        msg = 'the identification QP returned non-finite weights; check the data for outliers'
+        raise IdentificationError(msg)
+    resid = a_mat @ v
+    violation = float(np.max(np.maximum(lo - resid, 0.0)[1:]))
+    violation = max(violation, abs(float(resid[0]) - 1.0))
+    if violation > 1e-6:
+        msg = (f'the identification QP result violates the invertibility constraints by'
+               f' {violation:.3g} (OSQP status {res.info.status!r}); the data may be'
+               ' degenerate')
+        raise IdentificationError(msg)
+    # Project the solver's round-off onto the constraint set so (8)/(19) hold exactly.
+    w_h = v[:n1].copy()
+    w_h[hysteresis_center] = max(w_h[hysteresis_center], epsilon)
+    w_h[1:] = np.maximum(w_h[1:], 0.0)
+    w_h[sorted(zero)] = 0.0
+    w_s = v[n1:n1 + m].copy()
+    slopes = np.empty(m)
+    slopes[c:] = np.maximum(np.cumsum(w_s[c:]), epsilon)
+    slopes[:c + 1] = np.maximum(np.cumsum(w_s[:c + 1][::-1])[::-1], epsilon)
+    w_s[c] = slopes[c]
+    w_s[c + 1:] = np.diff(slopes[c:])
+    w_s[:c] = -np.diff(slopes[:c + 1])
+    w_x = np.maximum(v[n1 + m:], x_lower) if k else v[n1 + m:]
+    return w_h, w_s, w_x, res.info
+
+
+def _mpi_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: FloatArray, *,
+              rows: npt.NDArray[np.bool_] | None = None,
+              extra: FloatArray | None = None,
+              chunk: int = 32768) -> tuple[FloatArray, FloatArray]:
+    # Gram matrix and column means of [H_rH[x], -S_r'S[y], extra] over the selected rows,
+    # accumulated chunk by chunk: the full N x nv regressor matrix is never formed (1e6
+    # samples stay fast and small in memory).  The plays run over every sample.
+    nv = r_h.size + r_s_inv.size + (0 if extra is None else extra.shape[1])
+    gram = np.zeros((nv, nv))
+    total = np.zeros(nv)
+    z = np.zeros(r_h.size)                                                      # (32)
+    count = 0
+    for start in range(0, xs.size, chunk):
+        part = slice(start, start + chunk)
+        plays, z = play_operator(xs[part], r_h, z)
+        blocks = [plays, -dead_zone_operator(ys[part], r_s_inv)]
+        if extra is not None:
+            blocks.append(extra[part])
+        phi = np.hstack(blocks)
+        if rows is not None:
+            phi = phi[rows[part]]
+        count += phi.shape[0]
+        gram += phi.T @ phi
+        total += phi.sum(axis=0)
+    count = max(count, 1)
+    return gram / count, total / count
+
+
+def identify_weights(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
+                     epsilon: float = 1e-6,
+                     extra_columns: Callable[['ScaledDesign'], FloatArray] | None = None,
+                     extra_lower: FloatArray | None = None,
+                     anchor: str = 'operating_point',
+                     rows: npt.NDArray[np.bool_] | None = None) -> tuple[
+                         ScaledDesign, FloatArray, FloatArray, FloatArray, float, Any]:
+    """
+    Identify the weights of (34)-(36) on a record, optionally with extra regressors.
+
+    Parameters
+    ----------
+    x, y : ndarray of float, shape (N,)
+        Input [A] and output [m].
+    n, l : int
+        Model orders.
+    epsilon : float
+        Bound of (8)/(19), scaled units.
+    extra_columns : callable, optional
+        Given the :class:`ScaledDesign` (``design.scaled_input(x)`` is the input the QP
+        sees), returns extra regressors of shape (N, k) that enter the generalised error
+        beside H's plays (e.g. creep operators).
+    extra_lower : ndarray of float, shape (k,), optional
+        Lower bounds of the extra weights (default 0).
+    anchor : {'operating_point', 'origin'}
+        See :func:`scaled_design`.
+    rows : ndarray of bool, shape (N,), optional
+        Samples that enter the generalised error (e.g. the training part); all after the
+        burn-in by default.  The plays always run over every sample.
+
+    Returns
+    -------
+    design : ScaledDesign
+        Scales and thresholds; ``design.model(w_h, w_s_inv, constant)`` gives Gamma.
+    w_h, w_s_inv, w_extra : ndarray of float
+        The weights (scaled units).
+    constant : float
+        The constant term (0 without one).
+    info : object
+        OSQP's info structure.
+
+    """
+    design = scaled_design(x, y, n, l, anchor=anchor)
+    xs, ys = design.scaled_input(x), design.scaled_output(y)
+    r_h, r_s_inv = design.hysteresis_thresholds, design.inverse_superposition_thresholds
+    selected = np.ones(x.size, dtype=bool) if rows is None else np.array(rows, dtype=bool)
+    selected[:design.burn_in] = False
+    extra = None if extra_columns is None else np.asarray(extra_columns(design),
+                                                          dtype=np.float64)
+    gram, mean = _mpi_gram(xs, ys, r_h, r_s_inv, rows=selected, extra=extra)   # (34)
+    idle = None
+    if design.constant:
+        # min over c of |Phi v + c|^2 is c = -mean(Phi) v: the covariance of the columns
+        # replaces their Gram matrix, and the QP keeps its variables and constraints.
+        gram = gram - np.outer(mean, mean)
+        # A play the data never move after the burn-in (its threshold exceeds half the
+        # record's later reversals) is a constant column: it would satisfy (36) at no
+        # cost and shrink every other weight.  Such plays get weight 0.
+        variance = np.diag(gram)[:n + 1]
+        idle = np.flatnonzero(variance <= _IDLE_PLAY ** 2 * variance[0])
+    w_h, w_s_inv, w_extra, info = fit_generalized_error(
+        gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,    # (36), scaled
+        superposition_center=design.center, epsilon=epsilon, extra_lower=extra_lower,
+        fixed_zero=idle)
+    constant = (-float(mean @ np.concatenate([w_h, w_s_inv, w_extra]))
+                if design.constant else 0.0)
+    return design, w_h, w_s_inv, w_extra, constant, info
+
+
+def fit_model(current: npt.ArrayLike, displacement: npt.ArrayLike, n: int,
+              l: int, *, epsilon: float = 1e-6, anchor: str = 'operating_point',  # noqa: E741
+              rows: npt.NDArray[np.bool_] | None = None) -> tuple[MPIModel, ScaledDesign, Any]:
+    """
+    Fit Gamma of order (n, l) by the QP, without the checks of :func:`identify`.
+
+    For internal searches (order selection, diagnosis trials) that judge the fit
+    themselves.
+
+    Parameters
+    ----------
+    current, displacement : array_like of float, shape (N,)
+        Input [A] and output [m].
+    n, l : int
+        Model orders.
+    epsilon : float
+        Bound of (8)/(19), scaled units.
+    anchor : {'operating_point', 'origin'}
+        See :func:`scaled_design`.
+    rows : ndarray of bool, shape (N,), optional
+        Samples that enter the generalised error (after the burn-in).
+
+    Returns
+    -------
+    model : MPIModel
+        The forward model.
+    design : ScaledDesign
+        Its design (``design.burn_in``: samples not determined by the data).
+    info : object
+        OSQP's info structure.
+
+    """
+    x = np.asarray(current, dtype=np.float64).reshape(-1)
+    y = np.asarray(displacement, dtype=np.float64).reshape(-1)
+    design, w_h, w_s_inv, _, constant, info = identify_weights(
+        x, y, n, l, epsilon=epsilon, anchor=anchor, rows=rows)
+    return design.model(w_h, w_s_inv, constant), design, info
