@@ -14,12 +14,12 @@ identify`` and the other offline subcommands never load rclpy.
 
 import importlib
 import sys
-from typing import Dict, List, Sequence
+from typing import Dict, List, Sequence, Tuple
 
 __all__ = ['NODES', 'node_names', 'run_node']
 
 #: CLI name -> (module in mpi_ros.nodes, executable name, one-line summary).
-NODES: Dict[str, tuple] = {
+NODES: Dict[str, Tuple[str, str, str]] = {
     'compensator': (
         'compensator', 'compensator',
         'feedforward compensator: desired_displacement [m] -> current_command [A]'),

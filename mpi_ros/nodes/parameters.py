@@ -354,10 +354,10 @@ def normalized(spec: ParameterSpec, parameter: Parameter) -> Parameter:
         if all(_dotless(item) for item in items):
             return Parameter(parameter.name, Type.DOUBLE_ARRAY, [float(v) for v in items])
     if spec.type_ == Type.DOUBLE_ARRAY and found == Type.STRING:
-        items = _yaml_list(parameter.value)
-        if (items and all(isinstance(v, float) or _dotless(v) for v in items)
-                and any(_dotless(v) for v in items)):
-            return Parameter(parameter.name, Type.DOUBLE_ARRAY, [float(v) for v in items])
+        parsed = _yaml_list(parameter.value)
+        if (parsed and all(isinstance(v, float) or _dotless(v) for v in parsed)
+                and any(_dotless(v) for v in parsed)):
+            return Parameter(parameter.name, Type.DOUBLE_ARRAY, [float(v) for v in parsed])
     return parameter
 
 
@@ -504,7 +504,7 @@ def _dotless(item: Any) -> bool:
     return isinstance(item, str) and _DOTLESS_FLOAT.fullmatch(item.strip()) is not None
 
 
-def _yaml_list(text: str) -> Optional[list]:
+def _yaml_list(text: str) -> Optional[List[Any]]:
     try:
         value = yaml.safe_load(text)
     except yaml.YAMLError:
@@ -600,14 +600,14 @@ def harden_parameter_services(node: Node, *, groups: Iterable[Iterable[str]] = (
         The node's specs by name (``null`` handling); None: none.
 
     """
-    groups = [tuple(group) for group in groups]
+    grouped: List[Tuple[str, ...]] = [tuple(group) for group in groups]
     for service in node.services:
         name = service.srv_name.rsplit('/', 1)[-1]
         if name not in ('set_parameters', 'set_parameters_atomically'):
             continue
         callback = service.callback
         if name == 'set_parameters':
-            callback = _grouped(node, groups, specs)
+            callback = _grouped(node, grouped, specs)
         service.callback = _refusing_undecodable(callback, name)
 
 
