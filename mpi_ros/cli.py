@@ -66,7 +66,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     recording = read_recording(args.data, options)
     _progress(f'identifying from {len(recording.time)} samples of {args.data} '
               f'(order {format_order(order)}) ...')
-    result = fit_recording(recording, order=order, anchor=args.anchor).result
+    result = fit_recording(recording, order=order, anchor=args.anchor,
+                           periodic=args.periodic).result
     for row in result.order_table:
         _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out nonlinearity error "
                   f"{100 * row['nonlinearity_error']:6.2f} % of the output range")
@@ -224,6 +225,10 @@ def _parser() -> argparse.ArgumentParser:
                    help='operating_point (default): any sensor zero, bias, sign or start '
                         'state; origin: the design of the paper, for data that start at rest '
                         'at zero input and zero output')
+    p.add_argument('--periodic', action='store_true',
+                   help='the record is one period the actuator had been following (e.g. a '
+                        'single measured loop that ends where it starts): fit all of it, '
+                        'its start state taken as its end state (needs an explicit --order)')
     add_data_options(p)
     p.set_defaults(func=_cmd_identify)
     for name, func, what, column in (

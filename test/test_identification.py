@@ -195,3 +195,22 @@ def test_too_little_excitation_for_the_order(x, match):
     else:
         result = identify(x, 1e-5 * x ** 2, n=14, l=7)
         assert result.rms_error <= result.linear_rms_error
+
+
+def test_periodic_fits_a_single_loop_that_plain_refuses():
+    # One period of a loop the actuator had been following: its start state is its end
+    # state.  Without periodic the start state is unknown and the record is refused.
+    t = np.linspace(0.0, 1.0, 801)
+    x = np.sin(2 * np.pi * t)                           # 0 -> +1 -> -1 -> 0
+    h = PIHysteresisOperator([0.0, 0.2, 0.5], [1.0, 0.5, 0.3])
+    _, state = h.apply(np.tile(x, 3))                   # steady periodic state
+    y = 5.0 - 2e-5 * (h.apply(x, state)[0] + 0.2 * h.apply(x, state)[0] ** 3)
+    with pytest.raises(IdentificationError, match='periodic=True'):
+        identify(x, y, n=6, l=3)
+    result = identify(x, y, n=6, l=3, periodic=True)
+    assert result.rms_error < 0.1 * result.linear_rms_error
+    assert result.model.output_sign == -1
+    with pytest.raises(DataError, match='end where it starts'):
+        identify(x[:600], y[:600], n=6, l=3, periodic=True)
+    with pytest.raises(DataError, match="order 'auto'"):
+        identify(x, y, order='auto', periodic=True)

@@ -69,6 +69,7 @@ import math
 import time
 from typing import Any
 
+import numpy as np
 import numpy.typing as npt
 
 from .checks import _check_excitation, _check_monotone, _check_signals, _quality_check
@@ -155,7 +156,7 @@ class IdentificationResult:
 def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | None = None,
              l: int | None = None, order: str | tuple[int, int] | None = None,  # noqa: E741
              epsilon: float = 1e-6, holdout: float = 0.3,
-             anchor: str = 'operating_point') -> IdentificationResult:
+             anchor: str = 'operating_point', periodic: bool = False) -> IdentificationResult:
     """
     Identify a modified Prandtl-Ishlinskii model from measured input/output data.
 
@@ -180,6 +181,12 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         Held-out fraction for ``order='auto'``.
     anchor : {'operating_point', 'origin'}
         Where thresholds and states are anchored, see :func:`scaled_design`.
+    periodic : bool
+        The record is one period of a periodic excitation the actuator had been following
+        (e.g. a single measured loop that ends where it starts): its start state is then
+        the state at its end, so the whole record is fitted (the record is run twice and
+        the second pass fitted).  Otherwise the start state is unknown and the samples
+        before the input has covered its range are left out.  Needs an explicit order.
 
     Returns
     -------
@@ -216,6 +223,9 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         raise DataError(msg)
     table: list[dict[str, Any]] = []
     _check_monotone(x, y)
+    if periodic:
+        return _identify_periodic(x, y, order=order, n=n, l=l, epsilon=epsilon,
+                                  anchor=anchor, started=started)
     if order == 'auto':
         (n, l), table = select_order(x, y, holdout=holdout, epsilon=epsilon, anchor=anchor)
     elif order is not None:
@@ -238,3 +248,36 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         samples=int(x.size), solver_status=str(info.status), iterations=int(info.iter),
         solve_time=time.perf_counter() - started, order_table=table,
         linear_rms_error=linear, burn_in=int(design.burn_in))
+
+
+def _identify_periodic(x: npt.NDArray[Any], y: npt.NDArray[Any], *, order: Any,
+                       n: int | None, l: int | None,  # noqa: E741
+                       epsilon: float, anchor: str, started: float) -> IdentificationResult:
+    span = float(np.ptp(x))
+    if abs(float(x[-1]) - float(x[0])) > 0.02 * span:
+        gap = 100.0 * abs(float(x[-1]) - float(x[0])) / span
+        msg = (f'periodic: the record must end where it starts (one period); the input goes'
+               f' from {float(x[0]):.6g} to {float(x[-1]):.6g}, {gap:.1f} % of its range'
+               ' apart; cut it to whole periods')
+        raise DataError(msg)
+    if order == 'auto':
+        msg = ("periodic: order 'auto' needs held-out data beyond one period; give the order"
+               ' (e.g. 8,4), or record several periods and leave periodic off')
+        raise DataError(msg)
+    if order is not None:
+        n, l = int(order[0]), int(order[1])  # noqa: E741
+    n = 14 if n is None else int(n)
+    l = 7 if l is None else int(l)  # noqa: E741
+    size = x.size
+    x2, y2 = np.concatenate([x, x]), np.concatenate([y, y])
+    rows = np.zeros(2 * size, dtype=bool)
+    rows[size:] = True                       # the second pass: states set by the first
+    _check_excitation(x2, y2, n, l, anchor=anchor)
+    model, _, info = fit_model(x2, y2, n, l, epsilon=epsilon, anchor=anchor, rows=rows)
+    sim = model.simulate(x2)
+    rms, peak, linear = _quality_check(x2, y2, sim, size, n, l, anchor)
+    return IdentificationResult(
+        model=model, order=(n, l), nonlinearity_error=peak, rms_error=rms, samples=int(size),
+        solver_status=str(info.status), iterations=int(info.iter),
+        solve_time=time.perf_counter() - started, order_table=[], linear_rms_error=linear,
+        burn_in=0)

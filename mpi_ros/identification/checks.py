@@ -171,7 +171,9 @@ def _check_excitation(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: 
                    f' {100 * fall / span:.3g} % downwards: the loops (both branches) are not'
                    ' determined and a model fitted there is arbitrary elsewhere; record'
                    ' at least two full cycles over the range (a single cycle from an'
-                   ' unknown state is not enough)')
+                   ' unknown state is not enough), or, if the record is one period of an'
+                   ' excitation the actuator had been following, say so: periodic=True'
+                   ' (mpi-ros identify --periodic)')
             raise IdentificationError(msg)
 
 
