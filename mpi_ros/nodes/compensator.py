@@ -70,7 +70,6 @@ ordered, makes the node refuse to start (exit status 1) rather than run a model
 nobody asked for.
 """
 
-from functools import partial
 import math
 import struct
 import time
@@ -79,12 +78,12 @@ import warnings
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
 from .loop import loop_qos
+from .loss import LOSS_ADVICE, LossMonitor
 from .parameters import (
     check_parameters, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
     harden_parameter_services, is_null, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS,
@@ -144,10 +143,6 @@ _BIG = struct.Struct('>d').unpack_from
 _PACK = struct.Struct('<H2xd').pack
 #: The encapsulation header CDR_LE as the little-endian unsigned short _PACK writes first.
 _CDR_LE = 0x0100
-#: What to do about lost desired displacements (diagnostics and log).
-_LOSS_ADVICE = ('the node did not keep up and its input queue (qos_depth) overflowed, or '
-                'the publisher dropped them; raise qos_depth, give the node a core of its '
-                'own (taskset), or send chunks of samples (axes mode, docs/reliability.md)')
 #: Counters of bad inputs: a diagnostics period with any of them is WARN, and they are logged.
 _FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
 #: At most one log line about bad inputs per this period [s]; checked every second.
@@ -193,15 +188,6 @@ class CompensatorNode(Node):
         self._messages_in = 0
         self._messages_out = 0
         self._dropped_unconfigured = 0
-        # Loss accounting (see _on_desired_displacement and docs/reliability.md).
-        self._lost_input = 0          # jumps of the publisher's sequence number
-        self._dds_lost = 0            # DDS sample-lost events
-        self._incompatible_qos = 0    # peers that cannot match our QoS
-        self._incompatible: Dict[str, int] = {}
-        self._max_backlog = 0         # most messages served in one callback, this period
-        self._last_sequence: Optional[int] = None
-        self._unsequenced = 0
-        self._input_publishers = 0
         self._last_report = (time.monotonic(), 0, {})
         self._loss_log = (-math.inf, 0)
         self._fault_log = (-math.inf, {})
@@ -219,17 +205,16 @@ class CompensatorNode(Node):
                        else _no_stamp)
         self._configure_from_declared()
 
-        qos = loop_qos(self.get_parameter('qos_depth').value,
-                       self.get_parameter('qos_reliability').value)
+        reliability = self.get_parameter('qos_reliability').value
+        qos = loop_qos(self.get_parameter('qos_depth').value, reliability)
+        # Counts what never arrived (sequence gaps, DDS sample-lost, incompatible peers).
+        self._loss = LossMonitor(self, 'desired_displacement', 'current_command', reliability)
         self._publisher = self.create_publisher(
-            Float64, 'current_command', qos, event_callbacks=PublisherEventCallbacks(
-                incompatible_qos=partial(self._on_incompatible_qos, 'current_command')))
+            Float64, 'current_command', qos, event_callbacks=self._loss.publisher_callbacks())
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._subscription = self.create_subscription(
             Float64, 'desired_displacement', self._on_desired_displacement, qos, raw=True,
-            event_callbacks=SubscriptionEventCallbacks(
-                message_lost=self._on_message_lost,
-                incompatible_qos=partial(self._on_incompatible_qos, 'desired_displacement')))
+            event_callbacks=self._loss.subscription_callbacks())
         self._timer = self.create_timer(
             self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
         self._fault_timer = self.create_timer(1.0, self._every_second)
@@ -266,10 +251,7 @@ class CompensatorNode(Node):
         counters.update(
             messages_in=self._messages_in,
             messages_out=self._messages_out,
-            messages_lost=max(self._lost_input, self._dds_lost),
-            lost_sequence_gaps=self._lost_input,
-            lost_dds_events=self._dds_lost,
-            incompatible_qos=self._incompatible_qos,
+            **self._loss.counters(),
             dropped_unconfigured=self._dropped_unconfigured,
             rejected_updates=self._rejected_updates,
             model_version=self._model_version,
@@ -319,10 +301,11 @@ class CompensatorNode(Node):
         # (the messages left queued keep their events and come in the next calls).  The
         # messages taken here carry the publisher's sequence number: a jump counts lost
         # desired displacements (a keep-last queue that overflowed), which DDS itself does
-        # not report.  The first message of a call comes without it (the executor took it).
+        # not report (mpi_ros.nodes.loss).
         take = self._subscription.handle.take_message
         publish = self._publisher.handle.publish_raw
-        self._unsequenced += 1
+        loss = self._loss
+        loss.delivered()
         served = 0
         while True:
             value = (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0]
@@ -342,44 +325,8 @@ class CompensatorNode(Node):
             if taken is None:
                 break
             data, info = taken
-            self._check_sequence(info['publication_sequence_number'])
-        if served > self._max_backlog:
-            self._max_backlog = served
-
-    def _check_sequence(self, number: Optional[int]) -> None:
-        """
-        Count a jump of the publisher's sequence number as lost messages.
-
-        The messages the executor handed over came without their number
-        (``_unsequenced`` of them since the last number seen).  Several publishers
-        interleave their numbers: with more than one the check is off (their count is
-        refreshed with the diagnostics); a number that goes back (a restarted
-        publisher) starts the count again.
-
-        """
-        last, unsequenced = self._last_sequence, self._unsequenced
-        self._last_sequence, self._unsequenced = number, 0
-        if number is None or last is None or self._input_publishers > 1:
-            return
-        gap = number - last - 1 - unsequenced
-        if gap > 0:
-            self._lost_input += gap
-
-    def _on_message_lost(self, info: Any) -> None:
-        """Count what DDS reports lost on ``desired_displacement`` (sample-lost event)."""
-        self._dds_lost += int(info.total_count_change)
-
-    def _on_incompatible_qos(self, side: str, info: Any) -> None:
-        """Count and log an endpoint whose QoS cannot match ours (it gets nothing)."""
-        # total_count: rmw_fastrtps reports total_count_change 0 for this event.
-        self._incompatible[side] = max(self._incompatible.get(side, 0), int(info.total_count))
-        self._incompatible_qos = sum(self._incompatible.values())
-        policy = getattr(info.last_policy_kind, 'name', str(info.last_policy_kind))
-        self.get_logger().warning(
-            f'{side}: a peer with incompatible QoS ({policy.replace("RMW_QOS_POLICY_", "")}'
-            f'); it exchanges nothing with this node. This node uses qos_reliability='
-            f'{self.get_parameter("qos_reliability").value}: a best_effort publisher does '
-            'not reach a reliable subscription')
+            loss.taken(info['publication_sequence_number'])
+        loss.served(served)
 
     # -- parameters ---------------------------------------------------------------------
     def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
@@ -591,7 +538,7 @@ class CompensatorNode(Node):
         self._diagnostics.publish(self.diagnostics())
 
     def _every_second(self) -> None:
-        self._input_publishers = self._subscription.get_publisher_count()
+        self._loss.publishers = self._subscription.get_publisher_count()
         self.log_faults()
         self.log_losses()
 
@@ -607,13 +554,13 @@ class CompensatorNode(Node):
         """
         now = time.monotonic()
         last_time, last_lost = self._loss_log
-        lost = max(self._lost_input, self._dds_lost)
+        lost = self._loss.lost
         if now - last_time < _FAULT_LOG_PERIOD_S or lost == last_lost:
             return False
         self._loss_log = (now, lost)
         self.get_logger().warning(
             f'{lost - last_lost} desired displacements lost before this node could serve them'
-            f' ({lost} in all): {_LOSS_ADVICE}')
+            f' ({lost} in all): {LOSS_ADVICE}')
         return True
 
     def log_faults(self) -> bool:
@@ -667,26 +614,11 @@ class CompensatorNode(Node):
         status = DiagnosticStatus(name=f'{self.get_name()}: feedforward',
                                   hardware_id=self.get_fully_qualified_name())
         faults = _new_faults(counters, last_counters)
-        lost = counters['messages_lost'] - last_counters.get('messages_lost', 0)
-        incompatible = (counters['incompatible_qos']
-                        - last_counters.get('incompatible_qos', 0))
-        backlog, self._max_backlog = self._max_backlog, 0
         depth = self.get_parameter('qos_depth').value
-        if lost > 0 or incompatible > 0:
+        losses = self._loss.period(counters, last_counters, depth, 'desired displacements')
+        if losses:
             status.level = DiagnosticStatus.WARN
-            parts = []
-            if lost:
-                parts.append(f'{lost} desired displacements lost in the last period '
-                             f'({counters["messages_lost"]} in all): {_LOSS_ADVICE}')
-            if incompatible:
-                parts.append(f'{incompatible} peers with incompatible QoS in the last period '
-                             '(they exchange nothing with this node; see the log)')
-            status.message = '; '.join(parts)
-        elif backlog > depth // 2 and depth > 1:
-            status.level = DiagnosticStatus.WARN
-            status.message = (f'input queue more than half full ({backlog} of qos_depth='
-                              f'{depth} messages waiting at once): the node is falling '
-                              'behind; messages are lost when it fills')
+            status.message = '; '.join(losses)
         elif self._compensator is None:
             status.level = DiagnosticStatus.WARN
             status.message = ('no model: unconfigured, no commands published; give all '
@@ -710,9 +642,9 @@ class CompensatorNode(Node):
             values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
         values.update(
             rate_hz=round(rate, 3),
-            max_backlog=backlog,
+            max_backlog=self._loss.last_backlog,
             qos_depth=depth,
-            input_publishers=self._input_publishers,
+            input_publishers=self._loss.publishers,
             enabled=self.get_parameter('enabled').value,
             output_min=self.get_parameter('output.min').value,
             output_max=self.get_parameter('output.max').value,
