@@ -128,7 +128,7 @@ class LossMonitor:
     def period(self, counters: Dict[str, int], before: Dict[str, int], depth: int,
                what: str) -> List[str]:
         """
-        Describe the losses of a diagnostics period (and restart ``max_backlog``).
+        Describe the losses of a diagnostics period; restart ``max_backlog``.
 
         Parameters
         ----------
