@@ -84,6 +84,7 @@ from std_msgs.msg import Float64
 
 from .loop import loop_qos
 from .loss import LOSS_ADVICE, LossMonitor
+from .multi_axis import AXES
 from .parameters import (
     check_parameters, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
     harden_parameter_services, is_null, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS,
@@ -100,7 +101,7 @@ from ..extensions import (
 from ..model import MPIModel
 from ..params import OPERATING_POINT_DEFAULTS
 
-__all__ = ['CompensatorNode', 'PARAMETERS', 'main']
+__all__ = ['CompensatorNode', 'PARAMETERS', 'main', 'make_node']
 
 Type = Parameter.Type
 
@@ -132,6 +133,7 @@ PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
         'diagnostics_period', Type.DOUBLE, 1.0,
         'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0)),
     *loop_qos_parameters('desired_displacement and current_command'),
+    AXES,
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -671,7 +673,40 @@ def main(args: Optional[List[str]] = None) -> int:
         Exit status: 0 on shutdown, 1 when the configured model or limits are invalid.
 
     """
-    return run_node_main(CompensatorNode, 'compensator', args)
+    return run_node_main(make_node, 'compensator', args)
+
+
+def make_node(**kwargs: Any) -> Node:
+    """
+    Build the compensator the parameters ask for: single-axis, or multi-axis for ``axes`` > 1.
+
+    ``axes`` is read from the overrides (``-p axes:=8``, ``--params-file``) the way rclpy
+    gives them to a node of this name: a short-lived probe node (no parameter services,
+    no rosout) is created and destroyed first.
+
+    Parameters
+    ----------
+    **kwargs
+        Passed on to the node (``context=``, ``parameter_overrides=``...).
+
+    Returns
+    -------
+    rclpy.node.Node
+        A :class:`CompensatorNode` or a
+        :class:`mpi_ros.nodes.multi_axis.MultiAxisCompensatorNode`.
+
+    """
+    probe = Node('compensator', start_parameter_services=False, enable_rosout=False,
+                 **kwargs)
+    try:
+        # rclpy 7.1.6 has no public accessor of the overrides (see declare_parameters).
+        override = getattr(probe, '_parameter_overrides', {}).get('axes')
+    finally:
+        probe.destroy_node()
+    if override is not None and isinstance(override.value, int) and override.value > 1:
+        from .multi_axis import MultiAxisCompensatorNode
+        return MultiAxisCompensatorNode(**kwargs)
+    return CompensatorNode(**kwargs)
 
 
 def _no_stamp() -> None:
