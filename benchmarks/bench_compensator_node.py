@@ -60,7 +60,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                   workdir: Optional[Path] = None, qos_depth: int = 10000,
                   reliability: str = 'reliable', pin: bool = False,
                   node_kind: str = 'compensator',
-                  receiver_kind: str = 'ordinary') -> dict[str, Any]:
+                  receiver_kind: str = 'ordinary', axes: int = 1,
+                  chunk: int = 1) -> dict[str, Any]:
     """
     Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
@@ -95,6 +96,12 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         by the EventsExecutor as the package's nodes spin; ``naive``: the same callback
         spun by ``rclpy.spin`` (SingleThreadedExecutor); ``raw``: serialized messages,
         every queued one taken in one callback (the lightest receiver).
+    axes : int
+        1: the single-axis node on Float64 topics; N > 1: the multi-axis node (every axis
+        with the benchmark model) on the Float64MultiArray topics.
+    chunk : int
+        Samples per array message (``axes`` > 1): ``rate`` messages/s carry ``rate *
+        chunk`` samples of every axis per second.
 
     Returns
     -------
@@ -114,14 +121,24 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     from std_msgs.msg import Float64
 
     from mpi_ros import MPIModel
+    from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+
     from mpi_ros.nodes.loop import loop_qos, NodeProcess
+    from mpi_ros.nodes.multi_axis import axis_key
     from mpi_ros.params import write_params_yaml
 
     model = MPIModel.from_params(BENCH_MODEL)
     count = int(rate * duration)
     tmp = Path(tempfile.mkdtemp(prefix='mpi_ros_bench_')) if workdir is None else Path(workdir)
     params = tmp / 'params.yaml'
-    write_params_yaml(params, dict(model.to_params(), **{
+    arrays = axes > 1
+    chunk = chunk if arrays else 1
+    model_params = model.to_params()
+    if arrays:
+        model_params = {axis_key(k, key): value for k in range(axes)
+                        for key, value in model_params.items()}
+        model_params['axes'] = axes
+    write_params_yaml(params, dict(model_params, **{
         'qos_depth': qos_depth, 'qos_reliability': reliability,
         'output.min': output_min, 'output.max': output_max}))
     cores = sorted(os.sched_getaffinity(0))
@@ -141,7 +158,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     receiver = subprocess.Popen(
         [sys.executable, __file__, '--role', 'receiver', '--out', out, '--count', str(count),
          '--duration', str(duration + 60.0), '--qos-depth', str(qos_depth),
-         '--reliability', reliability, '--receiver', receiver_kind], env=dict(os.environ))
+         '--reliability', reliability, '--receiver', receiver_kind, '--axes', str(axes),
+         '--chunk', str(chunk)], env=dict(os.environ))
     if pin:
         # Right after the start, before rclpy creates any thread: every later thread
         # (DDS receive and event threads) inherits the affinity.
@@ -151,25 +169,40 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     context = rclpy.Context()
     rclpy.init(context=context)
     node = rclpy.create_node('bench_sender', context=context)
-    pub = node.create_publisher(Float64, 'desired_displacement',
-                                loop_qos(qos_depth, reliability))
+    if arrays:
+        pub = node.create_publisher(Float64MultiArray, 'desired_displacements',
+                                    loop_qos(qos_depth, reliability))
+    else:
+        pub = node.create_publisher(Float64, 'desired_displacement',
+                                    loop_qos(qos_depth, reliability))
+    output_topic = 'current_commands' if arrays else 'current_command'
+
     try:
         deadline = time.monotonic() + 60.0
         while (pub.get_subscription_count() < 1 or not Path(out + '.ready').exists()
-               or node.count_subscribers('current_command') < 1):
+               or node.count_subscribers(output_topic) < 1):
             if time.monotonic() > deadline:
                 msg = 'compensator or receiver did not start in 60 s'
                 raise RuntimeError(msg)
             time.sleep(0.05)
         time.sleep(2.0)                                      # let DDS finish matching
         lo, hi = 5e-6, 3e-5
-        t = np.arange(count) / rate
+        t = (np.arange(count * chunk) / (rate * chunk))[:, None] + np.arange(axes) * 0.1
         desired = lo + (hi - lo) * (0.5 + 0.4 * np.sin(2 * np.pi * 1.0 * t)
                                     + 0.1 * np.sin(2 * np.pi * 13.0 * t))
+        if arrays:
+            msg = Float64MultiArray()
+            msg.layout.dim = [
+                MultiArrayDimension(label='samples', size=chunk, stride=chunk * axes),
+                MultiArrayDimension(label='axes', size=axes, stride=axes)]
+            blocks = [desired[k * chunk:(k + 1) * chunk].reshape(-1).tolist()
+                      for k in range(count)]
+        else:
+            msg = Float64()
+            samples = desired[:, 0].tolist()
         sent = np.zeros(count, dtype=np.int64)
         rss = []
         period_ns = int(1e9 / rate)
-        msg = Float64()
         pids = {'compensator': comp.pid, 'sender': os.getpid(), 'receiver': receiver.pid}
         cpu_start = {name: _cpu_seconds(pid) for name, pid in pids.items()}
         threads_start = _thread_cpu_seconds(comp.pid)
@@ -182,7 +215,10 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
             now = time.monotonic_ns()
             due = min(count, (now - start) // period_ns + 1)
             while k < due:
-                msg.data = float(desired[k])
+                if arrays:
+                    msg.data = blocks[k]
+                else:
+                    msg.data = samples[k]
                 sent[k] = time.monotonic_ns()
                 pub.publish(msg)
                 k += 1
@@ -213,6 +249,16 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     n = stamps.size
     latency_us = (stamps - sent[:n]) / 1e3
     np.save(tmp / 'latency_us.npy', latency_us)
+    max_error = None
+    if n == count:
+        # Every command against the single-axis core, axis by axis (command_batch gives
+        # what per-sample commands give).
+        from mpi_ros.compensation import Compensator
+        commands = values.reshape(count * chunk, axes)
+        max_error = max(
+            float(np.max(np.abs(commands[:, k] - Compensator(
+                model, output_min=output_min, output_max=output_max).command_batch(
+                    desired[:, k])))) for k in range(axes))
     results: dict[str, Any] = {
         'cores': os.cpu_count(), 'domain_id': os.environ.get('ROS_DOMAIN_ID'),
         'rate': rate, 'duration': duration, 'sent': count, 'received': n,
@@ -226,7 +272,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'cpu_percent': cpu_percent, 'compensator_threads': thread_percent,
         'qos_depth': qos_depth, 'reliability': reliability,
         'pinned': pin, 'node': node_kind, 'receiver': receiver_kind,
-        'load_average': os.getloadavg(),
+        'load_average': os.getloadavg(), 'axes': axes, 'chunk': chunk,
+        'max_error_vs_core': max_error,
     }
     if n:
         p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
@@ -260,7 +307,9 @@ def format_results(results: dict[str, Any]) -> str:
     load = ' '.join(f'{v:.2f}' for v in r['load_average'])
     lines = [f'machine: {r["cores"]} cores, load average {load} (at the end); ROS_DOMAIN_ID '
              f'{r["domain_id"]}; QoS {r["reliability"]}, depth {r["qos_depth"]}; {pinning}',
-             f'node: {r["node"]}; receiver: {r["receiver"]}',
+             f'node: {r["node"]}; receiver: {r["receiver"]}; {r["axes"]} axes, '
+             f'{r["chunk"]} samples per message '
+             f'({r["rate"] * r["chunk"] * r["axes"]:,.0f} samples/s in all)',
              f'sent {r["sent"]} desired values in {r["elapsed"]:.2f} s '
              f'({r["achieved_rate"]:,.0f}/s), received {r["received"]} commands, '
              f'drops {r["drops"]}',
@@ -285,8 +334,11 @@ def format_results(results: dict[str, Any]) -> str:
     busy = {k: v for k, v in r['compensator_threads'].items() if v >= 0.5}
     lines.append('compensator CPU per thread [% of one core]: ' + ', '.join(
         f'{name} {value:.0f}' for name, value in sorted(busy.items(), key=lambda i: -i[1])))
-    lines.append(f'compensator CPU per message: '
-                 f'{r["cpu_percent"]["compensator"] * 1e4 / r["rate"]:.1f} us')
+    per_message = r['cpu_percent']['compensator'] * 1e4 / r['rate']
+    lines.append(f'compensator CPU per message: {per_message:.1f} us (per sample of one axis'
+                 f' {per_message / (r["chunk"] * r["axes"]):.2f} us)')
+    if r['max_error_vs_core'] is not None:
+        lines.append(f'largest |command - single-axis core|: {r["max_error_vs_core"]:.1e} A')
     lines.append(f'compensator exit status: {r["compensator_exit"]}')
     return '\n'.join(lines)
 
@@ -306,24 +358,28 @@ def main() -> None:
                         help='compensator, or relay:naive|events|waitset|poll (relay.py)')
     parser.add_argument('--receiver', choices=('ordinary', 'naive', 'raw'),
                         default='ordinary', help='how the receiver subscribes')
+    parser.add_argument('--axes', type=int, default=1,
+                        help='1: Float64 topics; N > 1: the multi-axis node, array topics')
+    parser.add_argument('--chunk', type=int, default=1, help='samples per array message')
     parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
     parser.add_argument('--out', default='', help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.role == 'receiver':
         _receiver(args.out, args.count, args.duration, args.qos_depth, args.reliability,
-                  args.receiver)
+                  args.receiver, args.axes, args.chunk)
         return
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
     print(format_results(run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
                                        reliability=args.reliability, pin=args.pin,
-                                       node_kind=args.node, receiver_kind=args.receiver)),
+                                       node_kind=args.node, receiver_kind=args.receiver,
+                                       axes=args.axes, chunk=args.chunk)),
           flush=True)
 
 
 def _receiver(out: str, count: int, timeout: float, qos_depth: int,
-              reliability: str, kind: str) -> None:
+              reliability: str, kind: str, axes: int, chunk: int) -> None:
     import struct
 
     import rclpy
@@ -333,8 +389,9 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
     from mpi_ros.nodes.spinning import events_executor
     rclpy.init()
     node = rclpy.create_node('bench_receiver')
+    from std_msgs.msg import Float64MultiArray
     stamps = np.zeros(count, dtype=np.int64)
-    values = np.zeros(count)
+    values = np.zeros(count) if axes == 1 else np.zeros((count, chunk * axes))
     received = [0]
 
     little, big = struct.Struct('<d').unpack_from, struct.Struct('>d').unpack_from
@@ -363,8 +420,19 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
             values[k] = msg.data
         received[0] = k + 1
 
+    def on_array(msg: Float64MultiArray) -> None:
+        # An ordinary subscriber of the array topic: a deserialised Float64MultiArray.
+        k = received[0]
+        if k < count:
+            stamps[k] = time.monotonic_ns()
+            values[k] = msg.data
+        received[0] = k + 1
+
     qos = loop_qos(qos_depth, reliability)
-    if kind == 'raw':
+    if axes > 1:
+        subscription = node.create_subscription(Float64MultiArray, 'current_commands',
+                                                on_array, qos)
+    elif kind == 'raw':
         subscription = node.create_subscription(Float64, 'current_command', on_command, qos,
                                                 raw=True)
     else:

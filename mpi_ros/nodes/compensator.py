@@ -83,7 +83,7 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
 from .loop import loop_qos
-from .loss import LOSS_ADVICE, LossMonitor
+from .loss import LossMonitor
 from .multi_axis import AXES
 from .parameters import (
     check_parameters, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
@@ -191,7 +191,6 @@ class CompensatorNode(Node):
         self._messages_out = 0
         self._dropped_unconfigured = 0
         self._last_report = (time.monotonic(), 0, {})
-        self._loss_log = (-math.inf, 0)
         self._fault_log = (-math.inf, {})
         # Validator first: rclpy runs it once per key while declaring (a bad
         # --params-file override is rejected there), then once per request.
@@ -542,28 +541,7 @@ class CompensatorNode(Node):
     def _every_second(self) -> None:
         self._loss.publishers = self._subscription.get_publisher_count()
         self.log_faults()
-        self.log_losses()
-
-    def log_losses(self) -> bool:
-        """
-        Log one warning about lost desired displacements since the last one (every 5 s).
-
-        Returns
-        -------
-        bool
-            True when a line was logged.
-
-        """
-        now = time.monotonic()
-        last_time, last_lost = self._loss_log
-        lost = self._loss.lost
-        if now - last_time < _FAULT_LOG_PERIOD_S or lost == last_lost:
-            return False
-        self._loss_log = (now, lost)
-        self.get_logger().warning(
-            f'{lost - last_lost} desired displacements lost before this node could serve them'
-            f' ({lost} in all): {LOSS_ADVICE}')
-        return True
+        self._loss.log(time.monotonic(), 'desired displacements')
 
     def log_faults(self) -> bool:
         """

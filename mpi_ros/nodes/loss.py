@@ -22,11 +22,15 @@ of messages served in one callback in a diagnostics period (``max_backlog``) tel
 close the queue came to ``qos_depth``.
 """
 
+import math
 from typing import Any, Dict, List, Optional
 
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 
-__all__ = ['LOSS_ADVICE', 'LossMonitor']
+__all__ = ['LOG_PERIOD_S', 'LOSS_ADVICE', 'LossMonitor']
+
+#: At most one log line about lost messages per this period [s].
+LOG_PERIOD_S = 5.0
 
 #: What to do about lost messages (diagnostics and log).
 LOSS_ADVICE = ('the node did not keep up and its input queue (qos_depth) overflowed, or the '
@@ -61,6 +65,7 @@ class LossMonitor:
         self._incompatible: Dict[str, int] = {}
         self._last_number: Optional[int] = None
         self._unsequenced = 0
+        self._logged = (-math.inf, 0)
 
     # -- event callbacks ----------------------------------------------------------------
     def subscription_callbacks(self) -> SubscriptionEventCallbacks:
@@ -164,3 +169,30 @@ class LossMonitor:
         return parts
 
     last_backlog = 0
+
+    def log(self, now: float, what: str) -> bool:
+        """
+        Log one warning about the messages lost since the last one, at most every 5 s.
+
+        Parameters
+        ----------
+        now : float
+            Steady time [s].
+        what : str
+            What the messages carry, e.g. ``desired displacements``.
+
+        Returns
+        -------
+        bool
+            True when a line was logged.
+
+        """
+        last_time, last_lost = self._logged
+        lost = self.lost
+        if now - last_time < LOG_PERIOD_S or lost == last_lost:
+            return False
+        self._logged = (now, lost)
+        self._node.get_logger().warning(
+            f'{lost - last_lost} {what} lost before this node could serve them ({lost} in '
+            f'all): {LOSS_ADVICE}')
+        return True

@@ -421,6 +421,7 @@ class MultiAxisCompensatorNode(Node):
 
     def _every_second(self) -> None:
         self._loss.publishers = self._subscription.get_publisher_count()
+        self._loss.log(time.monotonic(), 'desired displacement arrays')
 
     def diagnostics(self) -> DiagnosticArray:
         """
