@@ -130,10 +130,12 @@ def block_of(data: bytes, axes: int) -> npt.NDArray[np.float64]:
             msg = (f'layout says {samples} samples x {columns} axes (row stride {stride}, '
                    f'data_offset {offset}), data has {values.size} values')
             raise ArrayLayoutError(msg)
-        rows = np.lib.stride_tricks.as_strided(
-            values[offset:], shape=(samples, columns),
-            strides=(stride * values.itemsize, values.itemsize), writeable=False)
-        return rows
+        # A view: rows of the row stride, cut to the axes (no copy).
+        end = offset + samples * stride
+        if end > values.size:           # the last row may stop after its axes
+            padded = np.concatenate([values[offset:], np.zeros(end - values.size)])
+            return padded.reshape(samples, stride)[:, :columns]
+        return values[offset:end].reshape(samples, stride)[:, :columns]
     if dims and len(dims) != 2:
         msg = (f'layout.dim has {len(dims)} entries; expected none (consecutive samples '
                'of every axis) or two (samples, axes)')
