@@ -24,7 +24,7 @@ import time
 
 __all__ = ['main']
 
-_SINK = '''
+_SINK = """
 import time, rclpy
 from std_msgs.msg import Float64
 from mpi_ros.nodes.loop import loop_qos
@@ -37,7 +37,7 @@ executor.add_node(node)
 end = time.monotonic() + 120.0
 while time.monotonic() < end:
     executor.spin_once(timeout_sec=0.1)
-'''
+"""
 
 
 def main() -> None:

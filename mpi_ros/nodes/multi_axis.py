@@ -41,6 +41,7 @@ import time
 from typing import Any, Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -72,6 +73,8 @@ AXES = ParameterSpec(
     'axes) with the keys axis0.model.* ... axis<N-1>.model.*',
     value_range=(1, 1024), read_only=True)
 
+#: Blocks of at most this many samples are commanded sample by sample (cheaper).
+_PER_SAMPLE_ROWS = 4
 #: Most array messages served in one subscription callback.
 _DRAIN_LIMIT = 1000
 _LIMIT_KEYS = ('output.min', 'output.max')
@@ -242,7 +245,7 @@ class MultiAxisCompensatorNode(Node):
         compensator = self._compensator
         if compensator is None:
             return None
-        return compensator.command(block)
+        return _command_block(compensator, np.asarray(block, dtype=np.float64))
 
     # -- message path -----------------------------------------------------------------
     def _on_desired_displacements(self, data: bytes) -> None:
@@ -267,7 +270,7 @@ class MultiAxisCompensatorNode(Node):
                 if compensator is None:
                     self._dropped_unconfigured += 1
                 else:
-                    publish(encode_float64_multiarray(compensator.command(block)))
+                    publish(encode_float64_multiarray(_command_block(compensator, block)))
                     self._messages_out += 1
             served += 1
             if served >= _DRAIN_LIMIT:
@@ -474,6 +477,25 @@ class MultiAxisCompensatorNode(Node):
         array.header.stamp = self.get_clock().now().to_msg()
         array.status = [status]
         return array
+
+
+def _command_block(compensator: MultiAxisCompensator, block: np.ndarray) -> np.ndarray:
+    """
+    Return the commands of a samples x axes block, the cheaper way for its length.
+
+    Both ways give the same numbers, counters and states (the core's contract):
+    ``Compensator.command`` per axis and sample costs about 1.7 us, the per-axis compiled
+    loop of ``MultiAxisCompensator.command`` about 5 us per axis plus 0.8 us per sample
+    (measured, docs/reliability.md), so short blocks go sample by sample.
+
+    """
+    if block.shape[0] > _PER_SAMPLE_ROWS:
+        return compensator.command(block)
+    axes = compensator.axes
+    out = np.empty(block.shape)
+    for row in range(block.shape[0]):
+        out[row] = [axis.command(value) for axis, value in zip(axes, block[row].tolist())]
+    return out
 
 
 def _ordered_limits(output_min: float, output_max: float) -> tuple:
