@@ -34,6 +34,7 @@ import argparse
 import os
 from pathlib import Path
 import random
+import signal
 import subprocess
 import sys
 import tempfile
@@ -57,7 +58,10 @@ BENCH_MODEL = {
 def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                   output_max: float = 2.0, window: float = 10.0,
                   workdir: Optional[Path] = None, qos_depth: int = 10000,
-                  reliability: str = 'reliable', pin: bool = False) -> dict[str, Any]:
+                  reliability: str = 'reliable', pin: bool = False,
+                  node_kind: str = 'compensator',
+                  receiver_kind: str = 'ordinary', axes: int = 1,
+                  chunk: int = 1) -> dict[str, Any]:
     """
     Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
@@ -84,6 +88,20 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     pin : bool
         Run the compensator on the last CPU only and the sender and receiver on the
         others (needs at least 2 CPUs).
+    node_kind : str
+        ``compensator``, or ``relay:MODE`` for one of the relays of ``relay.py`` in its
+        place (the floor: no arithmetic).
+    receiver_kind : str
+        ``ordinary``: a ``Float64`` callback (deserialised), one message per call, spun
+        by the EventsExecutor as the package's nodes spin; ``naive``: the same callback
+        spun by ``rclpy.spin`` (SingleThreadedExecutor); ``raw``: serialized messages,
+        every queued one taken in one callback (the lightest receiver).
+    axes : int
+        1: the single-axis node on Float64 topics; N > 1: the multi-axis node (every axis
+        with the benchmark model) on the Float64MultiArray topics.
+    chunk : int
+        Samples per array message (``axes`` > 1): ``rate`` messages/s carry ``rate *
+        chunk`` samples of every axis per second.
 
     Returns
     -------
@@ -103,14 +121,24 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     from std_msgs.msg import Float64
 
     from mpi_ros import MPIModel
+    from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+
     from mpi_ros.nodes.loop import loop_qos, NodeProcess
+    from mpi_ros.nodes.multi_axis import axis_key
     from mpi_ros.params import write_params_yaml
 
     model = MPIModel.from_params(BENCH_MODEL)
     count = int(rate * duration)
     tmp = Path(tempfile.mkdtemp(prefix='mpi_ros_bench_')) if workdir is None else Path(workdir)
     params = tmp / 'params.yaml'
-    write_params_yaml(params, dict(model.to_params(), **{
+    arrays = axes > 1
+    chunk = chunk if arrays else 1
+    model_params = model.to_params()
+    if arrays:
+        model_params = {axis_key(k, key): value for k in range(axes)
+                        for key, value in model_params.items()}
+        model_params['axes'] = axes
+    write_params_yaml(params, dict(model_params, **{
         'qos_depth': qos_depth, 'qos_reliability': reliability,
         'output.min': output_min, 'output.max': output_max}))
     cores = sorted(os.sched_getaffinity(0))
@@ -118,13 +146,20 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         msg = f'--pin needs at least 2 CPUs; this process may use {cores}'
         raise RuntimeError(msg)
     node_cpus, load_cpus = set(cores[-1:]), set(cores[:-1])
-    comp = NodeProcess('compensator', ['--params-file', str(params), '-p',
-                                       'diagnostics_period:=5.0'], tmp / 'compensator.log')
+    if node_kind == 'compensator':
+        comp = NodeProcess('compensator', ['--params-file', str(params), '-p',
+                                           'diagnostics_period:=5.0'], tmp / 'compensator.log')
+    else:
+        comp = _ScriptProcess(
+            [str(Path(__file__).with_name('relay.py')), '--mode', node_kind.split(':')[1],
+             '--qos-depth', str(qos_depth), '--reliability', reliability],
+            tmp / 'compensator.log')
     out = str(tmp / 'received.npy')
     receiver = subprocess.Popen(
         [sys.executable, __file__, '--role', 'receiver', '--out', out, '--count', str(count),
          '--duration', str(duration + 60.0), '--qos-depth', str(qos_depth),
-         '--reliability', reliability], env=dict(os.environ))
+         '--reliability', reliability, '--receiver', receiver_kind, '--axes', str(axes),
+         '--chunk', str(chunk)], env=dict(os.environ))
     if pin:
         # Right after the start, before rclpy creates any thread: every later thread
         # (DDS receive and event threads) inherits the affinity.
@@ -134,27 +169,43 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     context = rclpy.Context()
     rclpy.init(context=context)
     node = rclpy.create_node('bench_sender', context=context)
-    pub = node.create_publisher(Float64, 'desired_displacement',
-                                loop_qos(qos_depth, reliability))
+    if arrays:
+        pub = node.create_publisher(Float64MultiArray, 'desired_displacements',
+                                    loop_qos(qos_depth, reliability))
+    else:
+        pub = node.create_publisher(Float64, 'desired_displacement',
+                                    loop_qos(qos_depth, reliability))
+    output_topic = 'current_commands' if arrays else 'current_command'
+
     try:
         deadline = time.monotonic() + 60.0
         while (pub.get_subscription_count() < 1 or not Path(out + '.ready').exists()
-               or node.count_subscribers('current_command') < 1):
+               or node.count_subscribers(output_topic) < 1):
             if time.monotonic() > deadline:
                 msg = 'compensator or receiver did not start in 60 s'
                 raise RuntimeError(msg)
             time.sleep(0.05)
         time.sleep(2.0)                                      # let DDS finish matching
         lo, hi = 5e-6, 3e-5
-        t = np.arange(count) / rate
+        t = (np.arange(count * chunk) / (rate * chunk))[:, None] + np.arange(axes) * 0.1
         desired = lo + (hi - lo) * (0.5 + 0.4 * np.sin(2 * np.pi * 1.0 * t)
                                     + 0.1 * np.sin(2 * np.pi * 13.0 * t))
+        if arrays:
+            msg = Float64MultiArray()
+            msg.layout.dim = [
+                MultiArrayDimension(label='samples', size=chunk, stride=chunk * axes),
+                MultiArrayDimension(label='axes', size=axes, stride=axes)]
+            blocks = [desired[k * chunk:(k + 1) * chunk].reshape(-1).tolist()
+                      for k in range(count)]
+        else:
+            msg = Float64()
+            samples = desired[:, 0].tolist()
         sent = np.zeros(count, dtype=np.int64)
         rss = []
         period_ns = int(1e9 / rate)
-        msg = Float64()
         pids = {'compensator': comp.pid, 'sender': os.getpid(), 'receiver': receiver.pid}
         cpu_start = {name: _cpu_seconds(pid) for name, pid in pids.items()}
+        threads_start = _thread_cpu_seconds(comp.pid)
         start = time.monotonic_ns()
         next_rss = start
         k = 0
@@ -164,7 +215,10 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
             now = time.monotonic_ns()
             due = min(count, (now - start) // period_ns + 1)
             while k < due:
-                msg.data = float(desired[k])
+                if arrays:
+                    msg.data = blocks[k]
+                else:
+                    msg.data = samples[k]
                 sent[k] = time.monotonic_ns()
                 pub.publish(msg)
                 k += 1
@@ -175,6 +229,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         elapsed = (time.monotonic_ns() - start) / 1e9
         cpu_percent = {name: 100.0 * (_cpu_seconds(pid) - cpu_start[name]) / elapsed
                        for name, pid in pids.items()}
+        threads_end = _thread_cpu_seconds(comp.pid)
+        thread_percent: dict[str, float] = {}
+        for tid, (name, seconds) in threads_end.items():
+            used = seconds - threads_start.get(tid, (name, 0.0))[1]
+            thread_percent[name] = thread_percent.get(name, 0.0) + 100.0 * used / elapsed
         receiver.wait(timeout=duration + 120.0)
         rss.append((elapsed, _rss_kib(comp.pid)))
     finally:
@@ -190,6 +249,16 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     n = stamps.size
     latency_us = (stamps - sent[:n]) / 1e3
     np.save(tmp / 'latency_us.npy', latency_us)
+    max_error = None
+    if n == count:
+        # Every command against the single-axis core, axis by axis (command_batch gives
+        # what per-sample commands give).
+        from mpi_ros.compensation import Compensator
+        commands = values.reshape(count * chunk, axes)
+        max_error = max(
+            float(np.max(np.abs(commands[:, k] - Compensator(
+                model, output_min=output_min, output_max=output_max).command_batch(
+                    desired[:, k])))) for k in range(axes))
     results: dict[str, Any] = {
         'cores': os.cpu_count(), 'domain_id': os.environ.get('ROS_DOMAIN_ID'),
         'rate': rate, 'duration': duration, 'sent': count, 'received': n,
@@ -200,8 +269,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'latency_us': {}, 'windows': [], 'rss_kib': rss,
         'rss_growth_mib': (rss[-1][1] - rss[1][1]) / 1024 if len(rss) > 2 else None,
         'compensator_exit': status, 'workdir': str(tmp), 'processes_left': left,
-        'cpu_percent': cpu_percent, 'qos_depth': qos_depth, 'reliability': reliability,
-        'pinned': pin,
+        'cpu_percent': cpu_percent, 'compensator_threads': thread_percent,
+        'qos_depth': qos_depth, 'reliability': reliability,
+        'pinned': pin, 'node': node_kind, 'receiver': receiver_kind,
+        'load_average': os.getloadavg(), 'axes': axes, 'chunk': chunk,
+        'max_error_vs_core': max_error,
     }
     if n:
         p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
@@ -232,8 +304,12 @@ def format_results(results: dict[str, Any]) -> str:
     r = results
     pinning = ('compensator pinned to its own CPU' if r['pinned']
                else 'no CPU pinning')
-    lines = [f'machine: {r["cores"]} cores; ROS_DOMAIN_ID {r["domain_id"]}; QoS '
-             f'{r["reliability"]}, depth {r["qos_depth"]}; {pinning}',
+    load = ' '.join(f'{v:.2f}' for v in r['load_average'])
+    lines = [f'machine: {r["cores"]} cores, load average {load} (at the end); ROS_DOMAIN_ID '
+             f'{r["domain_id"]}; QoS {r["reliability"]}, depth {r["qos_depth"]}; {pinning}',
+             f'node: {r["node"]}; receiver: {r["receiver"]}; {r["axes"]} axes, '
+             f'{r["chunk"]} samples per message '
+             f'({r["rate"] * r["chunk"] * r["axes"]:,.0f} samples/s in all)',
              f'sent {r["sent"]} desired values in {r["elapsed"]:.2f} s '
              f'({r["achieved_rate"]:,.0f}/s), received {r["received"]} commands, '
              f'drops {r["drops"]}',
@@ -255,6 +331,14 @@ def format_results(results: dict[str, Any]) -> str:
                      f'(from t={rss[1][0]:.0f} s to the end)')
     lines.append('CPU over the load [% of one core]: ' + ', '.join(
         f'{name} {value:.0f}' for name, value in r['cpu_percent'].items()))
+    busy = {k: v for k, v in r['compensator_threads'].items() if v >= 0.5}
+    lines.append('compensator CPU per thread [% of one core]: ' + ', '.join(
+        f'{name} {value:.0f}' for name, value in sorted(busy.items(), key=lambda i: -i[1])))
+    per_message = r['cpu_percent']['compensator'] * 1e4 / r['rate']
+    lines.append(f'compensator CPU per message: {per_message:.1f} us (per sample of one axis'
+                 f' {per_message / (r["chunk"] * r["axes"]):.2f} us)')
+    if r['max_error_vs_core'] is not None:
+        lines.append(f'largest |command - single-axis core|: {r["max_error_vs_core"]:.1e} A')
     lines.append(f'compensator exit status: {r["compensator_exit"]}')
     return '\n'.join(lines)
 
@@ -270,22 +354,32 @@ def main() -> None:
                         help='keep-last depth of all endpoints')
     parser.add_argument('--pin', action='store_true',
                         help='compensator on the last CPU, sender and receiver on the others')
+    parser.add_argument('--node', default='compensator',
+                        help='compensator, or relay:naive|events|waitset|poll (relay.py)')
+    parser.add_argument('--receiver', choices=('ordinary', 'naive', 'raw'),
+                        default='ordinary', help='how the receiver subscribes')
+    parser.add_argument('--axes', type=int, default=1,
+                        help='1: Float64 topics; N > 1: the multi-axis node, array topics')
+    parser.add_argument('--chunk', type=int, default=1, help='samples per array message')
     parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
     parser.add_argument('--out', default='', help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.role == 'receiver':
-        _receiver(args.out, args.count, args.duration, args.qos_depth, args.reliability)
+        _receiver(args.out, args.count, args.duration, args.qos_depth, args.reliability,
+                  args.receiver, args.axes, args.chunk)
         return
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
     print(format_results(run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
-                                       reliability=args.reliability, pin=args.pin)),
+                                       reliability=args.reliability, pin=args.pin,
+                                       node_kind=args.node, receiver_kind=args.receiver,
+                                       axes=args.axes, chunk=args.chunk)),
           flush=True)
 
 
 def _receiver(out: str, count: int, timeout: float, qos_depth: int,
-              reliability: str) -> None:
+              reliability: str, kind: str, axes: int, chunk: int) -> None:
     import struct
 
     import rclpy
@@ -295,8 +389,9 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
     from mpi_ros.nodes.spinning import events_executor
     rclpy.init()
     node = rclpy.create_node('bench_receiver')
+    from std_msgs.msg import Float64MultiArray
     stamps = np.zeros(count, dtype=np.int64)
-    values = np.zeros(count)
+    values = np.zeros(count) if axes == 1 else np.zeros((count, chunk * axes))
     received = [0]
 
     little, big = struct.Struct('<d').unpack_from, struct.Struct('>d').unpack_from
@@ -317,9 +412,33 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
                 break
             data = taken[0]
 
-    subscription = node.create_subscription(Float64, 'current_command', on_command,
-                                            loop_qos(qos_depth, reliability), raw=True)
-    executor = events_executor()
+    def on_message(msg: Float64) -> None:
+        # An ordinary subscriber: rclpy deserialises every command into a Float64.
+        k = received[0]
+        if k < count:
+            stamps[k] = time.monotonic_ns()
+            values[k] = msg.data
+        received[0] = k + 1
+
+    def on_array(msg: Float64MultiArray) -> None:
+        # An ordinary subscriber of the array topic: a deserialised Float64MultiArray.
+        k = received[0]
+        if k < count:
+            stamps[k] = time.monotonic_ns()
+            values[k] = msg.data
+        received[0] = k + 1
+
+    qos = loop_qos(qos_depth, reliability)
+    if axes > 1:
+        subscription = node.create_subscription(Float64MultiArray, 'current_commands',
+                                                on_array, qos)
+    elif kind == 'raw':
+        subscription = node.create_subscription(Float64, 'current_command', on_command, qos,
+                                                raw=True)
+    else:
+        subscription = node.create_subscription(Float64, 'current_command', on_message, qos)
+    executor = (rclpy.executors.SingleThreadedExecutor() if kind == 'naive'
+                else events_executor())
     executor.add_node(node)
     # Ready only once this reader has matched the compensator's writer: commands published
     # before the match are lost (volatile), which under load cost the first 0.3-0.6 s of
@@ -338,6 +457,27 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
     rclpy.try_shutdown()
 
 
+class _ScriptProcess:
+    """A benchmark script in its own process, with NodeProcess's pid/proc/stop."""
+
+    def __init__(self, argv: list[str], log: Path) -> None:
+        self._log = open(log, 'w')  # noqa: SIM115 - closed in stop()
+        self.proc = subprocess.Popen([sys.executable, *argv], stdout=self._log,
+                                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+        self.pid = self.proc.pid
+
+    def stop(self) -> Optional[int]:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._log.close()
+        return self.proc.returncode
+
+
 def _pin(pid: int, cpus: set) -> None:
     """Restrict every thread of process ``pid`` (and the threads it starts) to ``cpus``."""
     for task in Path(f'/proc/{pid}/task').iterdir():
@@ -354,6 +494,25 @@ def _cpu_seconds(pid: int) -> float:
     except OSError:
         return 0.0
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def _thread_cpu_seconds(pid: int) -> dict[int, tuple[str, float]]:
+    """User + system CPU time [s] of every thread of process ``pid``, with its name."""
+    threads = {}
+    tick = os.sysconf('SC_CLK_TCK')
+    try:
+        tasks = list(Path(f'/proc/{pid}/task').iterdir())
+    except OSError:
+        return threads
+    for task in tasks:
+        try:
+            head, tail = (task / 'stat').read_text().rsplit(')', 1)
+        except OSError:
+            continue
+        fields = tail.split()
+        threads[int(task.name)] = (head.split('(', 1)[1],
+                                   (int(fields[11]) + int(fields[12])) / tick)
+    return threads
 
 
 def _rss_kib(pid: int) -> int:

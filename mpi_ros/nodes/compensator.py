@@ -71,6 +71,7 @@ nobody asked for.
 """
 
 import math
+import struct
 import time
 from typing import Any, Dict, List, Optional
 
@@ -81,6 +82,8 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
 from .loop import loop_qos
+from .loss import LossMonitor
+from .multi_axis import AXES
 from .parameters import (
     check_parameters, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
     harden_parameter_services, is_null, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS,
@@ -94,7 +97,7 @@ from ..extensions import extended_model_from_params, EXTENSION_KEYS
 from ..model import MPIModel
 from ..params import OPERATING_POINT_DEFAULTS
 
-__all__ = ['CompensatorNode', 'PARAMETERS', 'main']
+__all__ = ['CompensatorNode', 'PARAMETERS', 'main', 'make_node']
 
 Type = Parameter.Type
 
@@ -126,11 +129,18 @@ PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
         'diagnostics_period', Type.DOUBLE, 1.0,
         'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0)),
     *loop_qos_parameters('desired_displacement and current_command'),
+    AXES,
 )
 
 _SPECS = specs_by_name(PARAMETERS)
 #: Most desired displacements served in one subscription callback.
 _DRAIN_LIMIT = 1000
+#: CDR of a Float64: 4-byte encapsulation header (byte 1: 1 = little-endian), the double.
+_LITTLE = struct.Struct('<d').unpack_from
+_BIG = struct.Struct('>d').unpack_from
+_PACK = struct.Struct('<H2xd').pack
+#: The encapsulation header CDR_LE as the little-endian unsigned short _PACK writes first.
+_CDR_LE = 0x0100
 #: Counters of bad inputs: a diagnostics period with any of them is WARN, and they are logged.
 _FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
 #: At most one log line about bad inputs per this period [s]; checked every second.
@@ -190,16 +200,19 @@ class CompensatorNode(Node):
                        else _no_stamp)
         self._configure_from_declared()
 
-        qos = loop_qos(self.get_parameter('qos_depth').value,
-                       self.get_parameter('qos_reliability').value)
-        self._command = Float64()
-        self._publisher = self.create_publisher(Float64, 'current_command', qos)
+        reliability = self.get_parameter('qos_reliability').value
+        qos = loop_qos(self.get_parameter('qos_depth').value, reliability)
+        # Counts what never arrived (sequence gaps, DDS sample-lost, incompatible peers).
+        self._loss = LossMonitor(self, 'desired_displacement', 'current_command', reliability)
+        self._publisher = self.create_publisher(
+            Float64, 'current_command', qos, event_callbacks=self._loss.publisher_callbacks())
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._subscription = self.create_subscription(
-            Float64, 'desired_displacement', self._on_desired_displacement, qos)
+            Float64, 'desired_displacement', self._on_desired_displacement, qos, raw=True,
+            event_callbacks=self._loss.subscription_callbacks())
         self._timer = self.create_timer(
             self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
-        self._fault_timer = self.create_timer(1.0, self.log_faults)
+        self._fault_timer = self.create_timer(1.0, self._every_second)
 
     # -- public read-only state -------------------------------------------------------
     @property
@@ -222,7 +235,10 @@ class CompensatorNode(Node):
         dict of str to int
             The core's ``clamped``, ``nonfinite_input``, ``out_of_range`` (and
             ``bad_time`` for an extended model) plus ``messages_in``, ``messages_out``,
-            ``dropped_unconfigured``,
+            ``messages_lost`` (desired displacements that never reached the node: the
+            larger of ``lost_sequence_gaps``, jumps of the publisher's sequence number,
+            and ``lost_dds_events``, what DDS reported lost), ``incompatible_qos``
+            (peers whose QoS cannot match), ``dropped_unconfigured``,
             ``rejected_updates`` and ``model_version``.
 
         """
@@ -230,6 +246,7 @@ class CompensatorNode(Node):
         counters.update(
             messages_in=self._messages_in,
             messages_out=self._messages_out,
+            **self._loss.counters(),
             dropped_unconfigured=self._dropped_unconfigured,
             rejected_updates=self._rejected_updates,
             model_version=self._model_version,
@@ -264,27 +281,45 @@ class CompensatorNode(Node):
         return compensator.command(desired_displacement, time=stamp)
 
     # -- message path -----------------------------------------------------------------
-    def _on_desired_displacement(self, msg: Optional[Float64]) -> None:
-        # Serve every message already queued in this one callback: rclpy rebuilds its wait
-        # set on every spin, which alone would cap the node far below 10 kHz.  Messages
-        # are still handled one by one, in order, each with its own command (and, for an
-        # extended model, its own arrival time).  The callback takes no MessageInfo: the
-        # rclpy 7.1.6 EventsExecutor raises SystemError for such callbacks, so the
-        # publisher's source time stamp is out of reach.  At most _DRAIN_LIMIT messages per
-        # call, so that a flood that outruns the node still lets the spin loop see a stop
-        # request (the messages left queued keep their events and come in the next calls).
+    def _on_desired_displacement(self, data: bytes) -> None:
+        # The lean per-sample path (docs/reliability.md has where its time goes).  The
+        # subscription is raw: each message arrives as its CDR bytes (a 4-byte
+        # encapsulation header, then the double), is decoded with one struct call and
+        # answered with 12 bytes packed by another, published raw: no Float64 object is
+        # built either way.  Every message already queued is served in this one callback
+        # (rclpy rebuilds its wait set on every spin, which alone would cap the node far
+        # below 10 kHz), one by one, in order, each with its own command and, for an
+        # extended model, its own arrival time.  At most _DRAIN_LIMIT messages per call,
+        # so that a flood that outruns the node still lets the spin loop see a stop request
+        # (the messages left queued keep their events and come in the next calls).  The
+        # messages taken here carry the publisher's sequence number: a jump counts lost
+        # desired displacements (a keep-last queue that overflowed), which DDS itself does
+        # not report (mpi_ros.nodes.loss).
         take = self._subscription.handle.take_message
-        for served in range(_DRAIN_LIMIT):
-            if served:
-                taken = take(Float64, False)
-                msg = taken[0] if taken is not None else None
-            if msg is None:
-                break
-            current = self.command(msg.data, stamp=self._stamp() if self._extended else None)
-            if current is not None:
-                self._command.data = current
-                self._publisher.publish(self._command)
+        publish = self._publisher.handle.publish_raw
+        loss = self._loss
+        loss.delivered()
+        served = 0
+        while True:
+            value = (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0]
+            self._messages_in += 1
+            compensator = self._compensator
+            if compensator is None:
+                self._dropped_unconfigured += 1
+            else:
+                current = (compensator.command(value, time=self._stamp()) if self._extended
+                           else compensator.command(value))
+                publish(_PACK(_CDR_LE, current))
                 self._messages_out += 1
+            served += 1
+            if served >= _DRAIN_LIMIT:
+                break
+            taken = take(Float64, True)
+            if taken is None:
+                break
+            data, info = taken
+            loss.taken(info['publication_sequence_number'])
+        loss.served(served)
 
     # -- parameters ---------------------------------------------------------------------
     def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
@@ -471,6 +506,11 @@ class CompensatorNode(Node):
     def _publish_diagnostics(self) -> None:
         self._diagnostics.publish(self.diagnostics())
 
+    def _every_second(self) -> None:
+        self._loss.publishers = self._subscription.get_publisher_count()
+        self.log_faults()
+        self._loss.log(time.monotonic(), 'desired displacements')
+
     def log_faults(self) -> bool:
         """
         Log one warning about the bad inputs since the last one, at most every 5 s.
@@ -505,8 +545,11 @@ class CompensatorNode(Node):
         -------
         diagnostic_msgs.msg.DiagnosticArray
             One status named ``<node name>: feedforward`` with ``hardware_id`` the
-            node's fully qualified name: WARN while unconfigured (``no model``) and
-            after a period with non-finite, out-of-range or clamped inputs, else OK.
+            node's fully qualified name: WARN after a period in which desired
+            displacements were lost (``messages_lost``) or a peer with incompatible
+            QoS appeared, or in which more than half of ``qos_depth`` messages waited at
+            once (``max_backlog``); WARN while unconfigured (``no model``) and after a
+            period with non-finite, out-of-range or clamped inputs; else OK.
 
         """
         now = time.monotonic()
@@ -519,7 +562,12 @@ class CompensatorNode(Node):
         status = DiagnosticStatus(name=f'{self.get_name()}: feedforward',
                                   hardware_id=self.get_fully_qualified_name())
         faults = _new_faults(counters, last_counters)
-        if self._compensator is None:
+        depth = self.get_parameter('qos_depth').value
+        losses = self._loss.period(counters, last_counters, depth, 'desired displacements')
+        if losses:
+            status.level = DiagnosticStatus.WARN
+            status.message = '; '.join(losses)
+        elif self._compensator is None:
             status.level = DiagnosticStatus.WARN
             status.message = ('no model: unconfigured, no commands published; give all '
                               'five model.* keys of Gamma in one request (ros2 param load, '
@@ -542,6 +590,9 @@ class CompensatorNode(Node):
             values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
         values.update(
             rate_hz=round(rate, 3),
+            max_backlog=self._loss.last_backlog,
+            qos_depth=depth,
+            input_publishers=self._loss.publishers,
             enabled=self.get_parameter('enabled').value,
             output_min=self.get_parameter('output.min').value,
             output_max=self.get_parameter('output.max').value,
@@ -568,7 +619,40 @@ def main(args: Optional[List[str]] = None) -> int:
         Exit status: 0 on shutdown, 1 when the configured model or limits are invalid.
 
     """
-    return run_node_main(CompensatorNode, 'compensator', args)
+    return run_node_main(make_node, 'compensator', args)
+
+
+def make_node(**kwargs: Any) -> Node:
+    """
+    Build the compensator the parameters ask for: single-axis, or multi-axis for ``axes`` > 1.
+
+    ``axes`` is read from the overrides (``-p axes:=8``, ``--params-file``) the way rclpy
+    gives them to a node of this name: a short-lived probe node (no parameter services,
+    no rosout) is created and destroyed first.
+
+    Parameters
+    ----------
+    **kwargs
+        Passed on to the node (``context=``, ``parameter_overrides=``...).
+
+    Returns
+    -------
+    rclpy.node.Node
+        A :class:`CompensatorNode` or a
+        :class:`mpi_ros.nodes.multi_axis.MultiAxisCompensatorNode`.
+
+    """
+    probe = Node('compensator', start_parameter_services=False, enable_rosout=False,
+                 **kwargs)
+    try:
+        # rclpy 7.1.6 has no public accessor of the overrides (see declare_parameters).
+        override = getattr(probe, '_parameter_overrides', {}).get('axes')
+    finally:
+        probe.destroy_node()
+    if override is not None and isinstance(override.value, int) and override.value > 1:
+        from .multi_axis import MultiAxisCompensatorNode
+        return MultiAxisCompensatorNode(**kwargs)
+    return CompensatorNode(**kwargs)
 
 
 def _no_stamp() -> None:

@@ -16,6 +16,17 @@ whole model or rejects it, so nothing is ever half-applied (a plain model switch
 target's extension off); the wait for the service and for its answer is bounded by
 ``service_timeout``.
 
+Several actuators (``axes`` > 1)
+    The bag holds ``std_msgs/msg/Float64MultiArray`` topics with one element per axis
+    (``/current_commands`` and ``/displacements`` when the topics are left at their
+    single-axis defaults, as the multi-axis compensator and plant simulator publish
+    them, one sample per message).  Axis k is fitted from element k of both topics
+    (``input_index`` / ``output_index`` are set per axis), the axes in parallel in a
+    process pool (``workers``, 0 = one per CPU, at most one per axis), and all models
+    go to the multi-axis compensator in **one** ``set_parameters_atomically`` request
+    with the keys ``axis<k>.model.*``: every axis changes, or none.  If any axis is
+    refused, nothing is written or pushed.
+
 When :func:`mpi_ros.identify` refuses the data (``IdentificationError``: output not
 monotone in the input, a fit no better than a straight line, too little excitation),
 the node logs the reason, writes no file and pushes nothing.
@@ -26,7 +37,10 @@ any failure: unreadable bag, refused or failed fit, target missing, push rejecte
 unanswered.
 """
 
-from dataclasses import dataclass
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, replace
+import multiprocessing
+import os
 import sys
 import time
 from typing import Any, Dict, List, Mapping, Optional
@@ -41,6 +55,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 
+from .multi_axis import AXES, axis_key
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, MODEL_KEYS,
     OPERATING_POINT_KEYS, ParameterRejected, ParameterSpec, specs_by_name,
@@ -54,7 +69,7 @@ from ..recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, re
 
 __all__ = [
     'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS', 'DATA_PARAMETERS',
-    'fit_bag', 'parse_order', 'push_model_parameters', 'main',
+    'fit_bag', 'fit_bag_axes', 'parse_order', 'push_model_parameters', 'main',
 ]
 
 Type = Parameter.Type
@@ -98,6 +113,13 @@ PARAMETERS = (
     ParameterSpec('params_file', Type.STRING, '',
                   'Also write the model as a parameter YAML keyed by the compensator node '
                   'name (empty: do not write)'),
+    replace(AXES, description=(
+        'Number of actuators in the bag: 1 = one input and one output signal; N > 1 = '
+        'Float64MultiArray topics with one element per axis, every axis fitted and all '
+        'models pushed to a multi-axis compensator in one request'), read_only=False),
+    ParameterSpec('workers', Type.INTEGER, 0,
+                  'axes > 1: processes fitting axes in parallel (0: one per CPU, at most '
+                  'one per axis; 1: in this process)', value_range=(0, 1024)),
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -195,6 +217,8 @@ class IdentifierNode(Node):
         options = DataOptions.from_mapping(
             {name: value(name).value for name in _DATA_NAMES}, spelling='parameter')
         order = parse_order(value('order').value)
+        if value('axes').value > 1:
+            return self._run_axes(bag, options, order)
         logger.info(f'identifying from {bag} ({options.input_topic} -> '
                     f'{options.output_topic}, order {format_order(order)})')
         try:
@@ -215,6 +239,95 @@ class IdentifierNode(Node):
                                   timeout=value('service_timeout').value)
             logger.info(f'{target} accepted the model')
         return fit
+
+    def _run_axes(self, bag: str, options: DataOptions, order: Order) -> List[BagFit]:
+        value = self.get_parameter
+        logger = self.get_logger()
+        axes = value('axes').value
+        logger.info(f'identifying {axes} axes from {bag}, order {format_order(order)}')
+        try:
+            fits = fit_bag_axes(bag, axes, options=options, order=order,
+                                workers=value('workers').value)
+        except IdentificationError as err:
+            logger.error(f'identification refused the data of {bag}: {err}; no model was '
+                         'written or pushed')
+            raise
+        parameters: Dict[str, Any] = {}
+        for axis, fit in enumerate(fits):
+            logger.info(f'axis {axis}: {fit.summary()}')
+            parameters.update({axis_key(axis, key): v for key, v in fit.parameters.items()})
+        params_file = value('params_file').value
+        if params_file:
+            write_params_yaml(params_file, dict(parameters, axes=axes),
+                              node_name='compensator',
+                              header=f'mpi_ros identifier: {axes} axes\nbag: {bag}')
+            logger.info(f'wrote {params_file}')
+        if value('push').value:
+            target = value('target_node').value
+            push_model_parameters(self, target, parameters,
+                                  timeout=value('service_timeout').value)
+            logger.info(f'{target} accepted the models of all {axes} axes')
+        return fits
+
+
+def fit_bag_axes(path: str, axes: int, *, options: Optional[DataOptions] = None,
+                 order: Order = 'auto', workers: int = 0) -> List[BagFit]:
+    """
+    Fit one model per axis of a multi-axis bag (Float64MultiArray topics).
+
+    Parameters
+    ----------
+    path : str
+        rosbag2 bag.
+    axes : int
+        Number of axes; axis k is element k of the input and the output topic.
+    options : mpi_ros.recordings.DataOptions, optional
+        Topics, scales, ...; topics left at the single-axis defaults become
+        ``/current_commands`` and ``/displacements``.  The indices are set per axis.
+    order : 'auto' or tuple of (int, int)
+        Model orders, for every axis.
+    workers : int
+        Processes fitting axes in parallel: 0 = one per CPU (at most one per axis), 1 =
+        in this process.
+
+    Returns
+    -------
+    list of BagFit
+        One fit per axis, in axis order.
+
+    Raises
+    ------
+    mpi_ros.errors.DataError, mpi_ros.errors.IdentificationError
+        As :func:`fit_bag`, the message prefixed with the axis.
+
+    """
+    options = options or DataOptions(spelling='parameter')
+    defaults = DataOptions()
+    changes: Dict[str, Any] = {}
+    if options.input_topic == defaults.input_topic:
+        changes['input_topic'] = '/current_commands'
+    if options.output_topic == defaults.output_topic:
+        changes['output_topic'] = '/displacements'
+    per_axis = [replace(options, input_index=axis, output_index=axis, **changes)
+                for axis in range(axes)]
+    count = min(axes, os.cpu_count() or 1) if workers == 0 else min(workers, axes)
+    if count <= 1:
+        return [_fit_axis(path, axis, opts, order) for axis, opts in enumerate(per_axis)]
+    # spawn, not fork: this process runs DDS threads (a forked child could inherit a
+    # lock held by one of them).
+    with ProcessPoolExecutor(max_workers=count,
+                             mp_context=multiprocessing.get_context('spawn')) as pool:
+        futures = [pool.submit(_fit_axis, path, axis, opts, order)
+                   for axis, opts in enumerate(per_axis)]
+        return [future.result() for future in futures]
+
+
+def _fit_axis(path: str, axis: int, options: DataOptions, order: Order) -> BagFit:
+    try:
+        return fit_bag(path, options=options, order=order)
+    except MPIError as err:
+        msg = f'axis {axis} (element {axis} of {options.input_topic}, {options.output_topic}):'
+        raise type(err)(f'{msg} {err}') from err
 
 
 def parse_order(text: str) -> Order:

@@ -33,14 +33,15 @@ RELIABILITY = {'reliable': ReliabilityPolicy.RELIABLE,
                'best_effort': ReliabilityPolicy.BEST_EFFORT}
 
 
-def loop_qos(depth: int = 1000, reliability: str = 'reliable') -> QoSProfile:
+def loop_qos(depth: int = 10000, reliability: str = 'reliable') -> QoSProfile:
     """
     Return the QoS of the loop topics (keep-last ``depth``), as the nodes build it.
 
     Parameters
     ----------
     depth : int
-        History depth.
+        History depth: 10000 (the nodes' default ``qos_depth``) holds 1 s of a 10 kHz
+        stream, so a subscriber or the node may stall that long without a lost sample.
     reliability : str
         ``reliable`` (default: nothing lost) or ``best_effort`` (a reliable Fast DDS
         writer wakes its event thread on every sample; at 10 kHz that is measurable, see

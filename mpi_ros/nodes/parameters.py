@@ -244,8 +244,9 @@ def loop_qos_parameters(topics: str) -> Tuple[ParameterSpec, ParameterSpec]:
 
     """
     return (
-        ParameterSpec('qos_depth', Type.INTEGER, 1000,
-                      f'History depth (keep-last) of {topics}',
+        ParameterSpec('qos_depth', Type.INTEGER, 10000,
+                      f'History depth (keep-last) of {topics}; 10000 holds 1 s of a '
+                      '10 kHz stream (a stall that long loses nothing)',
                       value_range=(1, 100000), read_only=True),
         ParameterSpec('qos_reliability', Type.STRING, 'reliable',
                       f'Reliability of {topics}: reliable (nothing lost) or best_effort '

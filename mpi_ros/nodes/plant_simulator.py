@@ -33,6 +33,17 @@ Excitation mode (``excitation.enabled:=true``)
     own commands nor anybody else's reach the plant meanwhile. When done it exits
     (``excitation.exit_when_done``) or continues as a normal plant.
 
+Several actuators (``axes`` > 1, read-only; default 1: the Float64 topics above)
+    N independent plants of the same truth (the built-in actuator with seeds ``seed``,
+    ``seed + 1``, ...; or the ``model.*`` MPI model for every axis), driven through
+    ``current_commands`` [A] and answering on ``displacements`` [m], both
+    ``std_msgs/msg/Float64MultiArray`` blocks of samples x axes as the multi-axis
+    compensator publishes them (:mod:`mpi_ros.nodes.arrays`): one displacement block of
+    the same shape per command block.  The K samples of a chunk are taken
+    ``sample_period`` apart, the last one at the block's arrival.  A non-finite current
+    is not applied (the source holds the axis's last current) and is counted.  Excitation
+    mode and recording are single-axis only.
+
 Recording (``record.path``)
     Every applied command and displacement is written to a new rosbag2 bag through
     :class:`mpi_ros.recordings.BagRecorder`; the bag appears at ``record.path`` only
@@ -49,9 +60,11 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.task import Future
-from std_msgs.msg import Float64
+from std_msgs.msg import Float64, Float64MultiArray
 
+from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
 from .loop import loop_qos
+from .multi_axis import AXES
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, loop_qos_parameters,
     MODEL_KEYS, MODEL_PARAMETERS, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
@@ -143,6 +156,14 @@ PARAMETERS = (
     ParameterSpec('record.storage', Type.STRING, 'sqlite3', 'rosbag2 storage plugin',
                   choices=('sqlite3', 'mcap'), read_only=True),
     *loop_qos_parameters('current_command and displacement'),
+    replace(AXES, description=(
+        'Number of simulated actuators: 1 = current_command / displacement (Float64); '
+        'N > 1 = N independent plants on current_commands / displacements '
+        '(Float64MultiArray, samples x axes)')),
+    ParameterSpec('sample_period', Type.DOUBLE, 1.0e-3,
+                  'axes > 1: interval between the samples of one chunk (a message with '
+                  'several samples per axis)', 's', value_range=(1.0e-7, 10.0),
+                  read_only=True),
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -178,7 +199,15 @@ class PlantSimulatorNode(Node):
         self._values = values
         self._rng = np.random.default_rng(values['seed'])
         self._noise_std = values['noise_std']
+        self.axes = int(values['axes'])
+        if self.axes > 1 and (values['excitation.enabled'] or values['record.path']):
+            msg = (f'axes={self.axes}: excitation.enabled and record.path are single-axis '
+                   'only; set axes:=1, or leave excitation and recording off')
+            raise ParameterRejected(msg)
         self._plant = self._build_truth(values)
+        self._plants = [self._plant] + [self._build_truth(values, seed=values['seed'] + k)
+                                        for k in range(1, self.axes)]
+        self._held = np.zeros(self.axes)
         self.finished = Future()
         self.counters: Dict[str, int] = {
             'commands': 0, 'nonfinite_commands': 0, 'published': 0}
@@ -193,7 +222,10 @@ class PlantSimulatorNode(Node):
         qos = loop_qos(values['qos_depth'], values['qos_reliability'])
         self._displacement = Float64()
         self._command = Float64()
-        self._publisher = self.create_publisher(Float64, 'displacement', qos)
+        if self.axes > 1:
+            self._publisher = self.create_publisher(Float64MultiArray, 'displacements', qos)
+        else:
+            self._publisher = self.create_publisher(Float64, 'displacement', qos)
         self._command_publisher = None
         self._excitation = None
         if values['excitation.enabled']:
@@ -213,8 +245,9 @@ class PlantSimulatorNode(Node):
         if self._excitation is None:
             self._subscribe()
         self.get_logger().info(
-            f'simulating {_describe_truth(values)}: '
-            f'{self.resolve_topic_name("current_command")} [A] -> '
+            f'simulating {_describe_truth(values)}'
+            + (f' x {self.axes} axes' if self.axes > 1 else '') + ': '
+            f'{self.resolve_topic_name(self._input_topic)} [A] -> '
             f'{self._publisher.topic_name} [m]'
             + (' (excitation first)' if self._excitation is not None else '')
             + (f', recording into {values["record.path"]}' if values['record.path'] else ''))
@@ -229,6 +262,10 @@ class PlantSimulatorNode(Node):
     def exciting(self) -> bool:
         """Tell whether the excitation is running."""
         return self._excitation is not None
+
+    @property
+    def _input_topic(self) -> str:
+        return 'current_commands' if self.axes > 1 else 'current_command'
 
     def measure(self, t: float, current: float) -> float:
         """
@@ -247,10 +284,47 @@ class PlantSimulatorNode(Node):
             Displacement [m] with sensor noise.
 
         """
-        if isinstance(self._plant, MagnetostrictiveActuator):
-            displacement = self._plant.step(t, current)
+        return self._measure(self._plant, t, current)
+
+    def measure_block(self, t: float, currents: Any) -> np.ndarray:
+        """
+        Advance every axis by the samples of a block; return the displacements.
+
+        Parameters
+        ----------
+        t : float
+            Time of the block's last sample [s]; the others ``sample_period`` apart.
+        currents : array_like of float, shape (K, axes)
+            Coil currents [A]; a non-finite one is not applied (the axis's last current
+            is held) and counted.
+
+        Returns
+        -------
+        ndarray of float, shape (K, axes)
+            Displacements [m] with sensor noise.
+
+        """
+        block = np.asarray(currents, dtype=np.float64)
+        out = np.empty_like(block)
+        period = self._values['sample_period']
+        samples = block.shape[0]
+        for row in range(samples):
+            ts = max(t - (samples - 1 - row) * period, self._last_t + 1e-9)
+            self._last_t = ts
+            for axis, plant in enumerate(self._plants):
+                current = float(block[row, axis])
+                if math.isfinite(current):
+                    self._held[axis] = current
+                else:
+                    self.counters['nonfinite_commands'] += 1
+                out[row, axis] = self._measure(plant, ts, float(self._held[axis]))
+        return out
+
+    def _measure(self, plant: Any, t: float, current: float) -> float:
+        if isinstance(plant, MagnetostrictiveActuator):
+            displacement = plant.step(t, current)
         else:
-            displacement = self._plant.step(current)
+            displacement = plant.step(current)
         if self._noise_std > 0.0:
             displacement += self._noise_std * float(self._rng.standard_normal())
         return float(displacement)
@@ -269,8 +343,26 @@ class PlantSimulatorNode(Node):
 
     # -- callbacks ---------------------------------------------------------------------
     def _subscribe(self) -> None:
+        if self.axes > 1:
+            self._subscription = self.create_subscription(
+                Float64MultiArray, 'current_commands', self._on_current_commands, self._qos,
+                raw=True)
+            return
         self._subscription = self.create_subscription(
             Float64, 'current_command', self._on_current_command, self._qos)
+
+    def _on_current_commands(self, data: bytes) -> None:
+        self.counters['commands'] += 1
+        try:
+            block = block_of(data, self.axes)
+        except ArrayLayoutError as err:
+            self.counters['malformed'] = self.counters.get('malformed', 0) + 1
+            self.get_logger().warning(f'ignoring current_commands message: {err}',
+                                      throttle_duration_sec=1.0)
+            return
+        displacements = self.measure_block(time.monotonic() - self._t0, block)
+        self._publisher.handle.publish_raw(encode_float64_multiarray(displacements))
+        self.counters['published'] += 1
 
     def _on_current_command(self, msg: Float64) -> None:
         current = msg.data
@@ -334,7 +426,7 @@ class PlantSimulatorNode(Node):
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
 
-    def _build_truth(self, values: Dict[str, Any]) -> Any:
+    def _build_truth(self, values: Dict[str, Any], seed: Optional[int] = None) -> Any:
         if values['truth'] == 'mpi':
             missing = [key for key in MODEL_KEYS if values[key] is None]
             if missing:
@@ -347,7 +439,7 @@ class PlantSimulatorNode(Node):
         for field_name in _NODE_OWNED_FIELDS:
             mapping[f'actuator.{field_name}'] = 0.0
         return MagnetostrictiveActuator(ActuatorConfig.from_mapping(mapping),
-                                        seed=values['seed'])
+                                        seed=values['seed'] if seed is None else seed)
 
 
 def main(args: Optional[List[str]] = None) -> int:

@@ -1,0 +1,181 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+``std_msgs/msg/Float64MultiArray`` as CDR bytes: samples x axes blocks without message objects.
+
+The multi-axis nodes take and publish their array topics serialized (rclpy's raw
+subscriptions and ``publish_raw``): decoding a block is one ``numpy.frombuffer`` over the
+message's bytes and encoding one ``tobytes``, where rclpy would build a Python message
+object and convert its ``data`` element by element.
+
+Layout of the blocks (README, "Topics"): row-major ``samples x axes``.  A message whose
+``layout.dim`` has two entries is read with ``dim[0].size`` samples of ``dim[1].size``
+axes (``dim[0].stride`` apart, from ``layout.data_offset``); a message without ``dim`` is
+read as consecutive samples of every axis (its length a multiple of the axes).  Published
+blocks carry ``dim = [samples (K, K*N), axes (N, N)]`` and ``data_offset = 0``.
+
+CDR (XCDR1, as rmw_fastrtps writes it): a 4-byte encapsulation header (byte 1: 1 =
+little-endian, 0 = big-endian), then the fields, each aligned to its size relative to
+the end of the header; a string is a ``uint32`` length (with its NUL) and its bytes.
+"""
+
+import struct
+from typing import List, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = ['ArrayLayoutError', 'decode_float64_multiarray', 'encode_float64_multiarray',
+           'block_of']
+
+#: One dimension of ``layout.dim``: label, size, stride.
+Dimension = Tuple[str, int, int]
+
+
+class ArrayLayoutError(ValueError):
+    """A Float64MultiArray whose bytes or layout do not give a samples x axes block."""
+
+
+def decode_float64_multiarray(data: bytes) -> Tuple[List[Dimension], int, np.ndarray]:
+    """
+    Decode the CDR bytes of a ``Float64MultiArray``.
+
+    Parameters
+    ----------
+    data : bytes
+        The serialized message (as a raw subscription delivers it).
+
+    Returns
+    -------
+    dims : list of (str, int, int)
+        ``layout.dim``: label, size, stride.
+    data_offset : int
+        ``layout.data_offset``.
+    values : ndarray of float, shape (M,)
+        ``data`` (a read-only view of ``data``'s bytes, native byte order after a copy
+        only when the message is big-endian).
+
+    Raises
+    ------
+    ArrayLayoutError
+        When the bytes are too short for what they announce.
+
+    """
+    if len(data) < 4:
+        msg = f'Float64MultiArray: {len(data)} bytes, fewer than the 4-byte CDR header'
+        raise ArrayLayoutError(msg)
+    order = '<' if data[1] == 1 else '>'
+    u32 = struct.Struct(order + 'I').unpack_from
+    view = memoryview(data)[4:]
+    pos = 0
+    try:
+        (count,), pos = u32(view, 0), 4
+        dims: List[Dimension] = []
+        for _ in range(count):
+            (length,) = u32(view, pos)
+            label = bytes(view[pos + 4:pos + 4 + max(length - 1, 0)]).decode('utf-8', 'replace')
+            pos = _align(pos + 4 + length, 4)
+            size, stride = struct.unpack_from(order + 'II', view, pos)
+            pos += 8
+            dims.append((label, size, stride))
+        (data_offset,) = u32(view, pos)
+        (length,) = u32(view, pos + 4)
+    except struct.error as err:
+        msg = f'Float64MultiArray: truncated message ({len(data)} bytes): {err}'
+        raise ArrayLayoutError(msg) from err
+    pos = _align(pos + 8, 8)
+    end = pos + 8 * length
+    if end > len(view):
+        msg = (f'Float64MultiArray: announces {length} values but has bytes for '
+               f'{max(len(view) - pos, 0) // 8}')
+        raise ArrayLayoutError(msg)
+    values = np.frombuffer(view[pos:end], dtype=order + 'f8')
+    if order == '>':
+        values = values.astype(np.float64)
+    return dims, data_offset, values
+
+
+def block_of(data: bytes, axes: int) -> npt.NDArray[np.float64]:
+    """
+    Return the ``samples x axes`` block a serialized ``Float64MultiArray`` carries.
+
+    Parameters
+    ----------
+    data : bytes
+        The serialized message.
+    axes : int
+        Number of axes (columns) expected.
+
+    Returns
+    -------
+    ndarray of float, shape (K, axes)
+        The block (K >= 1 samples).
+
+    Raises
+    ------
+    ArrayLayoutError
+        When the layout does not describe ``K x axes`` values that are there, naming
+        what was found.
+
+    """
+    dims, offset, values = decode_float64_multiarray(data)
+    if len(dims) == 2:
+        samples, columns = dims[0][1], dims[1][1]
+        # ROS convention: dim[1].stride is the row stride (dim[0].stride the total).
+        stride = max(dims[1][2], columns)
+        if columns != axes:
+            msg = (f'layout.dim[1].size (axes) is {columns}; this node has axes={axes}: '
+                   'send one column per axis')
+            raise ArrayLayoutError(msg)
+        if samples < 1 or offset + (samples - 1) * stride + columns > values.size:
+            msg = (f'layout says {samples} samples x {columns} axes (row stride {stride}, '
+                   f'data_offset {offset}), data has {values.size} values')
+            raise ArrayLayoutError(msg)
+        # A view: rows of the row stride, cut to the axes (no copy).
+        end = offset + samples * stride
+        if end > values.size:           # the last row may stop after its axes
+            padded = np.concatenate([values[offset:], np.zeros(end - values.size)])
+            return padded.reshape(samples, stride)[:, :columns]
+        return values[offset:end].reshape(samples, stride)[:, :columns]
+    if dims and len(dims) != 2:
+        msg = (f'layout.dim has {len(dims)} entries; expected none (consecutive samples '
+               'of every axis) or two (samples, axes)')
+        raise ArrayLayoutError(msg)
+    flat = values[offset:]
+    if flat.size == 0 or flat.size % axes:
+        msg = (f'{flat.size} values are not whole samples of axes={axes} (samples x axes, '
+               'row-major); send a multiple of the axis count or set layout.dim')
+        raise ArrayLayoutError(msg)
+    return flat.reshape(-1, axes)
+
+
+def encode_float64_multiarray(block: npt.NDArray[np.float64]) -> bytes:
+    """
+    Encode a ``samples x axes`` block as the CDR bytes of a ``Float64MultiArray``.
+
+    Parameters
+    ----------
+    block : ndarray of float, shape (K, N)
+        Values, row-major.
+
+    Returns
+    -------
+    bytes
+        ``layout.dim = [samples (K, K*N), axes (N, N)]``, ``data_offset = 0``, ``data``.
+
+    """
+    samples, columns = block.shape
+    values = samples * columns
+    return (_HEADER_START
+            + _LAYOUT(samples, values, 5, b'axes\x00', columns, columns, 0, values)
+            + np.ascontiguousarray(block, dtype='<f8').tobytes())
+
+
+def _align(pos: int, size: int) -> int:
+    return (pos + size - 1) // size * size
+
+
+# Fixed part of an encoded block: header; 2 dims; 'samples' (8 bytes with its NUL, so the
+# size after it is aligned); 'axes' (5 bytes + 3 of padding); data_offset; the data's
+# length; 4 bytes of padding: the doubles start at payload offset 56, aligned to 8.
+_HEADER_START = b'\x00\x01\x00\x00' + struct.pack('<II', 2, 8) + b'samples\x00'
+_LAYOUT = struct.Struct('<II I5s3x II II 4x').pack

@@ -1,0 +1,113 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The identifier on a multi-axis bag: every axis fitted, all models pushed in one request.
+
+The bag holds ``/current_commands`` and ``/displacements`` as Float64MultiArray, one
+element per axis, as the multi-axis nodes publish them; the three axes are different
+actuators (the built-in one driven around three operating points).  The identifier fits
+them in a process pool and pushes all ``axis<k>.model.*`` keys to a multi-axis compensator
+in one request; each axis must get exactly the model a single-axis fit of its columns
+gives.  A refused axis leaves the compensator untouched.
+"""
+
+import threading
+
+from mpi_ros.actuator import MagnetostrictiveActuator
+from mpi_ros.errors import IdentificationError
+from mpi_ros.excitation import identification_excitation
+from mpi_ros.nodes.identifier import fit_bag, IdentifierNode
+from mpi_ros.nodes.multi_axis import axis_key, MultiAxisCompensatorNode
+from mpi_ros.params import read_params_yaml
+from mpi_ros.recordings import DataOptions
+import numpy as np
+import pytest
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+
+from ..message_bags import ARRAY, float64_array, write_bag
+
+AXES = 3
+ORDER = '6,3'
+
+
+def _stamps(t):
+    return np.round(np.asarray(t) * 1e9).astype(np.int64).tolist()
+
+
+@pytest.fixture(scope='module')
+def axes_bag(tmp_path_factory):
+    """Return a 3-axis bag: one Float64MultiArray sample of every axis per message."""
+    t, base = identification_excitation(10.0, sample_rate=250.0, seed=1)
+    currents = np.column_stack([base, 0.8 * base + 0.3, 1.1 * base - 0.2])
+    displacements = np.column_stack([MagnetostrictiveActuator().simulate(t, currents[:, k])
+                                     for k in range(AXES)])
+    stamps = _stamps(t)
+    commands = [(s, float64_array(row)) for s, row in zip(stamps, currents)]
+    measured = [(s + 1, float64_array(row)) for s, row in zip(stamps, displacements)]
+    path = tmp_path_factory.mktemp('bags') / 'axes'
+    write_bag(path, {'/current_commands': (ARRAY, commands),
+                     '/displacements': (ARRAY, measured)})
+    return path
+
+
+@pytest.fixture
+def compensator(ros_context):
+    node = MultiAxisCompensatorNode(context=ros_context, parameter_overrides=[
+        Parameter('axes', value=AXES), Parameter('output.min', value=-1.0),
+        Parameter('output.max', value=3.0)])
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(node)
+    thread = threading.Thread(target=executor.spin, daemon=True)
+    thread.start()
+    yield node
+    executor.shutdown()
+    thread.join(timeout=5.0)
+    node.destroy_node()
+
+
+def test_fits_every_axis_and_pushes_all_at_once(ros_context, compensator, axes_bag, tmp_path):
+    params_file = tmp_path / 'axes.yaml'
+    node = IdentifierNode(context=ros_context, parameter_overrides=[
+        Parameter('bag', value=str(axes_bag)), Parameter('order', value=ORDER),
+        Parameter('axes', value=AXES), Parameter('workers', value=2),
+        Parameter('params_file', value=str(params_file)),
+        Parameter('service_timeout', value=10.0)])
+    try:
+        fits = node.run()
+    finally:
+        node.destroy_node()
+    assert len(fits) == AXES
+    assert compensator.compensator is not None                     # every axis configured
+    written = read_params_yaml(params_file)
+    assert written['axes'] == AXES
+    for axis, fit in enumerate(fits):
+        alone = fit_bag(str(axes_bag), order=(6, 3), options=DataOptions(
+            input_topic='/current_commands', output_topic='/displacements',
+            input_index=axis, output_index=axis))
+        assert fit.parameters == alone.parameters
+        assert compensator.compensator.axes[axis].model.to_params() == fit.parameters
+        for key, value in fit.parameters.items():
+            assert written[axis_key(axis, key)] == pytest.approx(value, rel=1e-12, abs=0.0)
+    assert fits[0].parameters != fits[1].parameters                # different actuators
+
+
+def test_a_refused_axis_pushes_nothing(ros_context, compensator, tmp_path):
+    t, base = identification_excitation(10.0, sample_rate=250.0, seed=2)
+    flat = np.column_stack([base, base, np.full_like(base, 1.0)])  # axis 2: constant input
+    displacements = np.column_stack([MagnetostrictiveActuator().simulate(t, flat[:, k])
+                                     for k in range(AXES)])
+    stamps = _stamps(t)
+    path = write_bag(tmp_path / 'refused', {
+        '/current_commands': (ARRAY, [(s, float64_array(r)) for s, r in zip(stamps, flat)]),
+        '/displacements': (ARRAY, [(s + 1, float64_array(r))
+                                   for s, r in zip(stamps, displacements)])})
+    node = IdentifierNode(context=ros_context, parameter_overrides=[
+        Parameter('bag', value=str(path)), Parameter('order', value=ORDER),
+        Parameter('axes', value=AXES), Parameter('workers', value=1)])
+    try:
+        with pytest.raises(IdentificationError, match='axis 2'):
+            node.run()
+    finally:
+        node.destroy_node()
+    assert compensator.compensator is None
+    assert compensator.counters['rejected_updates'] == 0
