@@ -73,7 +73,7 @@ nobody asked for.
 import math
 import struct
 import time
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
@@ -184,8 +184,8 @@ class CompensatorNode(Node):
         self._messages_in = 0
         self._messages_out = 0
         self._dropped_unconfigured = 0
-        self._last_report = (time.monotonic(), 0, {})
-        self._fault_log = (-math.inf, {})
+        self._last_report: Tuple[float, int, Dict[str, int]] = (time.monotonic(), 0, {})
+        self._fault_log: Tuple[float, Dict[str, int]] = (-math.inf, {})
         # Validator first: rclpy runs it once per key while declaring (a bad
         # --params-file override is rejected there), then once per request.
         self.add_pre_set_parameters_callback(self._complete_model_request)
@@ -352,9 +352,11 @@ class CompensatorNode(Node):
             if spec is not None:
                 current = self.get_parameter_or(
                     parameter.name, Parameter(parameter.name, Type.NOT_SET, None))
-                parameter = _resolve_null(spec, normalized(spec, parameter), current)
-            if parameter is not None:
-                completed.append(parameter)
+                resolved = _resolve_null(spec, normalized(spec, parameter), current)
+                if resolved is None:
+                    continue
+                parameter = resolved
+            completed.append(parameter)
         names = {parameter.name for parameter in completed}
         if not names.issuperset(MODEL_KEYS):
             return completed
@@ -451,7 +453,7 @@ class CompensatorNode(Node):
             self._compensator.set_limits(*prepared['limits'])
         if 'enabled' in prepared and self._compensator is not None:
             self._compensator.enabled = prepared['enabled']
-        if 'sample_period' in prepared and self._extended:
+        if 'sample_period' in prepared and self._compensator is not None:
             self._compensator.sample_period = prepared['sample_period']
         if 'model' in prepared:
             self._install_model(prepared['model'])
@@ -480,6 +482,9 @@ class CompensatorNode(Node):
             msg = f'incomplete model in the parameters: missing {missing}'
             raise ParameterRejected(msg)
         params = _model_params(values)
+        if params is None:
+            msg = 'incomplete model in the parameters'
+            raise ParameterRejected(msg)
         self._install_model(extended_model_from_params(params))
 
     def _install_model(self, model: Any) -> None:
@@ -581,13 +586,13 @@ class CompensatorNode(Node):
         else:
             status.level = DiagnosticStatus.OK
             status.message = 'compensating'
-        values = dict(counters)
+        values: Dict[str, Any] = dict(counters)
         values['last_rejected_update'] = self._last_rejection
         compensator = self._compensator
         if compensator is not None:
             values['extension'] = self._model_kind
-        if self._extended:
-            values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
+            if compensator.has_effect:
+                values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
         values.update(
             rate_hz=round(rate, 3),
             max_backlog=self._loss.last_backlog,
@@ -693,7 +698,7 @@ def _describe_faults(faults: Dict[str, int]) -> str:
 
 
 def _same(current: Parameter, incoming: Parameter) -> bool:
-    return current.type_ == incoming.type_ and current.value == incoming.value
+    return bool(current.type_ == incoming.type_ and current.value == incoming.value)
 
 
 def _resolve_null(spec: ParameterSpec, parameter: Parameter,
@@ -717,7 +722,7 @@ def _resolve_null(spec: ParameterSpec, parameter: Parameter,
     return parameter
 
 
-def _ordered_limits(output_min: float, output_max: float) -> tuple:
+def _ordered_limits(output_min: float, output_max: float) -> Tuple[float, float]:
     if not (math.isfinite(output_min) and math.isfinite(output_max)):
         msg = f'output.min and output.max must be finite; found {output_min}, {output_max}'
         raise ParameterRejected(msg)

@@ -193,7 +193,7 @@ class IdentifierNode(Node):
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
 
-    def run(self) -> BagFit:
+    def run(self) -> 'BagFit | List[BagFit]':
         """
         Fit, report, write the YAML if asked, and push if asked.
 

@@ -183,7 +183,8 @@ class LoopDriver(Node):
                 self.executor_.spin_once(timeout_sec=0.005)
             if self.displacement is not None:
                 self.spin_for(0.3)
-                return float(self.displacement)
+                answer: Any = self.displacement
+        return float(answer)
         msg = f'no answer from the loop within {timeout:g} s; see the node logs'
         raise MPIError(msg)
 
@@ -203,7 +204,8 @@ class LoopDriver(Node):
         else:
             self.wait_for(lambda: self.displacement is not None,
                           'the plant simulator to answer', timeout)
-        return float(self.displacement)
+        answer: Any = self.displacement
+        return float(answer)
 
     def exchange_paced(self, publisher: Any, values: npt.ArrayLike, times: npt.ArrayLike, *,
                        timeout: float = 5.0) -> tuple[np.ndarray, np.ndarray]:

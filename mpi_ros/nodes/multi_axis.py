@@ -38,7 +38,7 @@ Model updates
 from dataclasses import replace
 import math
 import time
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 import numpy as np
@@ -108,7 +108,7 @@ def axis_key(axis: int, key: str) -> str:
     return f'axis{axis}.{key}'
 
 
-def axis_parameters(axes: int) -> tuple:
+def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
     """
     Return the specs of every axis's model keys.
 
@@ -177,7 +177,7 @@ class MultiAxisCompensatorNode(Node):
         self._dropped_unconfigured = 0
         self._malformed = 0
         self._last_malformed = ''
-        self._last_report = (time.monotonic(), 0, {})
+        self._last_report: Tuple[float, int, Dict[str, int]] = (time.monotonic(), 0, {})
         self._configure_from_declared()
 
         reliability = self.get_parameter('qos_reliability').value
@@ -498,7 +498,7 @@ def _command_block(compensator: MultiAxisCompensator, block: np.ndarray) -> np.n
     return out
 
 
-def _ordered_limits(output_min: float, output_max: float) -> tuple:
+def _ordered_limits(output_min: float, output_max: float) -> Tuple[float, float]:
     if not (math.isfinite(output_min) and math.isfinite(output_max)
             and output_min < output_max):
         msg = (f'output.min must be finite and below output.max; found output.min='

@@ -53,7 +53,7 @@ Recording (``record.path``)
 from dataclasses import fields, replace
 import math
 import time
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
@@ -85,7 +85,7 @@ Type = Parameter.Type
 _NODE_OWNED_FIELDS = {'noise_std_m': 'noise_std'}
 
 
-def _actuator_parameters() -> tuple:
+def _actuator_parameters() -> Tuple[ParameterSpec, ...]:
     defaults = ActuatorConfig().to_mapping()
     descriptions = ActuatorConfig.descriptions()
     specs = []
@@ -226,8 +226,9 @@ class PlantSimulatorNode(Node):
             self._publisher = self.create_publisher(Float64MultiArray, 'displacements', qos)
         else:
             self._publisher = self.create_publisher(Float64, 'displacement', qos)
-        self._command_publisher = None
-        self._excitation = None
+        self._command_publisher: Optional[Any] = None
+        self._excitation: Optional[Tuple[Any, Any]] = None
+        self._excitation_start: Optional[float] = None
         if values['excitation.enabled']:
             self._command_publisher = self.create_publisher(Float64, 'current_command', qos)
             schedule_t, schedule_i = _excitation_schedule(values)
@@ -241,7 +242,7 @@ class PlantSimulatorNode(Node):
                 f'{values["excitation.signal"]} excitation: {len(schedule_t)} samples over '
                 f'{schedule_t[-1] - schedule_t[0]:g} s')
         self._qos = qos
-        self._subscription = None
+        self._subscription: Optional[Any] = None
         if self._excitation is None:
             self._subscribe()
         self.get_logger().info(
@@ -378,10 +379,12 @@ class PlantSimulatorNode(Node):
         self._emit(t, self._now(), current, publish_command=False)
 
     def _excite(self) -> None:
+        if self._excitation is None:
+            return
         schedule_t, schedule_i = self._excitation
         now = time.monotonic()
         if self._excitation_start is None:
-            self._excitation_start = now - schedule_t[0]
+            self._excitation_start = now - float(schedule_t[0])
         due = now - self._excitation_start
         stop = int(np.searchsorted(schedule_t, due, side='right'))
         for k in range(self._excitation_index, stop):
@@ -405,7 +408,7 @@ class PlantSimulatorNode(Node):
 
     def _emit(self, t: float, stamp: float, current: float, *, publish_command: bool) -> None:
         displacement = self.measure(t, current)
-        if publish_command:
+        if publish_command and self._command_publisher is not None:
             self._command.data = current
             self._command_publisher.publish(self._command)
         self._displacement.data = displacement
@@ -481,7 +484,7 @@ def _describe_truth(values: Dict[str, Any]) -> str:
     return text
 
 
-def _excitation_schedule(values: Dict[str, Any]) -> tuple:
+def _excitation_schedule(values: Dict[str, Any]) -> Tuple[Any, Any]:
     """Return the (time [s], current [A]) schedule of the excitation mode."""
     common = {'sample_rate': values['excitation.sample_rate'],
               'bias': values['excitation.bias'], 'amplitude': values['excitation.amplitude'],
