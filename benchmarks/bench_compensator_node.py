@@ -123,7 +123,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     from mpi_ros import MPIModel
     from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
-    from mpi_ros.nodes.loop import loop_qos, NodeProcess
+    from mpi_ros.harness import NodeProcess
+    from mpi_ros.nodes.qos import loop_qos
     from mpi_ros.nodes.multi_axis import axis_key
     from mpi_ros.params import write_params_yaml
 
@@ -385,7 +386,7 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
     import rclpy
     from std_msgs.msg import Float64
 
-    from mpi_ros.nodes.loop import loop_qos
+    from mpi_ros.nodes.qos import loop_qos
     from mpi_ros.nodes.spinning import events_executor
     rclpy.init()
     node = rclpy.create_node('bench_receiver')

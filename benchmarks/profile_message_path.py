@@ -27,7 +27,7 @@ __all__ = ['main']
 _SINK = """
 import time, rclpy
 from std_msgs.msg import Float64
-from mpi_ros.nodes.loop import loop_qos
+from mpi_ros.nodes.qos import loop_qos
 from mpi_ros.nodes.spinning import events_executor
 rclpy.init()
 node = rclpy.create_node('sink')
@@ -55,7 +55,7 @@ def main() -> None:
 
     from bench_compensator_node import BENCH_MODEL
     from mpi_ros.nodes.compensator import CompensatorNode
-    from mpi_ros.nodes.loop import loop_qos
+    from mpi_ros.nodes.qos import loop_qos
     from mpi_ros.nodes.spinning import events_executor
 
     sink = subprocess.Popen([sys.executable, '-c', _SINK])

@@ -43,7 +43,7 @@ def main(argv: 'list[str] | None' = None) -> None:
     from rclpy.signals import SignalHandlerOptions
     from std_msgs.msg import Float64
 
-    from mpi_ros.nodes.loop import loop_qos
+    from mpi_ros.nodes.qos import loop_qos
     from mpi_ros.nodes.spinning import events_executor, StopSignals
     qos = loop_qos(args.qos_depth, args.reliability)
     with StopSignals() as stop:

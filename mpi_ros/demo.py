@@ -24,7 +24,7 @@ function (:mod:`mpi_ros.extensions`), each pushed into a fresh compensator in fr
 fresh plant, tracking the same trajectory.  The identification excitation then has holds
 and bursts.  Both effects depend on time, and the plant and the compensator take a
 message's time from their steady clocks at its arrival, so the driver sends sample ``k``
-at ``t[k]`` in real time (:meth:`~mpi_ros.nodes.loop.LoopDriver.exchange_paced`), still
+at ``t[k]`` in real time (:meth:`~mpi_ros.harness.LoopDriver.exchange_paced`), still
 waiting for each answer; the bag's time stamps are the real send times.
 
 Samples are exchanged in lock step (each desired value waits for its measured
@@ -51,8 +51,8 @@ from .errors import MPIError
 
 if TYPE_CHECKING:  # the nodes (and rclpy) are imported only when the demo runs
     from .extensions import EffectModel
+    from .harness import NodeProcess
     from .model import MPIModel
-    from .nodes.loop import NodeProcess
 
 __all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']
 
@@ -79,7 +79,7 @@ class _DemoLoop:
 
     def start_plant(self) -> Any:
         """Start a plant simulator process and wait until it subscribes."""
-        from .nodes.loop import NodeProcess
+        from .harness import NodeProcess
         plant = NodeProcess('plant-simulator', self.plant_args,
                             self.out / 'plant_simulator.log')
         self.processes.append(plant)
@@ -91,7 +91,7 @@ class _DemoLoop:
                           first: float) -> tuple[Any, Any]:
         """Start a fresh plant and compensator, push ``params``, handshake with ``first``."""
         from .nodes.identifier import push_model_parameters
-        from .nodes.loop import NodeProcess
+        from .harness import NodeProcess
         plant = self.start_plant()
         comp = NodeProcess('compensator',
                            ['-p', f'output.min:={self.args.output_min!r}',
@@ -121,7 +121,7 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
     from .excitation import identification_excitation
     from .identification import identify
     from .metrics import control_error
-    from .nodes.loop import LoopDriver, NodeProcess
+    from .harness import LoopDriver, NodeProcess
     from .recordings import BagRecorder, read_bag_signals
 
     out = Path(args.output)
@@ -204,7 +204,7 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
     from .extensions import fit_creep, fit_rate_dependence
     from .identification import identify
     from .metrics import control_error, nonlinearity_error
-    from .nodes.loop import LoopDriver, NodeProcess
+    from .harness import LoopDriver, NodeProcess
     from .recordings import BagRecorder, read_bag_signals
 
     n, l = ORDERS[-1]  # noqa: E741

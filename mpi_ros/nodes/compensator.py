@@ -81,7 +81,6 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
-from .loop import loop_qos
 from .loss import LossMonitor
 from .multi_axis import AXES
 from .parameters import (
@@ -90,6 +89,7 @@ from .parameters import (
     normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected, ParameterSpec,
     set_parameters_in_groups, specs_by_name,
 )
+from .qos import loop_qos
 from .spinning import run_node_main
 from ..compensation import Compensator, gamma_of, inverse_step_of
 from ..errors import MPIError

@@ -48,13 +48,13 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64MultiArray
 
 from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
-from .loop import loop_qos
 from .loss import LossMonitor
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, MODEL_KEYS,
     MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
     ParameterSpec, set_parameters_in_groups, specs_by_name,
 )
+from .qos import loop_qos
 from ..compensation import MultiAxisCompensator
 from ..errors import MPIError
 from ..model import MPIModel

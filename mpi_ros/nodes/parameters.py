@@ -23,7 +23,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 import yaml
 
-from .loop import RELIABILITY
+from .qos import RELIABILITY
 from ..errors import ParameterRejected
 from ..extensions import EFFECTS
 from ..extensions.effect import effect_off_values
@@ -240,7 +240,7 @@ def loop_qos_parameters(topics: str) -> Tuple[ParameterSpec, ParameterSpec]:
     Returns
     -------
     tuple of ParameterSpec
-        Both read-only; the node builds its QoS with :func:`mpi_ros.nodes.loop.loop_qos`.
+        Both read-only; the node builds its QoS with :func:`mpi_ros.nodes.qos.loop_qos`.
 
     """
     return (

@@ -63,13 +63,13 @@ from rclpy.task import Future
 from std_msgs.msg import Float64, Float64MultiArray
 
 from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
-from .loop import loop_qos
 from .multi_axis import AXES
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, loop_qos_parameters,
     MODEL_KEYS, MODEL_PARAMETERS, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
     ParameterSpec, specs_by_name,
 )
+from .qos import loop_qos
 from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
 from ..diagnosis.signatures import diagnostic_excitation

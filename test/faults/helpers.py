@@ -10,8 +10,8 @@ the module's own ``ROS_DOMAIN_ID`` with local-only discovery (``ros_env`` of
 import time
 
 from mpi_ros.compensation import FeedforwardCompensator, operating_range
+from mpi_ros.harness import NodeProcess
 from mpi_ros.model import MPIModel
-from mpi_ros.nodes.loop import NodeProcess
 import numpy as np
 import pytest
 from rcl_interfaces.msg import ParameterType

@@ -22,7 +22,7 @@ import types
 
 from mpi_ros.actuator import MagnetostrictiveActuator
 from mpi_ros.excitation import identification_excitation
-from mpi_ros.nodes.loop import LoopDriver
+from mpi_ros.harness import LoopDriver
 from mpi_ros.recordings import write_bag_signals
 import pytest
 from rcl_interfaces.msg import ParameterType

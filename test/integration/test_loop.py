@@ -10,10 +10,10 @@ started and stopped here, by PID.
 from mpi_ros import identify, MPIModel
 from mpi_ros.compensation import FeedforwardCompensator, operating_range
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
+from mpi_ros.harness import LoopDriver, NodeProcess
 from mpi_ros.inverse import invert_hysteresis_initial_states
 from mpi_ros.metrics import control_error
 from mpi_ros.nodes.identifier import ParameterPushError, push_model_parameters
-from mpi_ros.nodes.loop import LoopDriver, NodeProcess
 import numpy as np
 import pytest
 import rclpy

@@ -2,10 +2,11 @@
 """
 Drive the compensator/plant loop from outside: node processes and a lock-step driver.
 
-Used by ``mpi-ros demo``, the integration tests and the benchmarks.  Every node runs in
-its own process (``python -m mpi_ros.cli <node> --ros-args ...``), started and stopped
-by PID.  The driver publishes a command or a desired displacement and waits for the
-measured displacement it causes, so results do not depend on DDS timing.
+The harness of ``mpi-ros demo``, the integration tests and the benchmarks; production nodes
+never import it.  Every node runs in its own process (``python -m mpi_ros.cli <node>
+--ros-args ...``), started and stopped by PID.  The driver publishes a command or a desired
+displacement and waits for the measured displacement it causes, so results do not depend on
+DDS timing.
 """
 
 import os
@@ -20,42 +21,12 @@ import numpy as np
 import numpy.typing as npt
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64
 
-from ..errors import MPIError
+from .errors import MPIError
+from .nodes.qos import loop_qos
 
-__all__ = ['NodeProcess', 'LoopDriver', 'loop_qos', 'RELIABILITY']
-
-
-#: ``qos_reliability`` parameter value -> rclpy policy.
-RELIABILITY = {'reliable': ReliabilityPolicy.RELIABLE,
-               'best_effort': ReliabilityPolicy.BEST_EFFORT}
-
-
-def loop_qos(depth: int = 10000, reliability: str = 'reliable') -> QoSProfile:
-    """
-    Return the QoS of the loop topics (keep-last ``depth``), as the nodes build it.
-
-    Parameters
-    ----------
-    depth : int
-        History depth: 10000 (the nodes' default ``qos_depth``) holds 1 s of a 10 kHz
-        stream, so a subscriber or the node may stall that long without a lost sample.
-    reliability : str
-        ``reliable`` (default: nothing lost) or ``best_effort`` (a reliable Fast DDS
-        writer wakes its event thread on every sample; at 10 kHz that is measurable, see
-        docs/reliability.md).  A best-effort publisher does not match a reliable
-        subscription.
-
-    Returns
-    -------
-    rclpy.qos.QoSProfile
-        Keep-last ``depth``, volatile, with the given reliability.
-
-    """
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
-                      reliability=RELIABILITY[reliability])
+__all__ = ['NodeProcess', 'LoopDriver']
 
 
 class NodeProcess:
