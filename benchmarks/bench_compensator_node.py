@@ -18,7 +18,18 @@ Targets: 10,000 messages/s for 10 s, zero drops, p99 <= 1 ms (ROS package issue)
 ``--duration 600``).
 
 Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]
-[--reliability reliable|best_effort] [--pin]``
+[--reliability reliable|best_effort] [--qos-depth 10000] [--pin] [--axes N [--chunk K]]
+[--node compensator|relay:events|relay:waitset|relay:poll|relay:naive]
+[--receiver ordinary|naive|raw]``
+
+``--axes N`` (N > 1) runs the multi-axis compensator on the Float64MultiArray topics, each
+message carrying ``--chunk`` samples of every axis (``--rate`` is messages per second).
+``--node relay:MODE`` puts one of the relays of ``relay.py`` (no arithmetic) in place of the
+compensator: the floor.  ``--receiver`` picks how commands are received: ``ordinary`` (a
+deserialising callback on the EventsExecutor, default), ``naive`` (``rclpy.spin``'s
+SingleThreadedExecutor) or ``raw`` (serialized, the queue drained per callback).  Every
+run prints the load average, the CPU per process and per compensator thread, the CPU per
+message, and the largest difference of a command from the single-axis core.
 
 ``--reliability`` sets the QoS of all three endpoints (a reliable Fast DDS writer wakes its
 event thread on every sample to restart its heartbeat timer: about 10,000 extra wake-ups

@@ -210,6 +210,7 @@ class CompensatorNode(Node):
         self._subscription = self.create_subscription(
             Float64, 'desired_displacement', self._on_desired_displacement, qos, raw=True,
             event_callbacks=self._loss.subscription_callbacks())
+        self._loss.publisher_count = self._subscription.get_publisher_count
         self._timer = self.create_timer(
             self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
         self._fault_timer = self.create_timer(1.0, self._every_second)

@@ -41,6 +41,7 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 import multiprocessing
 import os
+import signal
 import sys
 import time
 from typing import Any, Dict, List, Mapping, Optional
@@ -60,7 +61,7 @@ from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, MODEL_KEYS,
     OPERATING_POINT_KEYS, ParameterRejected, ParameterSpec, specs_by_name,
 )
-from .spinning import shutdown, StopSignals
+from .spinning import shutdown, STOP_SIGNALS, StopSignals
 from .. import IdentificationResult, identify
 from ..errors import DataError, IdentificationError, MPIError, ParameterPushError
 from ..order import format_order, Order, parse_order as parse_order_text
@@ -314,12 +315,22 @@ def fit_bag_axes(path: str, axes: int, *, options: Optional[DataOptions] = None,
     if count <= 1:
         return [_fit_axis(path, axis, opts, order) for axis, opts in enumerate(per_axis)]
     # spawn, not fork: this process runs DDS threads (a forked child could inherit a
-    # lock held by one of them).
-    with ProcessPoolExecutor(max_workers=count,
-                             mp_context=multiprocessing.get_context('spawn')) as pool:
+    # lock held by one of them).  The workers ignore SIGINT/SIGTERM (Ctrl-C reaches the
+    # whole process group): this process stops, cancels what has not started and waits
+    # for the fits under way, so a stop leaves no traceback and no process behind.
+    pool = ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context(
+        'spawn'), initializer=_ignore_stop_signals)
+    try:
         futures = [pool.submit(_fit_axis, path, axis, opts, order)
                    for axis, opts in enumerate(per_axis)]
         return [future.result() for future in futures]
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _ignore_stop_signals() -> None:
+    for signum in STOP_SIGNALS:
+        signal.signal(signum, signal.SIG_IGN)
 
 
 def _fit_axis(path: str, axis: int, options: DataOptions, order: Order) -> BagFit:

@@ -11,8 +11,9 @@ a GAP, which Fast DDS reports to the reader as *sample lost*; a peer with incomp
 - ``lost_sequence_gaps``: jumps of the publisher's sequence number
   (``publication_sequence_number`` of each message the node takes itself while serving
   its queue; the message the executor hands over comes without it and is accounted as
-  one in between).  Off while more than one publisher feeds the topic (their numbers
-  interleave), and restarted when a number goes back (a restarted publisher).
+  one in between).  A jump counts only while exactly one publisher feeds the topic
+  (asked when a jump is seen: several publishers interleave their numbers), and a
+  number that goes back (a restarted publisher) starts the count again.
 - ``lost_dds_events``: the DDS *sample lost* event of the subscription.
 - ``incompatible_qos``: requested / offered incompatible QoS events of the subscription
   and publisher.
@@ -23,7 +24,7 @@ close the queue came to ``qos_depth``.
 """
 
 import math
-from typing import Any, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 
@@ -61,6 +62,8 @@ class LossMonitor:
         self.lost_sequence_gaps = 0
         self.lost_dds_events = 0
         self.publishers = 0
+        #: Returns the number of publishers of the input (set once the subscription exists).
+        self.publisher_count: Callable[[], int] = lambda: 1
         self.max_backlog = 0
         self._incompatible: Dict[str, int] = {}
         self._last_number: Optional[int] = None
@@ -102,11 +105,13 @@ class LossMonitor:
         """Check the sequence number of a message the node took itself (None: unknown)."""
         last, unsequenced = self._last_number, self._unsequenced
         self._last_number, self._unsequenced = number, 0
-        if number is None or last is None or self.publishers > 1:
+        if number is None or last is None:
             return
         gap = number - last - 1 - unsequenced
         if gap > 0:
-            self.lost_sequence_gaps += gap
+            self.publishers = self.publisher_count()
+            if self.publishers == 1:
+                self.lost_sequence_gaps += gap
 
     def served(self, count: int) -> None:
         """Note the number of messages one callback served: how full the queue was."""

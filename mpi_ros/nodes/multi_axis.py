@@ -191,6 +191,7 @@ class MultiAxisCompensatorNode(Node):
         self._subscription = self.create_subscription(
             Float64MultiArray, 'desired_displacements', self._on_desired_displacements, qos,
             raw=True, event_callbacks=self._loss.subscription_callbacks())
+        self._loss.publisher_count = self._subscription.get_publisher_count
         self._timer = self.create_timer(
             self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
         self._second_timer = self.create_timer(1.0, self._every_second)

@@ -145,3 +145,19 @@ def test_incompatible_qos_peer_is_counted_and_warn(rig):
     status = node.diagnostics().status[0]
     assert status.level == DiagnosticStatus.WARN
     assert 'incompatible QoS' in status.message
+
+
+def test_two_publishers_interleaving_their_numbers_count_nothing(rig):
+    node, source, publisher, executor, _ = rig
+    other = source.create_publisher(Float64, 'desired_displacement', 10000)
+    spin_until(executor, lambda: node._subscription.get_publisher_count() == 2)
+    for _ in range(4):
+        burst(other, 5)                                  # other's numbers run ahead
+        settle(executor, node)
+    for _ in range(3):
+        for _ in range(2):                               # then both, interleaved
+            publisher.publish(Float64(data=GOOD))
+            other.publish(Float64(data=GOOD))
+        settle(executor, node)
+    assert node.counters['messages_in'] == 32
+    assert node.counters['messages_lost'] == 0
