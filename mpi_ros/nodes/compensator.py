@@ -2,6 +2,10 @@
 """
 Compensator node: desired displacement in, current command out, through the inverse (27).
 
+(Over 500 lines: the node's parameter rule - one model-update rule for every parameter
+path, null handling, grouped set_parameters - its raw message path and its diagnostics
+belong to one node; the model logic itself is in :mod:`mpi_ros.compensation`.)
+
 Topics (relative names, std_msgs/msg/Float64, SI units)
     ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
     ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray) every ``diagnostics_period``.

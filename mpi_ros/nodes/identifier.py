@@ -2,10 +2,13 @@
 """
 Identifier node: fit an MPI model (28)-(36) from a rosbag2 bag and push it atomically.
 
+(Slightly over 500 lines: single- and multi-axis fitting, the push with its bounded
+waits and the shutdown handling of one node.)
+
 One run: read the bag (sqlite3 or mcap; a ``.csv`` file works too) with
-:func:`mpi_ros.recordings.read_recording`, pairing ``input_topic`` (current [A]) with
-``output_topic`` (displacement [m]); the data parameters (``input_joint``, ``input_field``,
-``input_index``, ``output_scale``, ...) are the data options of ``mpi-ros identify``
+:func:`mpi_ros.pipeline.fit_recording` (the CLI's pipeline), pairing ``input_topic``
+(current [A]) with ``output_topic`` (displacement [m]); the data parameters
+(``input_joint``, ``input_field``, ``input_index``, ``output_scale``, ...) are the data options of ``mpi-ros identify``
 (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit with :func:`mpi_ros.identify` (``order``
 ``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
 fit errors (37); optionally write the parameter YAML (``params_file``); then send all
@@ -62,11 +65,12 @@ from .parameters import (
     OPERATING_POINT_KEYS, ParameterRejected, ParameterSpec, specs_by_name,
 )
 from .spinning import shutdown, STOP_SIGNALS, StopSignals
-from .. import IdentificationResult, identify
+from .. import IdentificationResult
 from ..errors import DataError, IdentificationError, MPIError, ParameterPushError
 from ..order import format_order, Order, parse_order as parse_order_text
 from ..params import write_params_yaml
-from ..recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording
+from ..pipeline import fit_recording
+from ..recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS
 
 __all__ = [
     'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS', 'DATA_PARAMETERS',
@@ -402,8 +406,8 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
     if options is None:
         options = DataOptions(input_topic=input_topic, output_topic=output_topic,
                               spelling='parameter')
-    recording = read_recording(path, options)
-    result = identify(recording.current, recording.displacement, order=order)
+    fit = fit_recording(path, options, order=order)          # the one pipeline (CLI too)
+    result = fit.result
     parameters = result.model.to_params()
     expected = MODEL_KEYS + OPERATING_POINT_KEYS
     if set(parameters) != set(expected):

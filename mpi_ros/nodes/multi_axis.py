@@ -2,6 +2,9 @@
 """
 Multi-axis compensator node: N actuators, one model each, on samples x axes array topics.
 
+(Slightly over 500 lines: per-axis parameter namespaces, atomic multi-axis updates, the
+array message path and diagnostics of one node.)
+
 Started by ``mpi-ros compensator --ros-args -p axes:=N`` (N > 1; ``axes`` 1, the default,
 is the single-axis node of :mod:`mpi_ros.nodes.compensator` with its Float64 topics).
 

@@ -2,6 +2,9 @@
 """
 Parameter declarations and per-key validation shared by the mpi_ros nodes.
 
+(Over 500 lines: the parameter specs of all nodes and the request handling they share -
+type checks, CLI value forms, grouped set_parameters - are kept in one place on purpose.)
+
 Every node describes its parameters once, as a tuple of :class:`ParameterSpec`,
 and declares them with :func:`declare_parameters`. The specs are declared with
 ``dynamic_typing=True`` on purpose: rclpy's own static type check answers
