@@ -9,7 +9,8 @@ One run: read the bag (sqlite3 or mcap; a ``.csv`` file works too) with
 :func:`mpi_ros.pipeline.fit_recording` (the CLI's pipeline), pairing ``input_topic``
 (current [A]) with ``output_topic`` (displacement [m]); the data parameters
 (``input_joint``, ``input_field``, ``input_index``, ``output_scale``, ...) are the data
-options of ``mpi-ros identify`` (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit with :func:`mpi_ros.identify` (``order``
+options of ``mpi-ros identify`` (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit with
+:func:`mpi_ros.identify` (``order``
 ``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
 fit errors (37); optionally write the parameter YAML (``params_file``); then send all
 eight ``model.*`` keys (Gamma's five arrays and the operating point
