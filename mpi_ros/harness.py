@@ -154,8 +154,8 @@ class LoopDriver(Node):
                 self.executor_.spin_once(timeout_sec=0.005)
             if self.displacement is not None:
                 self.spin_for(0.3)
-                answer: Any = self.displacement
-        return float(answer)
+                answered: Any = self.displacement
+                return float(answered)
         msg = f'no answer from the loop within {timeout:g} s; see the node logs'
         raise MPIError(msg)
 
