@@ -224,8 +224,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     table: list[dict[str, Any]] = []
     _check_monotone(x, y)
     if periodic:
-        return _identify_periodic(x, y, order=order, n=n, l=l, epsilon=epsilon,
-                                  anchor=anchor, started=started)
+        _check_one_period(x, order)
     if order == 'auto':
         (n, l), table = select_order(x, y, holdout=holdout, epsilon=epsilon, anchor=anchor)
     elif order is not None:
@@ -238,21 +237,24 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     if n < 0 or l < 0:
         msg = f'model orders must be >= 0; found n={n}, l={l}'
         raise DataError(msg)
-    _check_excitation(x, y, n, l, anchor=anchor)
-    model, design, info = fit_model(x, y, n, l, epsilon=epsilon, anchor=anchor)
-    sim = model.simulate(x)
-    rms, peak, linear = _quality_check(x, y, sim, design.burn_in, n, l, anchor,
+    # One period: run the record twice and fit the second pass, whose start state is the
+    # first pass's end state; otherwise the samples before the burn-in are left out.
+    xf, yf = (np.concatenate([x, x]), np.concatenate([y, y])) if periodic else (x, y)
+    rows = np.arange(xf.size) >= x.size if periodic else None
+    _check_excitation(xf, yf, n, l, anchor=anchor)
+    model, design, info = fit_model(xf, yf, n, l, epsilon=epsilon, anchor=anchor, rows=rows)
+    start = x.size if periodic else design.burn_in
+    sim = model.simulate(xf)
+    rms, peak, linear = _quality_check(xf, yf, sim, start, n, l, anchor,
                                        chosen=order == 'auto')
     return IdentificationResult(
         model=model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
         samples=int(x.size), solver_status=str(info.status), iterations=int(info.iter),
         solve_time=time.perf_counter() - started, order_table=table,
-        linear_rms_error=linear, burn_in=int(design.burn_in))
+        linear_rms_error=linear, burn_in=0 if periodic else int(design.burn_in))
 
 
-def _identify_periodic(x: npt.NDArray[Any], y: npt.NDArray[Any], *, order: Any,
-                       n: int | None, l: int | None,  # noqa: E741
-                       epsilon: float, anchor: str, started: float) -> IdentificationResult:
+def _check_one_period(x: npt.NDArray[Any], order: Any) -> None:
     span = float(np.ptp(x))
     if abs(float(x[-1]) - float(x[0])) > 0.02 * span:
         gap = 100.0 * abs(float(x[-1]) - float(x[0])) / span
@@ -264,20 +266,3 @@ def _identify_periodic(x: npt.NDArray[Any], y: npt.NDArray[Any], *, order: Any,
         msg = ("periodic: order 'auto' needs held-out data beyond one period; give the order"
                ' (e.g. 8,4), or record several periods and leave periodic off')
         raise DataError(msg)
-    if order is not None:
-        n, l = int(order[0]), int(order[1])  # noqa: E741
-    n = 14 if n is None else int(n)
-    l = 7 if l is None else int(l)  # noqa: E741
-    size = x.size
-    x2, y2 = np.concatenate([x, x]), np.concatenate([y, y])
-    rows = np.zeros(2 * size, dtype=bool)
-    rows[size:] = True                       # the second pass: states set by the first
-    _check_excitation(x2, y2, n, l, anchor=anchor)
-    model, _, info = fit_model(x2, y2, n, l, epsilon=epsilon, anchor=anchor, rows=rows)
-    sim = model.simulate(x2)
-    rms, peak, linear = _quality_check(x2, y2, sim, size, n, l, anchor)
-    return IdentificationResult(
-        model=model, order=(n, l), nonlinearity_error=peak, rms_error=rms, samples=int(size),
-        solver_status=str(info.status), iterations=int(info.iter),
-        solve_time=time.perf_counter() - started, order_table=[], linear_rms_error=linear,
-        burn_in=0)
