@@ -83,10 +83,13 @@ def hysteresis_inverse_states(w: FloatArray, z: FloatArray,
         Receives the play outputs of H^-1.
 
     """
-    cumulative = np.cumsum(w)
-    tail = 0.0
+    cumulative = 0.0
+    for i in range(w.shape[0]):                 # out holds w_0 + ... + w_i first
+        cumulative += w[i]
+        out[i] = cumulative
+    tail = 0.0                                  # no allocation: this runs every command
     for i in range(w.shape[0] - 1, -1, -1):
-        out[i] = cumulative[i] * z[i] + tail
+        out[i] = out[i] * z[i] + tail
         tail += w[i] * z[i]
 
 

@@ -16,15 +16,70 @@ when the input passes the first of them and the pair is nested inside the
 preceding segment.
 """
 
+import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['TurningPointMemory']
+__all__ = ['TurningPointMemory', 'memory_push']
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+
+@numba.njit(cache=True, nogil=True)
+def memory_push(points: FloatArray, state: IntArray,
+                x: float) -> None:  # pragma: no cover - compiled
+    """
+    Record one input sample in a turning-point buffer (the one rule, compiled).
+
+    Parameters
+    ----------
+    points : ndarray of float, shape (capacity + 1,)
+        The stored points in ``points[:state[0]]``.
+    state : ndarray of int, shape (2,)
+        Number of stored points; 1 once the capacity was exceeded.
+    x : float
+        Input sample (finite).
+
+    """
+    n = state[0]
+    if n >= 2 and (points[n - 1] - points[n - 2]) * (x - points[n - 1]) >= 0.0:
+        points[n - 1] = x                   # the current monotone segment goes on
+    elif n >= 1 and x == points[n - 1]:
+        return
+    else:
+        points[n] = x                       # a reversal: the last input is a turning point
+        n += 1
+    while n >= 4:
+        a, b, c, cur = points[n - 4], points[n - 3], points[n - 2], points[n - 1]
+        nested = (c - a) * (b - c) >= 0.0
+        passed = (cur - b) * (b - c) >= 0.0
+        if not (nested and passed):
+            break
+        points[n - 3] = cur                 # the minor loop b -> c is wiped out
+        n -= 2
+    if n > points.shape[0] - 1:             # over capacity: forget the oldest interior pair
+        for i in range(1, n - 2):
+            points[i] = points[i + 2]
+        n -= 2
+        state[1] = 1
+    state[0] = n
+
+
+@numba.njit(cache=True, nogil=True)
+def _memory_extend(points: FloatArray, state: IntArray,
+                   values: FloatArray) -> None:  # pragma: no cover - compiled
+    for k in range(values.shape[0]):
+        memory_push(points, state, values[k])
 
 
 class TurningPointMemory:
     """
     Bounded record of the turning points of an input sequence.
+
+    The points live in a numpy buffer updated by the compiled :func:`memory_push`, so
+    the compensators' compiled loops record them too (a multi-axis compensator keeps
+    every axis's buffer as one row of a block: ``points`` and ``state`` may be views).
 
     Parameters
     ----------
@@ -33,27 +88,39 @@ class TurningPointMemory:
         growing oscillations around the first point), the oldest interior
         points are dropped and the replay is no longer exact for the widest
         thresholds; ``overflowed`` tells.
+    points, state : ndarray, optional
+        Storage to use: ``capacity + 1`` floats and 2 integers (number of points,
+        overflow flag), e.g. rows of a multi-axis block; new arrays by default.
 
     """
 
-    def __init__(self, capacity: int = 4096) -> None:
+    def __init__(self, capacity: int = 4096, *, points: FloatArray | None = None,
+                 state: IntArray | None = None) -> None:
         self.capacity = int(capacity)
-        self._points: list[float] = []
-        self.overflowed = False
+        self.buffer = np.zeros(self.capacity + 1) if points is None else points
+        self.state = np.zeros(2, dtype=np.int64) if state is None else state
+        if self.buffer.shape != (self.capacity + 1,) or self.state.shape != (2,):
+            msg = (f'a turning-point memory of capacity {self.capacity} needs'
+                   f' {self.capacity + 1} points and 2 state entries')
+            raise ValueError(msg)
 
     def __len__(self) -> int:
         """Return the number of stored turning points (including the current input)."""
-        return len(self._points)
+        return int(self.state[0])
 
     @property
-    def points(self) -> npt.NDArray[np.float64]:
+    def overflowed(self) -> bool:
+        """Tell whether the capacity was exceeded (the replay is no longer exact)."""
+        return bool(self.state[1])
+
+    @property
+    def points(self) -> FloatArray:
         """Return the stored points: first input, turning points, current input (a copy)."""
-        return np.array(self._points, dtype=np.float64)
+        return self.buffer[:len(self)].copy()
 
     def clear(self) -> None:
         """Forget the history (back to the start state)."""
-        self._points.clear()
-        self.overflowed = False
+        self.state[:] = 0
 
     def push(self, x: float) -> None:
         """
@@ -65,31 +132,11 @@ class TurningPointMemory:
             Input sample (finite).
 
         """
-        p = self._points
-        if len(p) >= 2 and (p[-1] - p[-2]) * (x - p[-1]) >= 0.0:
-            p[-1] = x                       # the current monotone segment goes on
-        elif len(p) >= 1 and x == p[-1]:
-            return
-        else:
-            p.append(x)                     # a reversal: the last input is a turning point
-        while len(p) >= 4:
-            a, b, c, cur = p[-4], p[-3], p[-2], p[-1]
-            nested = (c - a) * (b - c) >= 0.0
-            passed = (cur - b) * (b - c) >= 0.0
-            if not (nested and passed):
-                break
-            del p[-3:-1]                    # the minor loop b -> c is wiped out
-        if len(p) > self.capacity:
-            del p[1:3]
-            self.overflowed = True
+        memory_push(self.buffer, self.state, float(x))
 
     def extend(self, values: npt.ArrayLike) -> None:
         """
         Record a sequence of input samples, as :meth:`push` on each would.
-
-        Only the ends of monotone runs are pushed: an interior point of a run only
-        replaces the run's last point, and a wipe-out it triggers the run's end triggers
-        too (passing an extremum further still passes it).
 
         Parameters
         ----------
@@ -97,18 +144,5 @@ class TurningPointMemory:
             Input samples (finite).
 
         """
-        x = np.asarray(values, dtype=np.float64).reshape(-1)
-        if x.size <= 2:
-            for v in x:
-                self.push(float(v))
-            return
-        direction = np.sign(np.diff(x))
-        nonzero = np.flatnonzero(direction)
-        keep = [0]
-        if nonzero.size:
-            d = direction[nonzero]
-            turns = nonzero[1:][d[1:] != d[:-1]]          # first step of a new run
-            keep.extend(int(i) for i in turns)
-        keep.append(x.size - 1)
-        for i in sorted(set(keep)):
-            self.push(float(x[i]))
+        _memory_extend(self.buffer, self.state,
+                       np.ascontiguousarray(values, dtype=np.float64).reshape(-1))

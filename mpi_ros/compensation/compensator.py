@@ -24,6 +24,13 @@ __all__ = ['Compensator', 'ExtendedCompensator', 'FeedforwardCompensator', 'Inve
 
 FloatArray = npt.NDArray[np.float64]
 
+#: The compiled step's arrays: r_H, w_H, z_H, r_H', w_H', z', r_S', w_S', point (x0, y0, sign).
+Kernel = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
+               FloatArray, FloatArray, FloatArray]
+
+#: The counters a compiled loop counts, in the order of its ``counts`` array.
+COMPILED_COUNTERS = ('messages', 'nonfinite_input', 'out_of_range', 'clamped')
+
 
 class InverseStep(Protocol):
     """
@@ -97,6 +104,9 @@ class Compensator:
     sample_period : float
         Interval [s] assumed between two commands when :meth:`command` gets no ``time``
         (effects with lags only).
+    memory : TurningPointMemory, optional
+        Where the applied current's turning points are kept (a row of a multi-axis
+        block); a new memory by default.
 
     Attributes
     ----------
@@ -109,17 +119,19 @@ class Compensator:
     """
 
     def __init__(self, model: Any, *, output_min: float, output_max: float,
-                 enabled: bool = True, sample_period: float = 1e-3) -> None:
+                 enabled: bool = True, sample_period: float = 1e-3,
+                 memory: TurningPointMemory | None = None) -> None:
         self._check_limits(output_min, output_max)
         _check_sample_period(sample_period)
         self.output_min = float(output_min)
         self.output_max = float(output_max)
-        self.enabled = bool(enabled)
+        self._enabled = bool(enabled)
         self.sample_period = float(sample_period)
         self.counters = {'messages': 0, 'nonfinite_input': 0, 'out_of_range': 0,
                          'clamped': 0, 'bad_time': 0}
         self.version = 0
-        self.memory = TurningPointMemory()
+        self.memory = TurningPointMemory() if memory is None else memory
+        self.before_change: Callable[[], None] | None = None
         self.last_command = float(np.clip(0.0, self.output_min, self.output_max))
         self._last_time: float | None = None
         self._started = False
@@ -135,7 +147,14 @@ class Compensator:
                    f' {output_max}')
             raise ModelError(msg)
 
+    def _changing(self) -> None:
+        # An owner that keeps this compensator's state elsewhere (MultiAxisCompensator)
+        # hands it back before anything changes.
+        if self.before_change is not None:
+            self.before_change()
+
     def _install(self, model: Any, *, replay: bool) -> None:
+        self._changing()
         gamma = gamma_of(model)
         step = inverse_step_of(model)
         if step is not None and not step.carry(self._step):
@@ -148,13 +167,12 @@ class Compensator:
         lo, hi = operating_range(gamma, self.output_min, self.output_max)
         linear = best_linear_map(gamma, self.output_min, self.output_max)
         # One assignment of a tuple: the step never sees half of an old and a new model.
-        self._kernel = (np.ascontiguousarray(h.thresholds), np.ascontiguousarray(h.weights),
-                        z_h, np.ascontiguousarray(h_inv.thresholds),
-                        np.ascontiguousarray(h_inv.weights), np.empty_like(z_h),
-                        np.ascontiguousarray(s_inv.thresholds),
-                        np.ascontiguousarray(s_inv.weights),
-                        np.array([gamma.input_offset, gamma.output_offset,
-                                  float(gamma.output_sign)]))
+        self._kernel: Kernel = (
+            np.ascontiguousarray(h.thresholds), np.ascontiguousarray(h.weights), z_h,
+            np.ascontiguousarray(h_inv.thresholds), np.ascontiguousarray(h_inv.weights),
+            np.empty_like(z_h), np.ascontiguousarray(s_inv.thresholds),
+            np.ascontiguousarray(s_inv.weights),
+            np.array([gamma.input_offset, gamma.output_offset, float(gamma.output_sign)]))
         _warm_up(self._kernel, lo, self.output_min, self.output_max)
         self._step = step
         self.model = model
@@ -181,6 +199,16 @@ class Compensator:
         self.version += 1
 
     @property
+    def enabled(self) -> bool:
+        """Tell whether Gamma^-1 is applied (False: the best linear map, for comparison)."""
+        return self._enabled
+
+    @enabled.setter
+    def enabled(self, value: bool) -> None:
+        self._changing()
+        self._enabled = bool(value)
+
+    @property
     def has_effect(self) -> bool:
         """Tell whether an effect's per-step inverse is in use (its lags need times)."""
         return self._step is not None
@@ -193,6 +221,7 @@ class Compensator:
     def set_limits(self, output_min: float, output_max: float) -> None:
         """Change the safe current range [A] (validated; the model is kept)."""
         self._check_limits(output_min, output_max)
+        self._changing()
         self.output_min, self.output_max = float(output_min), float(output_max)
         self.displacement_range = operating_range(self.gamma, self.output_min,
                                                   self.output_max)
@@ -296,18 +325,41 @@ class Compensator:
             return np.array([self.command(float(v), time=None if t is None else float(t))
                              for v, t in zip(values, stamps)], dtype=np.float64)
         out = np.empty(values.size)
-        counts = np.zeros(3, dtype=np.int64)
+        counts = np.zeros(4, dtype=np.int64)
         lo, hi = self.displacement_range
         self.last_command = float(_compensate_batch(
             values, lo, hi, self.output_min, self.output_max, *self._kernel,
-            self.last_command, counts, out))
-        c = self.counters
-        c['messages'] += int(values.size)
-        c['nonfinite_input'] += int(counts[0])
-        c['out_of_range'] += int(counts[1])
-        c['clamped'] += int(counts[2])
-        self.memory.extend(out)
+            self.last_command, counts, self.memory.buffer, self.memory.state, out))
+        self.add_counts(counts)
         return out
+
+    def add_counts(self, counts: npt.NDArray[np.int64]) -> None:
+        """Add a compiled loop's (messages, nonfinite_input, out_of_range, clamped) counts."""
+        c = self.counters
+        for key, count in zip(COMPILED_COUNTERS, counts.tolist()):
+            c[key] += count
+
+    def bind(self, kernel: Kernel) -> None:
+        """
+        Keep the compiled step's arrays in given storage (views into a multi-axis block).
+
+        Parameters
+        ----------
+        kernel : tuple of ndarray
+            Arrays of the same shapes as the current ones, holding the same values.
+
+        """
+        self._kernel = kernel
+
+    @property
+    def kernel(self) -> Kernel:
+        """Return the compiled step's arrays: r_H, w_H, z_H, r_H', w_H', z', r_S', w_S', point."""
+        return self._kernel
+
+    @property
+    def compiled(self) -> bool:
+        """Tell whether commands run the plain compiled step (no effect, enabled)."""
+        return self._step is None and self._enabled
 
     def _interval(self, time: float | None) -> float:
         if time is None:

@@ -2,9 +2,11 @@
 """
 Compiled steps of the compensator: (14), then (27) with the operating point, then clamping.
 
-One step (:func:`_compensate_step`), a chunk of steps with the screening and counters in one
-loop (:func:`_compensate_batch`), and the per-step inverse of H with its first weight raised
-(:func:`_inverse_value`, for the effects' exact inverses).  The laws themselves are in
+One step (:func:`_compensate_step`), one screened and counted sample with its turning point
+(:func:`_compensate_sample`), a chunk of samples of one axis (:func:`_compensate_batch`) or
+of every axis of a samples x axes block (:func:`_compensate_axes`) in one compiled loop, and
+the per-step inverse of H with its first weight raised (:func:`_inverse_value`, for the
+effects' exact inverses).  The laws themselves are in
 :mod:`mpi_ros.inverse` and :mod:`mpi_ros.play`, once.
 """
 
@@ -13,6 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..inverse import hysteresis_inverse_laws, hysteresis_inverse_states
+from ..memory import memory_push
 from ..model import _hysteresis_step, _superposition_value
 
 FloatArray = npt.NDArray[np.float64]
@@ -37,32 +40,86 @@ def _compensate_step(s_c: float, lo: float, hi: float, r_h: FloatArray, w_h: Flo
     return current, raw
 
 
+@numba.njit(cache=True, nogil=True, inline='always')
+def _compensate_sample(s_c: float, displacement_lo: float, displacement_hi: float,
+                       lo: float, hi: float, r_h: FloatArray, w_h: FloatArray,
+                       z_h: FloatArray, r_h_inv: FloatArray, w_h_inv: FloatArray,
+                       z_inv: FloatArray, r_s_inv: FloatArray, w_s_inv: FloatArray,
+                       point: FloatArray, last: float, counts: npt.NDArray[np.int64],
+                       memory: FloatArray,
+                       memory_state: npt.NDArray[np.int64]) -> float:  # pragma: no cover
+    # screen_desired + _compensate_step + the turning-point memory for one sample; counts
+    # holds (messages, nonfinite_input, out_of_range, clamped).  Returns the command.
+    counts[0] += 1
+    if not np.isfinite(s_c):
+        counts[1] += 1
+        return last
+    if s_c < displacement_lo or s_c > displacement_hi:
+        counts[2] += 1
+        margin = 10.0 * (displacement_hi - displacement_lo)
+        s_c = min(max(s_c, displacement_lo - margin), displacement_hi + margin)
+    current, raw = _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
+                                    r_s_inv, w_s_inv, point)
+    if current != raw:
+        counts[3] += 1
+    memory_push(memory, memory_state, current)
+    return current
+
+
 @numba.njit(cache=True, nogil=True)
 def _compensate_batch(desired: FloatArray, displacement_lo: float, displacement_hi: float,
                       lo: float, hi: float, r_h: FloatArray, w_h: FloatArray, z_h: FloatArray,
                       r_h_inv: FloatArray, w_h_inv: FloatArray, z_inv: FloatArray,
                       r_s_inv: FloatArray, w_s_inv: FloatArray, point: FloatArray,
-                      last: float, counts: npt.NDArray[np.int64],
+                      last: float, counts: npt.NDArray[np.int64], memory: FloatArray,
+                      memory_state: npt.NDArray[np.int64],
                       out: FloatArray) -> float:  # pragma: no cover - compiled
-    # screen_desired + _compensate_step per sample, in one compiled loop; counts holds
-    # (nonfinite_input, out_of_range, clamped).  Returns the last command.
-    margin = 10.0 * (displacement_hi - displacement_lo)
+    # _compensate_sample per sample of one axis, in one compiled loop.  Returns the last
+    # command.
     for k in range(desired.shape[0]):
-        s_c = desired[k]
-        if not np.isfinite(s_c):
-            counts[0] += 1
-            out[k] = last
-            continue
-        if s_c < displacement_lo or s_c > displacement_hi:
-            counts[1] += 1
-            s_c = min(max(s_c, displacement_lo - margin), displacement_hi + margin)
-        current, raw = _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
-                                        r_s_inv, w_s_inv, point)
-        if current != raw:
-            counts[2] += 1
-        out[k] = current
-        last = current
+        last = _compensate_sample(desired[k], displacement_lo, displacement_hi, lo, hi, r_h,
+                                  w_h, z_h, r_h_inv, w_h_inv, z_inv, r_s_inv, w_s_inv, point,
+                                  last, counts, memory, memory_state)
+        out[k] = last
     return last
+
+
+#: Columns of a multi-axis compensator's ``table`` (one row per axis).
+TABLE_COLUMNS = ('input_offset', 'output_offset', 'output_sign', 'displacement_lo',
+                 'displacement_hi', 'output_min', 'output_max', 'last_command')
+#: Columns of its integer ``index`` (one row per axis).
+INDEX_COLUMNS = ('coefficients_start', 'hysteresis_size', 'superposition_size',
+                 'states_start', 'compiled')
+
+
+@numba.njit(cache=True, nogil=True)
+def _compensate_axes(desired: FloatArray, out: FloatArray, coefficients: FloatArray,
+                     states: FloatArray, index: npt.NDArray[np.int64], table: FloatArray,
+                     counts: npt.NDArray[np.int64], memory: FloatArray,
+                     memory_state: npt.NDArray[np.int64]) -> None:  # pragma: no cover
+    # Every axis of a samples x axes block in one compiled loop: axis a runs
+    # _compensate_sample on its own slices of the packed arrays, so its column is exactly
+    # what its single-axis compensator gives.  Per axis, coefficients holds r_H, w_H,
+    # r_H', w_H' (n+1 each), r_S', w_S' (l+1 each) from index[a, 0]; states holds z_H,
+    # z' from index[a, 3]; table and index as TABLE_COLUMNS / INDEX_COLUMNS.  Axes with
+    # index[a, 4] == 0 (effects, disabled) are left to the caller.
+    for k in range(desired.shape[0]):
+        for a in range(desired.shape[1]):
+            if index[a, 4] == 0:
+                continue
+            c0, n1, m1, s0 = index[a, 0], index[a, 1], index[a, 2], index[a, 3]
+            row = table[a]
+            current = _compensate_sample(
+                desired[k, a], row[3], row[4], row[5], row[6],
+                coefficients[c0:c0 + n1], coefficients[c0 + n1:c0 + 2 * n1],
+                states[s0:s0 + n1],
+                coefficients[c0 + 2 * n1:c0 + 3 * n1], coefficients[c0 + 3 * n1:c0 + 4 * n1],
+                states[s0 + n1:s0 + 2 * n1],
+                coefficients[c0 + 4 * n1:c0 + 4 * n1 + m1],
+                coefficients[c0 + 4 * n1 + m1:c0 + 4 * n1 + 2 * m1],
+                row[0:3], row[7], counts[a], memory[a], memory_state[a])
+            out[k, a] = current
+            row[7] = current
 
 
 @numba.njit(cache=True, nogil=True)

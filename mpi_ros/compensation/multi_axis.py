@@ -2,7 +2,10 @@
 """
 Several actuators served together.
 
-One :class:`~mpi_ros.compensation.Compensator` per axis; blocks of samples x axes in and out.
+One :class:`~mpi_ros.compensation.Compensator` per axis (models, limits, bumpless handover);
+blocks of samples x axes in and out through one compiled loop over every axis
+(:func:`~mpi_ros.compensation.kernels._compensate_axes`), which runs each axis's own step
+on its slices of a few packed arrays: the columns are exactly the single-axis results.
 """
 
 from collections.abc import Sequence
@@ -11,12 +14,18 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .compensator import Compensator
+from .compensator import Compensator, COMPILED_COUNTERS
+from .kernels import _compensate_axes, INDEX_COLUMNS, TABLE_COLUMNS
 from ..errors import DataError, ModelError
+from ..memory import TurningPointMemory
 
 __all__ = ['MultiAxisCompensator']
 
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+_LAST = TABLE_COLUMNS.index('last_command')
+_COMPILED = INDEX_COLUMNS.index('compiled')
 
 
 class MultiAxisCompensator:
@@ -26,6 +35,14 @@ class MultiAxisCompensator:
     A block of desired displacements, ``samples x axes`` (one row per sample, one column
     per axis, as in a ``Float64MultiArray`` chunk), gives a block of commands of the same
     shape; each column is exactly what that axis's single-axis compensator gives.
+
+    Every plain, enabled axis runs in one compiled loop over the block: its thresholds,
+    weights, play states, operating point, limits and turning points are packed into a
+    few shared arrays (the axis's :class:`Compensator` keeps views of them, so its state
+    is the packed one).  Axes with an effect or disabled are served by their own
+    :class:`Compensator`.  The pack is rebuilt on the next block after any axis changes
+    (:meth:`install`, :meth:`set_limits`, :attr:`enabled`, or anything done to
+    :attr:`axes`).
 
     Parameters
     ----------
@@ -37,25 +54,80 @@ class MultiAxisCompensator:
         False: the best linear maps instead of the inverses.
     sample_period : float
         Nominal command interval [s] (effects with lags only).
+    memory_capacity : int
+        Turning points kept per axis (see :class:`~mpi_ros.memory.TurningPointMemory`).
 
     """
 
     def __init__(self, models: Sequence[Any], *, output_min: float | Sequence[float],
                  output_max: float | Sequence[float], enabled: bool = True,
-                 sample_period: float = 1e-3) -> None:
+                 sample_period: float = 1e-3, memory_capacity: int = 4096) -> None:
         if len(models) == 0:
             msg = 'a multi-axis compensator needs at least one axis model'
             raise ModelError(msg)
         count = len(models)
         lows = _per_axis(output_min, count, 'output.min')
         highs = _per_axis(output_max, count, 'output.max')
-        self.axes = [Compensator(model, output_min=lo, output_max=hi, enabled=enabled,
-                                 sample_period=sample_period)
-                     for model, lo, hi in zip(models, lows, highs)]
+        self._memory = np.zeros((count, memory_capacity + 1))
+        self._memory_state = np.zeros((count, 2), dtype=np.int64)
+        self._axes = [
+            Compensator(model, output_min=lo, output_max=hi, enabled=enabled,
+                        sample_period=sample_period,
+                        memory=TurningPointMemory(memory_capacity, points=self._memory[k],
+                                                  state=self._memory_state[k]))
+            for k, (model, lo, hi) in enumerate(zip(models, lows, highs))]
+        self._pack: tuple[Any, ...] | None = None
+        self._counts = np.zeros((count, len(COMPILED_COUNTERS)), dtype=np.int64)
+        for axis in self._axes:
+            axis.before_change = self._unpack
+        self._warm_up()
 
     def __len__(self) -> int:
         """Return the number of axes."""
-        return len(self.axes)
+        return len(self._axes)
+
+    @property
+    def axes(self) -> list[Compensator]:
+        """
+        Return the axes' compensators, up to date (packed counters and commands handed back).
+
+        Changing an axis through them (``install``, ``set_limits``, ``enabled``) is safe:
+        the pack is rebuilt on the next block.
+        """
+        self._unpack()
+        return list(self._axes)
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """Return the counters of :class:`Compensator`, summed over the axes."""
+        totals = dict.fromkeys(self._axes[0].counters, 0)
+        for axis in self._axes:
+            for key, value in axis.counters.items():
+                totals[key] += value
+        for key, value in zip(COMPILED_COUNTERS, self._counts.sum(axis=0).tolist()):
+            totals[key] += value
+        return totals
+
+    def install(self, axis: int, model: Any) -> None:
+        """Switch one axis to a new (validated) model, bumplessly (:meth:`Compensator.install`)."""
+        self._axes[axis].install(model)
+
+    def set_limits(self, output_min: float, output_max: float) -> None:
+        """Give every axis the safe current range [A] (validated, all or none)."""
+        for axis in self._axes:
+            axis._check_limits(output_min, output_max)
+        for axis in self._axes:
+            axis.set_limits(output_min, output_max)
+
+    @property
+    def enabled(self) -> bool:
+        """Tell whether every axis applies its inverse (False: best linear maps)."""
+        return all(axis.enabled for axis in self._axes)
+
+    @enabled.setter
+    def enabled(self, value: bool) -> None:
+        for axis in self._axes:
+            axis.enabled = value
 
     def command(self, desired: npt.ArrayLike) -> FloatArray:
         """
@@ -80,14 +152,65 @@ class MultiAxisCompensator:
         block = np.asarray(desired, dtype=np.float64)
         single = block.ndim == 1
         rows = block.reshape(1, -1) if single else block
-        if rows.ndim != 2 or rows.shape[1] != len(self.axes):
-            msg = (f'desired displacements must be samples x axes with {len(self.axes)}'
+        if rows.ndim != 2 or rows.shape[1] != len(self._axes):
+            msg = (f'desired displacements must be samples x axes with {len(self._axes)}'
                    f' axes; found shape {tuple(block.shape)}')
             raise DataError(msg)
-        out = np.empty_like(rows)
-        for axis, compensator in enumerate(self.axes):
-            out[:, axis] = compensator.command_batch(rows[:, axis])
+        pack = self._pack if self._pack is not None else self._build()
+        coefficients, states, index, table, others = pack
+        out = np.empty(rows.shape)
+        _compensate_axes(rows, out, coefficients, states, index, table, self._counts,
+                         self._memory, self._memory_state)
+        for axis in others:
+            out[:, axis] = self._axes[axis].command_batch(rows[:, axis])
         return out[0] if single else out
+
+    def _warm_up(self) -> None:
+        """Run the compiled loop once on copies (the first block does not compile it)."""
+        coefficients, states, index, table, _ = self._build()
+        start = table[:, TABLE_COLUMNS.index('displacement_lo')].reshape(1, -1)
+        _compensate_axes(start.copy(), np.empty(start.shape), coefficients, states.copy(),
+                         index, table.copy(), np.zeros_like(self._counts),
+                         np.zeros((len(self._axes), 4)), np.zeros_like(self._memory_state))
+
+    def _build(self) -> tuple[Any, ...]:
+        """Pack the axes' arrays; each compiled axis's compensator keeps views of them."""
+        kernels = [axis.kernel for axis in self._axes]
+        compiled = [axis.compiled for axis in self._axes]
+        n1 = np.array([k[0].size for k in kernels], dtype=np.int64)
+        m1 = np.array([k[6].size for k in kernels], dtype=np.int64)
+        coefficients = np.concatenate([np.concatenate([k[0], k[1], k[3], k[4], k[6], k[7]])
+                                       for k in kernels])
+        states = np.concatenate([np.concatenate([k[2], k[5]]) for k in kernels])
+        index = np.zeros((len(kernels), len(INDEX_COLUMNS)), dtype=np.int64)
+        index[1:, 0] = np.cumsum(4 * n1 + 2 * m1)[:-1]
+        index[:, 1], index[:, 2] = n1, m1
+        index[1:, 3] = np.cumsum(2 * n1)[:-1]
+        index[:, _COMPILED] = compiled
+        table = np.array([[*k[8], *axis.displacement_range, axis.output_min, axis.output_max,
+                           axis.last_command] for k, axis in zip(kernels, self._axes)])
+        for a, axis in enumerate(self._axes):
+            c0, n, m, s0 = (int(v) for v in index[a, :4])
+            views = [coefficients[c0 + i * n:c0 + (i + 1) * n] for i in range(4)]
+            r_s = coefficients[c0 + 4 * n:c0 + 4 * n + m]
+            w_s = coefficients[c0 + 4 * n + m:c0 + 4 * n + 2 * m]
+            axis.bind((views[0], views[1], states[s0:s0 + n], views[2], views[3],
+                       states[s0 + n:s0 + 2 * n], r_s, w_s, table[a, 0:3]))
+        others = [a for a, flag in enumerate(compiled) if not flag]
+        self._pack = (coefficients, states, index, table, others)
+        return self._pack
+
+    def _unpack(self) -> None:
+        """Hand the packed counters and last commands back to the axes; repack later."""
+        pack, self._pack = self._pack, None
+        if pack is None:
+            return
+        table = pack[3]
+        for a, axis in enumerate(self._axes):
+            axis.add_counts(self._counts[a])
+            if pack[2][a, _COMPILED]:
+                axis.last_command = float(table[a, _LAST])
+        self._counts[:] = 0
 
 
 def _per_axis(value: float | Sequence[float], count: int, name: str) -> list[float]:

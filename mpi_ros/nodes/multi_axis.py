@@ -15,7 +15,8 @@ Topics (relative names, ``std_msgs/msg/Float64MultiArray``, SI units)
     of N, see :mod:`mpi_ros.nodes.arrays`).  Each input message gives one output message
     of the same shape; column k is exactly what a single-axis compensator with axis k's
     model gives for that column (:class:`mpi_ros.compensation.MultiAxisCompensator`, one
-    compiled loop per axis and message).  ``/diagnostics`` as the single-axis node.
+    compiled loop over every axis and sample of a message).  ``/diagnostics`` as the
+    single-axis node.
 
 Node parameters
     ``axes`` (read-only); per axis k = 0..N-1 the model keys of the single-axis node under
@@ -76,8 +77,6 @@ AXES = ParameterSpec(
     'axes) with the keys axis0.model.* ... axis<N-1>.model.*',
     value_range=(1, 1024), read_only=True)
 
-#: Blocks of at most this many samples are commanded sample by sample (cheaper).
-_PER_SAMPLE_ROWS = 4
 #: Most array messages served in one subscription callback.
 _DRAIN_LIMIT = 1000
 _LIMIT_KEYS = ('output.min', 'output.max')
@@ -220,9 +219,8 @@ class MultiAxisCompensatorNode(Node):
         """
         counters: Dict[str, int] = dict.fromkeys(_FAULT_KEYS, 0)
         if self._compensator is not None:
-            for axis in self._compensator.axes:
-                for key in _FAULT_KEYS:
-                    counters[key] += axis.counters[key]
+            summed = self._compensator.counters
+            counters.update((key, summed[key]) for key in _FAULT_KEYS)
         counters.update(
             messages_in=self._messages_in, messages_out=self._messages_out,
             samples_in=self._samples_in, malformed=self._malformed,
@@ -249,7 +247,7 @@ class MultiAxisCompensatorNode(Node):
         compensator = self._compensator
         if compensator is None:
             return None
-        return _command_block(compensator, np.asarray(block, dtype=np.float64))
+        return compensator.command(np.asarray(block, dtype=np.float64))
 
     # -- message path -----------------------------------------------------------------
     def _on_desired_displacements(self, data: bytes) -> None:
@@ -274,7 +272,7 @@ class MultiAxisCompensatorNode(Node):
                 if compensator is None:
                     self._dropped_unconfigured += 1
                 else:
-                    publish(encode_float64_multiarray(_command_block(compensator, block)))
+                    publish(encode_float64_multiarray(compensator.command(block)))
                     self._messages_out += 1
             served += 1
             if served >= _DRAIN_LIMIT:
@@ -377,11 +375,9 @@ class MultiAxisCompensatorNode(Node):
             return
         compensator = self._compensator
         if 'limits' in prepared and compensator is not None:
-            for axis in compensator.axes:
-                axis.set_limits(*prepared['limits'])
+            compensator.set_limits(*prepared['limits'])
         if 'enabled' in prepared and compensator is not None:
-            for axis in compensator.axes:
-                axis.enabled = prepared['enabled']
+            compensator.enabled = prepared['enabled']
         self._install(prepared['models'])
         if 'diagnostics_period' in prepared:
             self.destroy_timer(self._timer)
@@ -396,7 +392,7 @@ class MultiAxisCompensatorNode(Node):
             self._models[axis] = model
             self._model_versions[axis] += 1
             if self._compensator is not None:
-                self._compensator.axes[axis].install(model)
+                self._compensator.install(axis, model)
         if self._compensator is None and all(m is not None for m in self._models):
             self._compensator = MultiAxisCompensator(
                 self._models, output_min=self.get_parameter('output.min').value,
@@ -481,25 +477,6 @@ class MultiAxisCompensatorNode(Node):
         array.header.stamp = self.get_clock().now().to_msg()
         array.status = [status]
         return array
-
-
-def _command_block(compensator: MultiAxisCompensator, block: np.ndarray) -> np.ndarray:
-    """
-    Return the commands of a samples x axes block, the cheaper way for its length.
-
-    Both ways give the same numbers, counters and states (the core's contract):
-    ``Compensator.command`` per axis and sample costs about 1.7 us, the per-axis compiled
-    loop of ``MultiAxisCompensator.command`` about 5 us per axis plus 0.8 us per sample
-    (measured, docs/reliability.md), so short blocks go sample by sample.
-
-    """
-    if block.shape[0] > _PER_SAMPLE_ROWS:
-        return compensator.command(block)
-    axes = compensator.axes
-    out = np.empty(block.shape)
-    for row in range(block.shape[0]):
-        out[row] = [axis.command(value) for axis, value in zip(axes, block[row].tolist())]
-    return out
 
 
 def _ordered_limits(output_min: float, output_max: float) -> Tuple[float, float]:

@@ -1,0 +1,109 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""The multi-axis compensator's packed compiled loop against one compensator per axis."""
+
+from hypothesis import given, settings, strategies as st
+from mpi_ros.compensation import Compensator, MultiAxisCompensator
+from mpi_ros.extensions import CreepModel
+from mpi_ros.memory import TurningPointMemory
+import numpy as np
+import pytest
+
+from .core_models import random_model
+
+
+def _reference_push(points, x, capacity):
+    # The turning-point rule as it was written in Python before it was compiled.
+    p = points
+    if len(p) >= 2 and (p[-1] - p[-2]) * (x - p[-1]) >= 0.0:
+        p[-1] = x
+    elif len(p) >= 1 and x == p[-1]:
+        return
+    else:
+        p.append(x)
+    while len(p) >= 4:
+        a, b, c, cur = p[-4], p[-3], p[-2], p[-1]
+        if not ((c - a) * (b - c) >= 0.0 and (cur - b) * (b - c) >= 0.0):
+            break
+        del p[-3:-1]
+    if len(p) > capacity:
+        del p[1:3]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.integers(-6, 6), min_size=0, max_size=120), st.integers(4, 12))
+def test_compiled_memory_equals_the_reference_rule_with_overflow(steps, capacity):
+    memory, reference = TurningPointMemory(capacity), []
+    for x in np.cumsum(np.array(steps, dtype=float) * 0.5) * np.linspace(1.0, 3.0, len(steps)):
+        memory.push(float(x))
+        _reference_push(reference, float(x), capacity)
+        assert memory.points.tolist() == reference
+    assert len(memory) <= capacity
+
+
+def _blocks(rng, ranges, count):
+    lo, hi = ranges[:, 0], ranges[:, 1]
+    path = np.cumsum(rng.normal(0.0, 0.12, (count, lo.size)), axis=0) % 1.5 - 0.25
+    block = lo + (hi - lo) * path                  # some out of range and clamped
+    block[rng.random(block.shape) < 0.02] = np.nan
+    block[rng.random(block.shape) < 0.01] = -np.inf
+    return block
+
+
+def test_packed_axes_equal_single_compensators_exactly():
+    rng = np.random.default_rng(3)
+    models = [random_model(rng, n=n, l=l) for n, l in ((6, 3), (14, 7), (0, 0), (9, 2))]
+    models[1] = CreepModel(models[1], np.array([0.05, 0.5]), np.array([0.1, 0.05]))
+    highs = [1.5, 2.0, 2.5, 3.0]
+    multi = MultiAxisCompensator(models, output_min=-1.0, output_max=highs)
+    singles = [Compensator(m, output_min=-1.0, output_max=hi) for m, hi in zip(models, highs)]
+    ranges = np.array([c.displacement_range for c in singles])
+    block = _blocks(rng, ranges, 700)
+    replacement = random_model(rng, n=11, l=4)
+    changes = {
+        1: lambda c, k: c.install(replacement) if k == 0 else None,
+        2: lambda c, k: c.install(models[0]) if k == 3 else None,
+        3: lambda c, k: c.set_limits(-0.5, 2.2),
+        4: lambda c, k: setattr(c, 'enabled', False),
+        5: lambda c, k: setattr(c, 'enabled', True),
+    }
+    parts = np.array_split(block, [1, 9, 200, 201, 450, 455])
+    got, expected = [], []
+    for step, part in enumerate(parts):
+        if step in changes:
+            if step == 1:
+                multi.install(0, replacement)            # through the multi-axis compensator
+            elif step == 3:
+                multi.set_limits(-0.5, 2.2)
+            elif step in (4, 5):
+                multi.enabled = step == 5
+            else:
+                changes[step](multi.axes[3], 3)          # straight on an axis
+            for k, single in enumerate(singles):
+                changes[step](single, k)
+        rows = [multi.command(row) for row in part] if step == 6 else [multi.command(part)]
+        got.append(np.vstack(rows) if step == 6 else rows[0])
+        expected.append([[c.command(v) for c, v in zip(singles, row)] for row in part])
+    np.testing.assert_array_equal(np.vstack(got), np.vstack(expected))
+    assert multi.counters == {key: sum(c.counters[key] for c in singles)
+                              for key in singles[0].counters}
+    for axis, single in zip(multi.axes, singles):
+        assert axis.counters == single.counters
+        assert axis.last_command == single.last_command
+        np.testing.assert_array_equal(axis.state, single.state)
+        np.testing.assert_array_equal(axis.memory.points, single.memory.points)
+        np.testing.assert_array_equal(axis.slow_state, single.slow_state)
+    counts = singles[0].counters
+    assert counts['nonfinite_input'] and counts['out_of_range'] and counts['clamped']
+
+
+@pytest.mark.parametrize('axes', [1, 3, 16])
+def test_one_sample_rows_equal_blocks(axes):
+    rng = np.random.default_rng(axes)
+    models = [random_model(rng, n=8, l=4) for _ in range(axes)]
+    by_rows = MultiAxisCompensator(models, output_min=-1.0, output_max=2.0)
+    by_block = MultiAxisCompensator(models, output_min=-1.0, output_max=2.0)
+    ranges = np.array([c.displacement_range for c in by_rows.axes])
+    block = _blocks(rng, ranges, 300)
+    rows = np.vstack([by_rows.command(row) for row in block])
+    np.testing.assert_array_equal(rows, by_block.command(block))
+    assert by_rows.counters == by_block.counters
