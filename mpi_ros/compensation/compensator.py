@@ -320,6 +320,8 @@ class Compensator:
 
         """
         values = np.ascontiguousarray(desired, dtype=np.float64).reshape(-1)
+        if not values.flags.writeable:
+            values = values.copy()  # one compiled variant (a read-only view would compile another)
         if self._step is not None or not self.enabled:
             stamps = (None,) * values.size if times is None else np.asarray(times, float)
             return np.array([self.command(float(v), time=None if t is None else float(t))

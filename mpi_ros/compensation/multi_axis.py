@@ -156,6 +156,8 @@ class MultiAxisCompensator:
             msg = (f'desired displacements must be samples x axes with {len(self._axes)}'
                    f' axes; found shape {tuple(block.shape)}')
             raise DataError(msg)
+        if not (rows.flags.c_contiguous and rows.flags.writeable):
+            rows = rows.copy()      # one compiled variant (a read-only view would compile another)
         pack = self._pack if self._pack is not None else self._build()
         coefficients, states, index, table, others = pack
         out = np.empty(rows.shape)
