@@ -7,8 +7,8 @@ The core (this package without ``mpi_ros.nodes``) never imports rclpy.
 >>> from mpi_ros import MPIModel, identify
 
 numba caches the compiled kernels in a per-user directory (``$NUMBA_CACHE_DIR``, else
-``$XDG_CACHE_HOME/mpi_ros/numba`` or ``~/.cache/mpi_ros/numba``), never in the package:
-see :mod:`mpi_ros._numba_cache`.
+``$XDG_CACHE_HOME/mpi_ros/numba`` or ``~/.cache/mpi_ros/numba``, one subdirectory per
+state of the sources), never in the package: see :mod:`mpi_ros._numba_cache`.
 """
 
 # First: sets numba's cache directory before any @numba.njit(cache=True) is decorated.

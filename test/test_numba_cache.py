@@ -55,7 +55,8 @@ def _run(code, env_updates, *, first=''):
 @pytest.mark.parametrize('first', ['', 'import numba\n'])
 def test_kernels_are_cached_under_xdg_cache_home(tmp_path, first):
     used = _run(RUN_KERNEL, {'XDG_CACHE_HOME': str(tmp_path)}, first=first)
-    assert Path(used) == tmp_path / 'mpi_ros' / 'numba'
+    digest = _numba_cache.sources_digest()
+    assert Path(used) == tmp_path / 'mpi_ros' / 'numba' / f'sources-{digest}'
     assert _cache_files(tmp_path / 'mpi_ros' / 'numba'), 'no cache file written'
 
 
@@ -73,8 +74,8 @@ def test_an_unwritable_cache_home_falls_back_to_the_temporary_directory(tmp_path
     temporary = tmp_path / 'tmp'
     temporary.mkdir()
     used = _run(RUN_KERNEL, {'XDG_CACHE_HOME': str(blocker), 'TMPDIR': str(temporary)})
-    assert Path(used).parent == temporary
-    assert Path(used).name.startswith('mpi_ros-numba-')
+    assert Path(used).parent.parent == temporary
+    assert Path(used).parent.name.startswith('mpi_ros-numba-')
     assert _cache_files(temporary)
 
 
@@ -94,3 +95,18 @@ def test_this_process_caches_outside_the_package():
     cache = Path(numba.config.CACHE_DIR).resolve()
     assert str(cache)
     assert PACKAGE not in (cache, *cache.parents)
+
+
+def test_a_changed_source_file_gets_a_new_cache_directory(tmp_path):
+    # numba checks a cached kernel against its own file only: a kernel calling a changed
+    # law would run the old one from the cache.  Any change of any source file changes
+    # the directory.
+    tree = tmp_path / 'src'
+    (tree / 'sub').mkdir(parents=True)
+    (tree / 'play.py').write_text('rule = 1\n')
+    (tree / 'sub' / 'kernels.py').write_text('calls the rule\n')
+    first = _numba_cache.sources_digest(tree)
+    assert _numba_cache.sources_digest(tree) == first
+    (tree / 'play.py').write_text('rule = 22\n')
+    assert _numba_cache.sources_digest(tree) != first
+    assert _numba_cache.sources_digest() == _numba_cache.sources_digest(PACKAGE)
