@@ -124,3 +124,27 @@ def test_one_compiled_variant_serves_every_block_layout():
     for layout in (readonly, strided, np.asfortranarray(block), block[0]):
         multi.command(layout)
     assert len(_compensate_axes.signatures) == variants
+
+
+def test_an_axis_used_alone_between_blocks_stays_exact():
+    # A compensator taken from .axes and used on its own (its chunk loop packs it alone)
+    # hands its state back and forth with the multi-axis pack.
+    rng = np.random.default_rng(12)
+    models = [random_model(rng, n=7, l=3) for _ in range(3)]
+    multi = MultiAxisCompensator(models, output_min=-1.0, output_max=2.0)
+    singles = [Compensator(m, output_min=-1.0, output_max=2.0) for m in models]
+    ranges = np.array([c.displacement_range for c in singles])
+    block = _blocks(rng, ranges, 90)
+    first = multi.axes[1]
+    got = [multi.command(block[:30])]
+    alone = first.command_batch(block[30:40, 1])
+    got.append(multi.command(block[40:60]))
+    alone = np.concatenate([alone, first.command_batch(block[60:70, 1]),
+                            [first.command(block[70, 1])]])
+    got.append(multi.command(block[71:]))
+    rows = np.r_[0:30, 40:60, 71:90]
+    expected = np.array([[c.command(v) if (k == 1 or i in set(rows)) else np.nan
+                          for k, (c, v) in enumerate(zip(singles, row))]
+                         for i, row in enumerate(block)])
+    np.testing.assert_array_equal(np.vstack(got), expected[rows])
+    np.testing.assert_array_equal(alone, expected[np.r_[30:40, 60:71], 1])

@@ -13,14 +13,16 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from .kernels import _compensate_batch, _compensate_step, _inverse_value, _warm_up
+from .kernels import (
+    _compensate_axes, _compensate_step, _inverse_value, _warm_up, INDEX_COLUMNS, TABLE_COLUMNS,
+)
 from .screening import best_linear_map, operating_range, screen_desired
 from ..errors import ModelError
 from ..memory import TurningPointMemory
 from ..model import _hysteresis_step, _superposition_value, MPIModel
 
 __all__ = ['Compensator', 'ExtendedCompensator', 'FeedforwardCompensator', 'InverseStep',
-           'gamma_of', 'inverse_step_of', 'kind_of']
+           'Pack', 'gamma_of', 'inverse_step_of', 'kind_of', 'pack']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -136,6 +138,7 @@ class Compensator:
         self._last_time: float | None = None
         self._started = False
         self._step: InverseStep | None = None
+        self._own_pack: Pack | None = None
         self._install(model, replay=False)
         self.version = 1
 
@@ -149,9 +152,10 @@ class Compensator:
 
     def _changing(self) -> None:
         # An owner that keeps this compensator's state elsewhere (MultiAxisCompensator)
-        # hands it back before anything changes.
+        # hands it back before anything changes; the packed form is rebuilt when used.
         if self.before_change is not None:
             self.before_change()
+        self._own_pack = None
 
     def _install(self, model: Any, *, replay: bool) -> None:
         self._changing()
@@ -326,14 +330,18 @@ class Compensator:
             stamps = (None,) * values.size if times is None else np.asarray(times, float)
             return np.array([self.command(float(v), time=None if t is None else float(t))
                              for v, t in zip(values, stamps)], dtype=np.float64)
-        out = np.empty(values.size)
-        counts = np.zeros(4, dtype=np.int64)
-        lo, hi = self.displacement_range
-        self.last_command = float(_compensate_batch(
-            values, lo, hi, self.output_min, self.output_max, *self._kernel,
-            self.last_command, counts, self.memory.buffer, self.memory.state, out))
-        self.add_counts(counts)
-        return out
+        if self._own_pack is None:
+            self._own_pack = pack([self])
+        coefficients, states, index, table = self._own_pack
+        table[0, _LAST] = self.last_command
+        out = np.empty((values.size, 1))
+        counts = np.zeros((1, len(COMPILED_COUNTERS)), dtype=np.int64)
+        _compensate_axes(values.reshape(-1, 1), out, coefficients, states, index, table,
+                         counts, self.memory.buffer.reshape(1, -1),
+                         self.memory.state.reshape(1, -1))
+        self.last_command = float(table[0, _LAST])
+        self.add_counts(counts[0])
+        return out.reshape(-1)
 
     def add_counts(self, counts: npt.NDArray[np.int64]) -> None:
         """Add a compiled loop's (messages, nonfinite_input, out_of_range, clamped) counts."""
@@ -343,7 +351,7 @@ class Compensator:
 
     def bind(self, kernel: Kernel) -> None:
         """
-        Keep the compiled step's arrays in given storage (views into a multi-axis block).
+        Keep the compiled step's arrays in given storage (views into packed arrays).
 
         Parameters
         ----------
@@ -456,6 +464,62 @@ class ExtendedCompensator(Compensator):
                    f' {type(model).__name__}; use install() to change the kind of model')
             raise ModelError(msg)
         self.install(model)
+
+
+#: The packed arrays of :func:`pack`: coefficients, states, index, table.
+Pack = tuple[FloatArray, FloatArray, npt.NDArray[np.int64], FloatArray]
+
+_LAST = TABLE_COLUMNS.index('last_command')
+_COMPILED = INDEX_COLUMNS.index('compiled')
+
+
+def pack(axes: list[Compensator]) -> Pack:
+    """
+    Pack compensators for the compiled block loop; each keeps views of the packed arrays.
+
+    The thresholds, weights, play states, operating points, limits and last commands of
+    the axes go into four arrays (the layout of
+    :func:`~mpi_ros.compensation.kernels._compensate_axes`); every axis's compiled step is
+    then bound to views of them, so its state is the packed one.  The last commands are
+    copied: write them back after the loop (column ``last_command`` of ``table``).
+
+    Parameters
+    ----------
+    axes : list of Compensator
+        The axes, in column order.
+
+    Returns
+    -------
+    coefficients, states : ndarray of float
+        r_H, w_H, r_H', w_H', r_S', w_S' of every axis; z_H, z' of every axis.
+    index : ndarray of int, shape (N, len(INDEX_COLUMNS))
+        Where each axis starts, its sizes, and whether the loop serves it.
+    table : ndarray of float, shape (N, len(TABLE_COLUMNS))
+        Operating point, operating range, limits, last command of each axis.
+
+    """
+    for axis in axes:
+        axis._changing()            # an earlier owner of an axis hands its state back
+    kernels = [axis.kernel for axis in axes]
+    n1 = np.array([k[0].size for k in kernels], dtype=np.int64)
+    m1 = np.array([k[6].size for k in kernels], dtype=np.int64)
+    coefficients = np.concatenate([np.concatenate([k[0], k[1], k[3], k[4], k[6], k[7]])
+                                   for k in kernels])
+    states = np.concatenate([np.concatenate([k[2], k[5]]) for k in kernels])
+    index = np.zeros((len(kernels), len(INDEX_COLUMNS)), dtype=np.int64)
+    index[1:, 0] = np.cumsum(4 * n1 + 2 * m1)[:-1]
+    index[:, 1], index[:, 2] = n1, m1
+    index[1:, 3] = np.cumsum(2 * n1)[:-1]
+    index[:, _COMPILED] = [axis.compiled for axis in axes]
+    table = np.array([[*k[8], *axis.displacement_range, axis.output_min, axis.output_max,
+                       axis.last_command] for k, axis in zip(kernels, axes)])
+    for a, axis in enumerate(axes):
+        c0, n, m, s0 = (int(v) for v in index[a, :4])
+        part = [coefficients[c0 + i * n:c0 + (i + 1) * n] for i in range(4)]
+        axis.bind((part[0], part[1], states[s0:s0 + n], part[2], part[3],
+                   states[s0 + n:s0 + 2 * n], coefficients[c0 + 4 * n:c0 + 4 * n + m],
+                   coefficients[c0 + 4 * n + m:c0 + 4 * n + 2 * m], table[a, 0:3]))
+    return coefficients, states, index, table
 
 
 def _check_sample_period(sample_period: float) -> None:

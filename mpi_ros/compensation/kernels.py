@@ -2,11 +2,10 @@
 """
 Compiled steps of the compensator: (14), then (27) with the operating point, then clamping.
 
-One step (:func:`_compensate_step`), one screened and counted sample with its turning point
-(:func:`_compensate_sample`), a chunk of samples of one axis (:func:`_compensate_batch`) or
-of every axis of a samples x axes block (:func:`_compensate_axes`) in one compiled loop, and
-the per-step inverse of H with its first weight raised (:func:`_inverse_value`, for the
-effects' exact inverses).  The laws themselves are in
+One step (:func:`_compensate_step`); a samples x axes block with the screening, counters
+and turning points in one compiled loop (:func:`_compensate_axes`: a chunk of one axis is a
+one-column block); and the per-step inverse of H with its first weight raised
+(:func:`_inverse_value`, for the effects' exact inverses).  The laws themselves are in
 :mod:`mpi_ros.inverse` and :mod:`mpi_ros.play`, once.
 """
 
@@ -40,51 +39,7 @@ def _compensate_step(s_c: float, lo: float, hi: float, r_h: FloatArray, w_h: Flo
     return current, raw
 
 
-@numba.njit(cache=True, nogil=True, inline='always')
-def _compensate_sample(s_c: float, displacement_lo: float, displacement_hi: float,
-                       lo: float, hi: float, r_h: FloatArray, w_h: FloatArray,
-                       z_h: FloatArray, r_h_inv: FloatArray, w_h_inv: FloatArray,
-                       z_inv: FloatArray, r_s_inv: FloatArray, w_s_inv: FloatArray,
-                       point: FloatArray, last: float, counts: npt.NDArray[np.int64],
-                       memory: FloatArray,
-                       memory_state: npt.NDArray[np.int64]) -> float:  # pragma: no cover
-    # screen_desired + _compensate_step + the turning-point memory for one sample; counts
-    # holds (messages, nonfinite_input, out_of_range, clamped).  Returns the command.
-    counts[0] += 1
-    if not np.isfinite(s_c):
-        counts[1] += 1
-        return last
-    if s_c < displacement_lo or s_c > displacement_hi:
-        counts[2] += 1
-        margin = 10.0 * (displacement_hi - displacement_lo)
-        s_c = min(max(s_c, displacement_lo - margin), displacement_hi + margin)
-    current, raw = _compensate_step(s_c, lo, hi, r_h, w_h, z_h, r_h_inv, w_h_inv, z_inv,
-                                    r_s_inv, w_s_inv, point)
-    if current != raw:
-        counts[3] += 1
-    memory_push(memory, memory_state, current)
-    return current
-
-
-@numba.njit(cache=True, nogil=True)
-def _compensate_batch(desired: FloatArray, displacement_lo: float, displacement_hi: float,
-                      lo: float, hi: float, r_h: FloatArray, w_h: FloatArray, z_h: FloatArray,
-                      r_h_inv: FloatArray, w_h_inv: FloatArray, z_inv: FloatArray,
-                      r_s_inv: FloatArray, w_s_inv: FloatArray, point: FloatArray,
-                      last: float, counts: npt.NDArray[np.int64], memory: FloatArray,
-                      memory_state: npt.NDArray[np.int64],
-                      out: FloatArray) -> float:  # pragma: no cover - compiled
-    # _compensate_sample per sample of one axis, in one compiled loop.  Returns the last
-    # command.
-    for k in range(desired.shape[0]):
-        last = _compensate_sample(desired[k], displacement_lo, displacement_hi, lo, hi, r_h,
-                                  w_h, z_h, r_h_inv, w_h_inv, z_inv, r_s_inv, w_s_inv, point,
-                                  last, counts, memory, memory_state)
-        out[k] = last
-    return last
-
-
-#: Columns of a multi-axis compensator's ``table`` (one row per axis).
+#: Columns of a packed compensator's ``table`` (one row per axis).
 TABLE_COLUMNS = ('input_offset', 'output_offset', 'output_sign', 'displacement_lo',
                  'displacement_hi', 'output_min', 'output_max', 'last_command')
 #: Columns of its integer ``index`` (one row per axis).
@@ -97,27 +52,43 @@ def _compensate_axes(desired: FloatArray, out: FloatArray, coefficients: FloatAr
                      states: FloatArray, index: npt.NDArray[np.int64], table: FloatArray,
                      counts: npt.NDArray[np.int64], memory: FloatArray,
                      memory_state: npt.NDArray[np.int64]) -> None:  # pragma: no cover
-    # Every axis of a samples x axes block in one compiled loop: axis a runs
-    # _compensate_sample on its own slices of the packed arrays, so its column is exactly
-    # what its single-axis compensator gives.  Per axis, coefficients holds r_H, w_H,
+    # Every axis of a samples x axes block in one compiled loop: axis a runs the screening
+    # and _compensate_step on its own slices of the packed arrays, so its column is
+    # exactly what its single-axis compensator gives.  Per axis, coefficients holds r_H, w_H,
     # r_H', w_H' (n+1 each), r_S', w_S' (l+1 each) from index[a, 0]; states holds z_H,
     # z' from index[a, 3]; table and index as TABLE_COLUMNS / INDEX_COLUMNS.  Axes with
     # index[a, 4] == 0 (effects, disabled) are left to the caller.
-    for k in range(desired.shape[0]):
-        for a in range(desired.shape[1]):
-            if index[a, 4] == 0:
+    for a in range(desired.shape[1]):            # axes are independent: axis by axis
+        if index[a, 4] == 0:
+            continue
+        c0, n1, m1, s0 = index[a, 0], index[a, 1], index[a, 2], index[a, 3]
+        r_h, w_h = coefficients[c0:c0 + n1], coefficients[c0 + n1:c0 + 2 * n1]
+        r_h_inv = coefficients[c0 + 2 * n1:c0 + 3 * n1]
+        w_h_inv = coefficients[c0 + 3 * n1:c0 + 4 * n1]
+        r_s_inv = coefficients[c0 + 4 * n1:c0 + 4 * n1 + m1]
+        w_s_inv = coefficients[c0 + 4 * n1 + m1:c0 + 4 * n1 + 2 * m1]
+        z_h, z_inv = states[s0:s0 + n1], states[s0 + n1:s0 + 2 * n1]
+        row, count, points, point = table[a], counts[a], memory[a], table[a, 0:3]
+        held = memory_state[a]
+        lo, hi = row[3], row[4]
+        # The screening of screen_desired, written out here (as a called function it
+        # made the loop three times slower).
+        for k in range(desired.shape[0]):
+            s_c = desired[k, a]
+            count[0] += 1
+            if not np.isfinite(s_c):
+                count[1] += 1
+                out[k, a] = row[7]
                 continue
-            c0, n1, m1, s0 = index[a, 0], index[a, 1], index[a, 2], index[a, 3]
-            row = table[a]
-            current = _compensate_sample(
-                desired[k, a], row[3], row[4], row[5], row[6],
-                coefficients[c0:c0 + n1], coefficients[c0 + n1:c0 + 2 * n1],
-                states[s0:s0 + n1],
-                coefficients[c0 + 2 * n1:c0 + 3 * n1], coefficients[c0 + 3 * n1:c0 + 4 * n1],
-                states[s0 + n1:s0 + 2 * n1],
-                coefficients[c0 + 4 * n1:c0 + 4 * n1 + m1],
-                coefficients[c0 + 4 * n1 + m1:c0 + 4 * n1 + 2 * m1],
-                row[0:3], row[7], counts[a], memory[a], memory_state[a])
+            if s_c < lo or s_c > hi:
+                count[2] += 1
+                margin = 10.0 * (hi - lo)
+                s_c = min(max(s_c, lo - margin), hi + margin)
+            current, raw = _compensate_step(s_c, row[5], row[6], r_h, w_h, z_h, r_h_inv,
+                                            w_h_inv, z_inv, r_s_inv, w_s_inv, point)
+            if current != raw:
+                count[3] += 1
+            memory_push(points, held, current)
             out[k, a] = current
             row[7] = current
 

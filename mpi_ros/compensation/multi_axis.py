@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .compensator import Compensator, COMPILED_COUNTERS
+from .compensator import Compensator, COMPILED_COUNTERS, pack
 from .kernels import _compensate_axes, INDEX_COLUMNS, TABLE_COLUMNS
 from ..errors import DataError, ModelError
 from ..memory import TurningPointMemory
@@ -176,29 +176,9 @@ class MultiAxisCompensator:
                          np.zeros((len(self._axes), 4)), np.zeros_like(self._memory_state))
 
     def _build(self) -> tuple[Any, ...]:
-        """Pack the axes' arrays; each compiled axis's compensator keeps views of them."""
-        kernels = [axis.kernel for axis in self._axes]
-        compiled = [axis.compiled for axis in self._axes]
-        n1 = np.array([k[0].size for k in kernels], dtype=np.int64)
-        m1 = np.array([k[6].size for k in kernels], dtype=np.int64)
-        coefficients = np.concatenate([np.concatenate([k[0], k[1], k[3], k[4], k[6], k[7]])
-                                       for k in kernels])
-        states = np.concatenate([np.concatenate([k[2], k[5]]) for k in kernels])
-        index = np.zeros((len(kernels), len(INDEX_COLUMNS)), dtype=np.int64)
-        index[1:, 0] = np.cumsum(4 * n1 + 2 * m1)[:-1]
-        index[:, 1], index[:, 2] = n1, m1
-        index[1:, 3] = np.cumsum(2 * n1)[:-1]
-        index[:, _COMPILED] = compiled
-        table = np.array([[*k[8], *axis.displacement_range, axis.output_min, axis.output_max,
-                           axis.last_command] for k, axis in zip(kernels, self._axes)])
-        for a, axis in enumerate(self._axes):
-            c0, n, m, s0 = (int(v) for v in index[a, :4])
-            views = [coefficients[c0 + i * n:c0 + (i + 1) * n] for i in range(4)]
-            r_s = coefficients[c0 + 4 * n:c0 + 4 * n + m]
-            w_s = coefficients[c0 + 4 * n + m:c0 + 4 * n + 2 * m]
-            axis.bind((views[0], views[1], states[s0:s0 + n], views[2], views[3],
-                       states[s0 + n:s0 + 2 * n], r_s, w_s, table[a, 0:3]))
-        others = [a for a, flag in enumerate(compiled) if not flag]
+        """Pack the axes (:func:`~mpi_ros.compensation.compensator.pack`); note the others."""
+        coefficients, states, index, table = pack(self._axes)
+        others = [a for a, axis in enumerate(self._axes) if not axis.compiled]
         self._pack = (coefficients, states, index, table, others)
         return self._pack
 
