@@ -7,7 +7,9 @@ Targets of the core issue, measured on the machine this runs on:
 
 - identification from 1,000,000 samples at n=14, l=7 in <= 1 s wall;
 - batch Gamma and Gamma^-1 >= 10 million samples/s;
-- streaming single-sample Gamma^-1 step <= 5 us median.
+- streaming single-sample Gamma^-1 step <= 5 us median;
+- the compensator's compiled block loop (chunks of one axis, samples x axes blocks of
+  several): cost per axis-sample, and per one-sample block of 8 and 64 axes (issue 12).
 
 Usage: ``python benchmarks/bench_core.py [--samples N]``
 """
@@ -18,7 +20,7 @@ import platform
 import time
 
 from mpi_ros import identify
-from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.compensation import FeedforwardCompensator, MultiAxisCompensator
 import numpy as np
 
 
@@ -39,7 +41,7 @@ def main() -> None:
     y = truth_y + rng.normal(0.0, 2e-8, x.size)
     print(f'machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, '
           f'python {platform.python_version()}')
-    identify(x[:20000], y[:20000])                            # compile the kernels first
+    identify(x, y, n=14, l=7)          # compile the kernels first (a short cut is refused)
     times = []
     for _ in range(args.repeats):
         t0 = time.perf_counter()
@@ -76,6 +78,37 @@ def main() -> None:
         laps[k] = clock() - t0
     print(f'compensator command (clamp, counters, turning-point memory): median '
           f'{np.median(laps) / 1e3:.2f} us, p99 {np.percentile(laps, 99) / 1e3:.2f} us')
+    _blocks(model, desired, args.repeats)
+
+
+def _blocks(model, desired: np.ndarray, repeats: int) -> None:
+    """Print the block loop's cost: chunks, samples x axes blocks, one-sample blocks."""
+    comp = FeedforwardCompensator(model, output_min=0.2, output_max=1.8)
+    comp.command_batch(desired[:10])
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        comp.command_batch(desired)
+        times.append(time.perf_counter() - t0)
+    print(f'compensator chunk of {desired.size:,} samples: {min(times) / desired.size * 1e9:.0f}'
+          ' ns per sample (best of repeats)')
+    for axes in (8, 64):
+        multi = MultiAxisCompensator([model] * axes, output_min=0.2, output_max=1.8)
+        block = np.repeat(desired[:20000, None], axes, axis=1)
+        multi.command(block[:2])
+        t0 = time.perf_counter()
+        multi.command(block)
+        per = (time.perf_counter() - t0) / block.size * 1e9
+        rows = list(block[:5000])
+        laps = np.empty(len(rows))
+        clock = time.perf_counter_ns
+        for k, row in enumerate(rows):
+            t0 = clock()
+            multi.command(row)
+            laps[k] = clock() - t0
+        print(f'{axes} axes: block of 20,000 samples {per:.0f} ns per axis-sample; one-sample'
+              f' block median {np.median(laps) / 1e3:.2f} us, p99'
+              f' {np.percentile(laps, 99) / 1e3:.2f} us')
 
 
 if __name__ == '__main__':
