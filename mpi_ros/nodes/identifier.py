@@ -81,15 +81,16 @@ __all__ = [
 Type = Parameter.Type
 
 _KINDS = {'str': Type.STRING, 'optional_str': Type.STRING, 'choice': Type.STRING,
-          'optional_int': Type.INTEGER, 'float': Type.DOUBLE, 'bool': Type.BOOL}
+          'optional_int': Type.INTEGER, 'optional_float': Type.DOUBLE, 'float': Type.DOUBLE,
+          'bool': Type.BOOL}
+_UNSET = {'optional_str': "''", 'optional_int': '-1', 'optional_float': '0'}
 
 
 def _data_parameter(option: DataOption) -> ParameterSpec:
     """Return the node parameter of one shared data option."""
     description = option.description[0].upper() + option.description[1:]
     if option.kind.startswith('optional'):
-        unset = "''" if option.kind == 'optional_str' else '-1'
-        description = description.replace('(unset:', f'({unset}:')
+        description = description.replace('(unset:', f'({_UNSET[option.kind]}:')
     if option.applies != 'any':
         description += f'; {option.applies} only'
     return ParameterSpec(
