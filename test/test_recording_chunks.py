@@ -201,8 +201,8 @@ def test_reader_value_and_values():
     assert reader.value(float64_block(block[2:3]), Selection('/a', index=2)) == 8.0
     np.testing.assert_array_equal(reader.values(float64_array([1.0, 2.0]),
                                                 Selection('/a', index=1)), [2.0])
-    with pytest.raises(SelectionError, match=r'it holds a chunk of 4 samples \(layout.dim = '
-                                             r'samples x axes\), not one number; read it with '
+    with pytest.raises(SelectionError, match=r'it holds a chunk of 4 samples \(samples x '
+                                             r'axes\), not one number; read it with '
                                              r'values\(\)'):
         reader.value(float64_block(block), Selection('/a', index=0))
 
@@ -257,3 +257,67 @@ def test_read_signals_accepts_sample_period(tmp_path):
     bag = _chunked_bag(tmp_path / 'c', stamps, currents, displacements, 10, 10)
     rec = read_signals(bag, **TOPICS, input_index=0, output_index=0, sample_period=1e-3)
     np.testing.assert_allclose(rec.time, 1e-3 * np.arange(30), rtol=0, atol=1e-12)
+
+
+def _flat(messages):
+    """Return the same chunks as K x N values without layout.dim."""
+    flat = [(stamp, float64_array(message.data)) for stamp, message in messages]
+    for _, message in flat:
+        message.layout.dim = []
+    return flat
+
+
+def test_chunks_without_layout_dim_need_array_axes(tmp_path):
+    stamps, currents, displacements = _data(60)
+    reference = _per_sample_bag(tmp_path / 'samples', stamps, currents, displacements)
+    bag = write_bag(tmp_path / 'flat', {
+        '/current_commands': (ARRAY, _flat(chunked(stamps, currents, 10))),
+        '/displacements': (ARRAY, chunked(stamps + 1, displacements, 6))})
+    options = DataOptions(**TOPICS, input_index=1, output_index=1, array_axes=AXES)
+    _assert_same(read_recording(bag, options), read_recording(reference, options))
+    # Without array_axes a dim-less message would be one sample: refused, with the fix.
+    with pytest.raises(DataError, match=r'bag .*: topic /current_commands holds 30 values per '
+                                        r'message without layout.dim while /displacements '
+                                        r'holds chunks of 3 axes \(layout.dim = samples x '
+                                        r'axes\); its messages look like chunks of 10 samples '
+                                        r'x 3 axes, which would be read as one sample each; '
+                                        r'pass --array-axes 3 to read them as the multi-axis '
+                                        r'nodes do, or republish them with a layout.dim'):
+        read_recording(bag, DataOptions(**TOPICS, input_index=1, output_index=1,
+                                        spelling='cli'))
+
+
+@pytest.mark.parametrize('messages, axes, match', [
+    ([float64_array(np.zeros(7))], 3,
+     r'message 0 of topic /current_commands .*: it holds 7 value\(s\) and no layout.dim, not '
+     r'whole samples of --array-axes 3 axes \(samples x axes, row-major\); publish K x N '
+     r'values or set layout.dim, or set --array-axes to the number of axes'),
+    ([float64_block(np.zeros((4, 3)))], 2,
+     r'it holds chunks of \d+ sample\(s\) x 3 axes \(layout.dim = samples x axes\), but '
+     r'--array-axes is 2; set --array-axes to 3 \(one column per axis\)'),
+    ([float64_array(np.zeros(6))], 3,
+     r'--input-index 4 is out of range: the message holds 2 sample\(s\) x 3 axes '
+     r'\(--array-axes 3, no layout.dim\); set --input-index to an axis, one of 0 to 2'),
+])
+def test_array_axes_errors(tmp_path, messages, axes, match):
+    stamps, _, displacements = _data(20)
+    bag = write_bag(tmp_path / 'bad', {
+        '/current_commands': (ARRAY, [(int(stamps[k]), messages[0]) for k in (9, 19)]),
+        '/displacements': (ARRAY, chunked(stamps + 1, displacements, 5))})
+    index = 4 if 'out of range' in match else 0
+    with pytest.raises(DataError, match=match):
+        read_recording(bag, DataOptions(**TOPICS, input_index=index, output_index=0,
+                                        array_axes=axes, spelling='cli'))
+
+
+def test_array_axes_keeps_one_sample_messages(tmp_path):
+    """Read N values per message (one sample of every axis) the same with array_axes = N."""
+    stamps, currents, displacements = _data(30)
+    bag = _per_sample_bag(tmp_path / 'samples', stamps, currents, displacements)
+    plain = read_bag_signals(bag, **TOPICS, input_index=2, output_index=2)
+    _assert_same(read_bag_signals(bag, **TOPICS, input_index=2, output_index=2,
+                                  array_axes=AXES), plain)
+    with pytest.raises(DataError, match=r'array_axes must be a whole number >= 1 \(the axes '
+                                        r'of an array message without layout.dim\) or unset; '
+                                        r'found 0$'):
+        DataOptions(array_axes=0)

@@ -25,9 +25,10 @@ Several actuators (``axes`` > 1)
     (``/current_commands`` and ``/displacements`` when the topics are left at their
     single-axis defaults), as the multi-axis compensator and plant simulator publish
     them: one sample of every axis per message, or a chunk of K samples x N axes
-    (``layout.dim`` = samples x axes; the K samples of a message end at its log time and
-    are spaced by the time since the previous message / K, or ``sample_period``; input
-    and output chunk sizes may differ, see :func:`mpi_ros.recordings.read_bag_signals`).
+    (``layout.dim`` = samples x axes, or K x N values without ``dim``); the K samples of
+    a message end at its log time and are spaced by the time since the previous message
+    / K, or ``sample_period``; input and output chunk sizes may differ, see
+    :func:`mpi_ros.recordings.read_bag_signals`).
     Axis k is fitted from element (column) k of both topics
     (``input_index`` / ``output_index`` are set per axis), the axes in parallel in a
     process pool (``workers``, 0 = one per CPU, at most one per axis), and all models
@@ -288,7 +289,8 @@ def fit_bag_axes(path: str, axes: int, *, options: Optional[DataOptions] = None,
     Fit one model per axis of a multi-axis bag (Float64MultiArray topics).
 
     Each message holds one sample of every axis, or a chunk of K samples x N axes
-    (``layout.dim`` = samples x axes, as the multi-axis nodes publish it); the chunk
+    (``layout.dim`` = samples x axes, as the multi-axis nodes publish it, or K x N values
+    without ``dim``, as they also accept it); the chunk
     sizes of the input and output topics may differ.  How the samples of a chunk are
     timed: :func:`mpi_ros.recordings.read_bag_signals` (``options.sample_period``).
 
@@ -301,7 +303,9 @@ def fit_bag_axes(path: str, axes: int, *, options: Optional[DataOptions] = None,
         topic, and must be < N for chunked messages.
     options : mpi_ros.recordings.DataOptions, optional
         Topics, scales, ...; topics left at the single-axis defaults become
-        ``/current_commands`` and ``/displacements``.  The indices are set per axis.
+        ``/current_commands`` and ``/displacements``.  The indices are set per axis, and
+        ``array_axes`` to `axes`: a message without ``layout.dim`` must hold K x `axes`
+        values (K samples of every axis), as the multi-axis nodes read it.
     order : 'auto' or tuple of (int, int)
         Model orders, for every axis.
     workers : int
@@ -321,7 +325,11 @@ def fit_bag_axes(path: str, axes: int, *, options: Optional[DataOptions] = None,
     """
     options = options or DataOptions(spelling='parameter')
     defaults = DataOptions()
-    changes: Dict[str, Any] = {}
+    if options.array_axes not in (None, axes):
+        msg = (f'{options.name("array_axes")} is {options.array_axes} but axes is {axes}; '
+               f'leave {options.name("array_axes")} unset (it follows axes) or make them equal')
+        raise DataError(msg)
+    changes: Dict[str, Any] = {'array_axes': axes}
     if options.input_topic == defaults.input_topic:
         changes['input_topic'] = '/current_commands'
     if options.output_topic == defaults.output_topic:

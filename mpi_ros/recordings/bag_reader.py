@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import contextlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 from rosbags.rosbag2 import Reader
 
 from .messages import (
-    MESSAGE_READERS, MessageReader, Selection, SelectionError, supported_types, typestore)
+    Float64MultiArrayReader, MESSAGE_READERS, MessageReader, Selection, SelectionError,
+    supported_types, typestore)
 from .options import DataOptions
 from .recording import FloatArray, MIN_SAMPLES, PathLike, Recording
 from ..errors import DataError
@@ -49,6 +51,7 @@ def read_bag_signals(
     output_field: str = 'position',
     input_index: int | None = None,
     output_index: int | None = None,
+    array_axes: int | None = None,
     sample_period: float | None = None,
     time_source: str = 'receive',
     drop_nonfinite: bool = False,
@@ -66,9 +69,10 @@ def read_bag_signals(
     sample have no command and are dropped.
 
     Chunked messages (``layout.dim`` = [samples (K, K*N), axes (N, N)], as the
-    multi-axis compensator and plant simulator publish them) give K samples
-    each; input and output may use different chunk sizes, and messages
-    without ``dim`` (or with K = 1) are one sample as before. The log time of
+    multi-axis compensator and plant simulator publish them, or K*N values
+    without ``dim`` when `array_axes` = N) give K samples each; input and
+    output may use different chunk sizes, and messages without ``dim`` (unless
+    `array_axes` is set) or with K = 1 are one sample as before. The log time of
     a message belongs to its **last** sample (a publisher sends a chunk when
     it is complete, and the plant simulator times a chunk's last sample at
     its arrival); the earlier ones are spaced by the sample period: the log
@@ -98,6 +102,12 @@ def read_bag_signals(
         Element of a ``Float64MultiArray`` topic (after ``layout.data_offset``),
         or the axis (column, < N) of a chunked one; by default the array's
         only element (the only axis).
+    array_axes : int, optional
+        Number of axes N of ``Float64MultiArray`` messages without
+        ``layout.dim``: their K x N values are read as K samples x N axes
+        (as the multi-axis nodes accept them). By default such a message is
+        one sample (element `input_index`/`output_index`). Topics of other
+        types ignore it.
     sample_period : float, optional
         Interval [s] between the samples of a chunked message; by default
         inferred from the log times (see above). Give it when the log times
@@ -146,7 +156,8 @@ def read_bag_signals(
                           input_joint=input_joint, output_joint=output_joint,
                           input_field=input_field, output_field=output_field,
                           input_index=input_index, output_index=output_index,
-                          sample_period=sample_period, drop_nonfinite=drop_nonfinite)
+                          array_axes=array_axes, sample_period=sample_period,
+                          drop_nonfinite=drop_nonfinite)
     return read_bag(path, options, time_source=time_source)
 
 
@@ -215,11 +226,12 @@ def _selections(options: DataOptions) -> tuple[Selection, Selection]:
     pair = tuple(
         Selection(getattr(options, f'{role}_topic'), joint=getattr(options, f'{role}_joint'),
                   joint_field=getattr(options, f'{role}_field'),
-                  index=getattr(options, f'{role}_index'),
+                  index=getattr(options, f'{role}_index'), axes=options.array_axes,
                   names={'topic': options.name(f'{role}_topic'),
                          'joint': options.name(f'{role}_joint'),
                          'joint_field': options.name(f'{role}_field'),
-                         'index': options.name(f'{role}_index')})
+                         'index': options.name(f'{role}_index'),
+                         'axes': options.name('array_axes')})
         for role in ('input', 'output'))
     if pair[0] == pair[1]:
         msg = (f'{options.name("input_topic")} and {options.name("output_topic")} are both '
@@ -350,6 +362,7 @@ def _read_bag_topics(
         stamps: dict[str, list[int]] = {role: [] for role in roles}
         values: dict[str, list[FloatArray]] = {role: [] for role in roles}
         counts = dict.fromkeys(readers, 0)
+        layouts: dict[str, tuple[str, int]] = {}
         by_topic = {topic: [(role, selection) for role, selection in roles.items()
                             if selection.topic == topic] for topic in readers}
         store = typestore()
@@ -364,6 +377,8 @@ def _read_bag_topics(
                            f'decoded as {conn.msgtype} ({type(err).__name__}: {err}); the bag '
                            'is corrupt; re-record it')
                     raise DataError(msg) from err
+                if number == 0 and conn.msgtype == Float64MultiArrayReader.msgtype:
+                    layouts[conn.topic] = _layout_of(decoded)
                 for role, selection in by_topic[conn.topic]:
                     try:
                         samples = readers[conn.topic].values(decoded, selection)
@@ -380,10 +395,50 @@ def _read_bag_topics(
     finally:
         with contextlib.suppress(Exception):
             reader.close()
+    _check_layouts(bag, selections, layouts, options)
     return {role: (np.array(stamps[role], dtype=np.int64),
                    np.concatenate(values[role]) if values[role] else np.empty(0),
                    np.array([chunk.size for chunk in values[role]], dtype=np.int64))
             for role in roles}
+
+
+def _layout_of(msg: Any) -> tuple[str, int]:
+    """Return ('chunk', axes) for a samples x axes block, ('flat', values) without dim."""
+    dims = msg.layout.dim
+    if len(dims) == 2:
+        return 'chunk', int(dims[1].size)
+    if not dims:
+        return 'flat', len(msg.data) - int(msg.layout.data_offset)
+    return 'other', 0
+
+
+def _check_layouts(bag: Path, selections: tuple[Selection, Selection],
+                   layouts: dict[str, tuple[str, int]], options: DataOptions) -> None:
+    """
+    Refuse a dim-less array topic paired with chunks of N > 1 axes without `array_axes`.
+
+    The multi-axis nodes read K x N values without ``layout.dim`` as K samples; without
+    ``array_axes`` the reader would take one element per message and pair it with the
+    other topic's K samples per message, a silently wrong recording.
+    """
+    if options.array_axes is not None:
+        return
+    shapes = {selection.topic: layouts.get(selection.topic) for selection in selections}
+    chunks = [(topic, shape[1]) for topic, shape in shapes.items()
+              if shape and shape[0] == 'chunk' and shape[1] > 1]
+    flats = [(topic, shape[1]) for topic, shape in shapes.items()
+             if shape and shape[0] == 'flat']
+    for chunk_topic, axes in chunks:
+        for flat_topic, size in flats:
+            if size > axes and size % axes == 0:
+                option = options.setting('array_axes', str(axes))
+                msg = (f'bag {bag}: topic {flat_topic} holds {size} values per message '
+                       f'without layout.dim while {chunk_topic} holds chunks of {axes} axes '
+                       f'(layout.dim = samples x axes); its messages look like chunks of '
+                       f'{size // axes} samples x {axes} axes, which would be read as one '
+                       f'sample each; pass {option} to read them as the multi-axis nodes do, '
+                       'or republish them with a layout.dim')
+                raise DataError(msg)
 
 
 def _check_selectors(bag: Path, selection: Selection, reader: MessageReader) -> None:

@@ -19,7 +19,10 @@ Chunked arrays (the multi-axis nodes' layout, :mod:`mpi_ros.nodes.arrays`)
     the K samples of that column, oldest first. A message without ``dim``, or
     with one or more than two entries, is one sample whose elements are
     indexed as before (element k after ``data_offset``); so is a block with
-    K = 1. When the samples were taken is the bag reader's business
+    K = 1. With :attr:`Selection.axes` = N (the data option ``array_axes``,
+    set by the identifier for ``axes`` > 1) such a message is read as the
+    nodes read it: its values after ``data_offset`` are K x N samples x axes.
+    When the samples were taken is the bag reader's business
     (:func:`mpi_ros.recordings.read_bag_signals`).
 
 Adding a message type is one class and one registry line (the type must be in
@@ -84,9 +87,16 @@ class Selection:
         Element of a ``Float64MultiArray`` after ``layout.data_offset``, or
         the axis (column) of a chunked one (``layout.dim`` = samples x axes);
         None takes the array's only element (the only axis of a chunk).
+    axes : int or None
+        Number of axes N of a ``Float64MultiArray`` without ``layout.dim``:
+        its values are then K x N samples x axes (row-major, K >= 1), as the
+        multi-axis nodes accept them; None reads such a message as one
+        sample (element `index`). A two-entry ``layout.dim`` must agree with
+        it. Other types ignore it.
     names : Mapping[str, str]
         How the user writes the options behind ``topic``, ``joint``,
-        ``joint_field`` and ``index`` (e.g. ``'--input-joint'``), for messages.
+        ``joint_field``, ``index`` and ``axes`` (e.g. ``'--input-joint'``),
+        for messages.
 
     """
 
@@ -94,6 +104,7 @@ class Selection:
     joint: str | None = None
     joint_field: str = 'position'
     index: int | None = None
+    axes: int | None = None
     names: Mapping[str, str] = dataclasses.field(default_factory=dict, compare=False)
 
     def name(self, attribute: str) -> str:
@@ -233,11 +244,11 @@ class Float64MultiArrayReader(MessageReader):
 
     def value(self, msg: Any, selection: Selection) -> float:
         """Return ``msg.data[layout.data_offset + index]`` (a one-sample chunk's element)."""
-        if len(msg.layout.dim) == 2:
+        if len(msg.layout.dim) == 2 or selection.axes is not None:
             samples = self.values(msg, selection)
             if samples.size != 1:
-                msg_text = (f'it holds a chunk of {samples.size} samples (layout.dim = '
-                            'samples x axes), not one number; read it with values()')
+                msg_text = (f'it holds a chunk of {samples.size} samples (samples x axes), '
+                            'not one number; read it with values()')
                 raise SelectionError(msg_text)
             return float(samples[0])
         return self._element(msg, selection)
@@ -245,27 +256,46 @@ class Float64MultiArrayReader(MessageReader):
     def values(self, msg: Any, selection: Selection) -> npt.NDArray[np.float64]:
         """Return the selected axis of a chunk (K samples), or ``[value]`` for one sample."""
         dims = msg.layout.dim
-        if len(dims) != 2:
-            return np.array([self._element(msg, selection)], dtype=np.float64)
-        samples, axes = int(dims[0].size), int(dims[1].size)
-        row = max(int(dims[1].stride), axes)     # ROS: dim[1].stride is the row stride
         offset = int(msg.layout.data_offset)
         size = len(msg.data)
         option = selection.name('index')
-        stride = f', row stride {row}' if row != axes else ''
-        shape = (f'{samples} sample(s) x {axes} axes (layout.dim = samples x axes{stride}'
-                 f'{_offset_note(offset, ", ")})')
-        if samples < 1 or axes < 1:
-            msg_text = (f'its layout announces {shape}: a chunk needs at least one sample and '
-                        'one axis; fix layout.dim in the publisher (dim[0] = samples, '
-                        'dim[1] = axes) or leave dim empty for one sample per message')
-            raise SelectionError(msg_text)
-        needed = offset + (samples - 1) * row + axes
-        if needed > size:
-            msg_text = (f'its layout announces {shape}, which needs {needed} values, but data '
-                        f'holds {size}; fix layout.dim in the publisher (dim[0] = samples, '
-                        'dim[1] = axes) to match the data')
-            raise SelectionError(msg_text)
+        axes_option = selection.name('axes')
+        if len(dims) == 2:
+            samples, axes = int(dims[0].size), int(dims[1].size)
+            row = max(int(dims[1].stride), axes)     # ROS: dim[1].stride is the row stride
+            stride = f', row stride {row}' if row != axes else ''
+            shape = (f'{samples} sample(s) x {axes} axes (layout.dim = samples x axes{stride}'
+                     f'{_offset_note(offset, ", ")})')
+            if samples < 1 or axes < 1:
+                msg_text = (f'its layout announces {shape}: a chunk needs at least one sample '
+                            'and one axis; fix layout.dim in the publisher (dim[0] = samples, '
+                            'dim[1] = axes) or leave dim empty for one sample per message')
+                raise SelectionError(msg_text)
+            needed = offset + (samples - 1) * row + axes
+            if needed > size:
+                msg_text = (f'its layout announces {shape}, which needs {needed} values, but '
+                            f'data holds {size}; fix layout.dim in the publisher (dim[0] = '
+                            'samples, dim[1] = axes) to match the data')
+                raise SelectionError(msg_text)
+            if selection.axes is not None and axes != selection.axes:
+                msg_text = (f'it holds chunks of {shape}, but {axes_option} is '
+                            f'{selection.axes}; set {axes_option} to {axes} (one column per '
+                            'axis) or record the topic of the other actuators')
+                raise SelectionError(msg_text)
+        elif selection.axes is not None:
+            axes = row = selection.axes
+            flat = size - offset
+            if flat < axes or flat % axes:
+                msg_text = (f'it holds {max(flat, 0)} value(s){_offset_note(offset)} and no '
+                            f'layout.dim, not whole samples of {axes_option} {axes} axes '
+                            '(samples x axes, row-major); publish K x N values or set '
+                            f'layout.dim, or set {axes_option} to the number of axes')
+                raise SelectionError(msg_text)
+            samples = flat // axes
+            shape = (f'{samples} sample(s) x {axes} axes ({axes_option} {axes}, no '
+                     f'layout.dim{_offset_note(offset, ", ")})')
+        else:
+            return np.array([self._element(msg, selection)], dtype=np.float64)
         if selection.index is None:
             if axes != 1:
                 msg_text = (f'it holds chunks of {shape} and {option} is not set; set '

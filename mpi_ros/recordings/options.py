@@ -99,6 +99,9 @@ DATA_OPTIONS = (
     DataOption('output_index', 'optional_int',
                'element of a std_msgs/Float64MultiArray output topic (unset: its only '
                'element)', '', 'bag', -1),
+    DataOption('array_axes', 'optional_int',
+               'number of axes N of Float64MultiArray topics without layout.dim: K*N values '
+               'are K samples x N axes (unset: such a message is one sample)', '', 'bag', -1),
     DataOption('sample_period', 'optional_float',
                'interval between the samples of a chunked Float64MultiArray message '
                '(layout.dim = samples x axes) (unset: the log time since the previous '
@@ -150,6 +153,12 @@ class DataOptions:
         layout's ``data_offset``); None takes the array's only element. For
         a chunked message (``layout.dim`` = samples x axes) the axis, i.e.
         the column of the block.
+    array_axes : int or None
+        Number of axes N of ``Float64MultiArray`` messages without
+        ``layout.dim``: their K x N values are then read as K samples x N
+        axes (row-major), as the multi-axis nodes read them; None reads such
+        a message as one sample. A two-entry ``layout.dim`` must agree.
+        The identifier sets it to ``axes`` for a multi-axis bag.
     sample_period : float or None
         Interval [s] between the samples of a chunked
         ``Float64MultiArray`` message; None (or 0) infers it per message as
@@ -173,8 +182,8 @@ class DataOptions:
     ------
     DataError
         If a topic is empty, a field is unknown, an index is negative or not
-        a whole number, the sample period is negative or not finite, or a
-        scale is zero or not finite.
+        a whole number, `array_axes` is not a whole number >= 1, the sample
+        period is negative or not finite, or a scale is zero or not finite.
 
     Examples
     --------
@@ -194,6 +203,7 @@ class DataOptions:
     output_field: str = 'position'
     input_index: int | None = None
     output_index: int | None = None
+    array_axes: int | None = None
     sample_period: float | None = None
     time_column: str | None = 'time'
     input_column: str | None = None
@@ -235,6 +245,15 @@ class DataOptions:
                 raise DataError(msg)
             if value is not None:
                 object.__setattr__(self, name, int(value))
+        axes = self.array_axes
+        if axes is not None:
+            whole = isinstance(axes, numbers.Integral) and not isinstance(axes, bool)
+            if not whole or axes < 1:
+                msg = (f'{self.name("array_axes")} must be a whole number >= 1 (the axes of '
+                       'an array message without layout.dim) or unset; found '
+                       f'{show_value(axes)}')
+                raise DataError(msg)
+            object.__setattr__(self, 'array_axes', int(axes))
         period = self.sample_period
         if period is not None:
             number = isinstance(period, numbers.Real) and not isinstance(period, bool)

@@ -143,8 +143,27 @@ def test_chunked_bag_gives_the_models_of_the_per_sample_bag(ros_context, axes_ba
     assert [fit.result.samples for fit in fits] == [fit.result.samples for fit in reference]
 
 
-def test_an_axis_beyond_the_chunk_columns_is_named(chunked_bag):
-    with pytest.raises(DataError, match=r'axis 3 \(element or column 3 of /current_commands, '
-                                        r'/displacements\): .*output_index 3 is out of range: '
-                                        r'the message holds 4 sample\(s\) x 3 axes'):
+def test_an_axis_count_that_disagrees_with_the_chunks_is_named(chunked_bag):
+    with pytest.raises(DataError, match=r'axis 0 \(element or column 0 of /current_commands, '
+                                        r'/displacements\): .*it holds chunks of 4 sample\(s\) '
+                                        r'x 3 axes \(layout.dim = samples x axes\), but '
+                                        r'array_axes is 4; set array_axes to 3'):
         fit_bag_axes(str(chunked_bag), AXES + 1, order=(6, 3), workers=1)
+    with pytest.raises(DataError, match=r'^array_axes is 2 but axes is 3; leave array_axes '
+                                        r'unset \(it follows axes\) or make them equal$'):
+        fit_bag_axes(str(chunked_bag), AXES, options=DataOptions(array_axes=2), workers=1)
+
+
+def test_chunks_without_layout_dim_are_read_with_the_axis_count(axes_bag, tmp_path):
+    """Read K x N values without layout.dim (the nodes accept them) as K samples of N axes."""
+    stamps, currents, displacements = _axes_data()
+    flat = [(stamp, float64_array(message.data))
+            for stamp, message in chunked(stamps, currents, 10)]
+    for _, message in flat:
+        message.layout.dim = []
+    path = write_bag(tmp_path / 'flat', {
+        '/current_commands': (ARRAY, flat),
+        '/displacements': (ARRAY, chunked(stamps + 1, displacements, 5))})
+    reference = fit_bag_axes(str(axes_bag), AXES, order=(6, 3), workers=1)
+    fits = fit_bag_axes(str(path), AXES, order=(6, 3), workers=1)
+    assert [fit.parameters for fit in fits] == [fit.parameters for fit in reference]
