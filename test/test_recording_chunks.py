@@ -121,7 +121,8 @@ def test_sample_period_option(tmp_path):
     # A period longer than the log times allow: samples moved after the previous chunk.
     rec = read_bag_signals(bag, **TOPICS, input_index=1, output_index=1, sample_period=2e-3)
     assert np.all(np.diff(rec.time) > 0)
-    assert any('moved to 1 ns after it; check sample_period' in note for note in rec.notes)
+    assert any('longer than the log times allow; check sample_period); moved to 1 ns after it'
+               in note for note in rec.notes)
     # 0 means "infer", as the node parameter's default.
     assert DataOptions(sample_period=0.0).sample_period is None
 
@@ -321,3 +322,17 @@ def test_array_axes_keeps_one_sample_messages(tmp_path):
                                         r'of an array message without layout.dim\) or unset; '
                                         r'found 0$'):
         DataOptions(array_axes=0)
+
+
+def test_chunks_logged_closer_than_their_size_in_ns_stay_in_order(tmp_path):
+    """Two chunks of 10 logged 5 ns apart: their samples cannot be 1 ns apart; kept in order."""
+    stamps, currents, displacements = _data(40)
+    logged = stamps.copy()
+    logged[19] = logged[9] + 5
+    bag = write_bag(tmp_path / 'close', {
+        '/current_commands': (ARRAY, chunked(logged, currents, 10)),
+        '/displacements': (ARRAY, chunked(stamps + 1, displacements, 10))})
+    rec = read_bag_signals(bag, **TOPICS, input_index=0, output_index=0)
+    assert len(rec) == 40
+    assert any('(messages logged fewer ns apart than they hold samples); moved to 1 ns after '
+               'it' in note for note in rec.notes)

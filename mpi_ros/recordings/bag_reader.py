@@ -508,9 +508,11 @@ def _clean_topic(
                      f'others {spacing}')
         if n_moved:
             name = options.name('sample_period')
+            cause = (f'{name} longer than the log times allow; check {name}'
+                     if options.sample_period is not None else
+                     'messages logged fewer ns apart than they hold samples')
             notes.append(f'{topic}: {n_moved} sample(s) would fall at or before the last '
-                         f'sample of the previous message ({name} longer than the log times '
-                         f'allow); moved to 1 ns after it; check {name}')
+                         f'sample of the previous message ({cause}); moved to 1 ns after it')
     bad = ~np.isfinite(values)
     n_bad = int(np.count_nonzero(bad))
     if n_bad and not options.drop_nonfinite:
