@@ -95,6 +95,8 @@ def add_data_options(parser: argparse.ArgumentParser,
             kwargs.update(type=float, default=default, metavar='F')
         elif option.kind == 'optional_int':
             kwargs.update(type=int, default=default, metavar='I')
+        elif option.kind == 'optional_float':
+            kwargs.update(type=float, default=default, metavar='S')
         elif option.kind == 'choice':
             kwargs.update(choices=JOINT_FIELDS, default=default)
         else:

@@ -81,3 +81,44 @@ def write_array_signals(path, t, current, displacement, storage='sqlite3'):
                     for stamp, s in zip(stamps, np.asarray(displacement).tolist())]
     return write_bag(path, {'/command': (ARRAY, commands),
                             '/measurement': (ARRAY, measurements)}, storage)
+
+
+def float64_block(block, data_offset=0, row_stride=None, sizes=None, pad=0):
+    """
+    Return a Float64MultiArray chunk: `block` (K x N) row-major, as the multi-axis nodes send.
+
+    ``layout.dim = [samples (K, K*row), axes (N, row)]``; `row_stride` > N pads every row,
+    `data_offset` puts that many values (99.0) in front, `pad` that many after; `sizes`
+    overrides the announced (K, N) to build bad layouts.
+    """
+    types = STORE.types
+    block = np.asarray(block, dtype=np.float64)
+    samples, axes = block.shape
+    row = axes if row_stride is None else row_stride
+    rows = np.full((samples, row), -7.0)
+    rows[:, :axes] = block
+    data = np.concatenate([np.full(data_offset, 99.0), rows.reshape(-1), np.full(pad, -8.0)])
+    samples, axes = (samples, axes) if sizes is None else sizes
+    dim = types['std_msgs/msg/MultiArrayDimension']
+    layout = types['std_msgs/msg/MultiArrayLayout'](
+        dim=[dim(label='samples', size=samples, stride=samples * row),
+             dim(label='axes', size=axes, stride=row)], data_offset=data_offset)
+    return types[ARRAY](layout=layout, data=data)
+
+
+def chunked(stamps, block, sizes):
+    """
+    Cut `block` (samples x axes, one row per stamp) into chunks of the given sizes.
+
+    Each chunk is logged at the stamp of its last sample, as a publisher sends a chunk
+    when it is complete. `sizes` is one size (the last chunk may be shorter) or a
+    sequence that is cycled. Returns [(stamp, message), ...].
+    """
+    block = np.asarray(block, dtype=np.float64)
+    cycle = [sizes] if np.isscalar(sizes) else list(sizes)
+    messages, start, k = [], 0, 0
+    while start < len(block):
+        stop = min(start + int(cycle[k % len(cycle)]), len(block))
+        messages.append((stamps[stop - 1], float64_block(block[start:stop])))
+        start, k = stop, k + 1
+    return messages

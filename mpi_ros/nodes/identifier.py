@@ -23,8 +23,13 @@ target's extension off); the wait for the service and for its answer is bounded 
 Several actuators (``axes`` > 1)
     The bag holds ``std_msgs/msg/Float64MultiArray`` topics with one element per axis
     (``/current_commands`` and ``/displacements`` when the topics are left at their
-    single-axis defaults, as the multi-axis compensator and plant simulator publish
-    them, one sample per message).  Axis k is fitted from element k of both topics
+    single-axis defaults), as the multi-axis compensator and plant simulator publish
+    them: one sample of every axis per message, or a chunk of K samples x N axes
+    (``layout.dim`` = samples x axes, or K x N values without ``dim``); the K samples of
+    a message end at its log time and are spaced by the time since the previous message
+    / K, or ``sample_period``; input and output chunk sizes may differ, see
+    :func:`mpi_ros.recordings.read_bag_signals`).
+    Axis k is fitted from element (column) k of both topics
     (``input_index`` / ``output_index`` are set per axis), the axes in parallel in a
     process pool (``workers``, 0 = one per CPU, at most one per axis), and all models
     go to the multi-axis compensator in **one** ``set_parameters_atomically`` request
@@ -81,15 +86,16 @@ __all__ = [
 Type = Parameter.Type
 
 _KINDS = {'str': Type.STRING, 'optional_str': Type.STRING, 'choice': Type.STRING,
-          'optional_int': Type.INTEGER, 'float': Type.DOUBLE, 'bool': Type.BOOL}
+          'optional_int': Type.INTEGER, 'optional_float': Type.DOUBLE, 'float': Type.DOUBLE,
+          'bool': Type.BOOL}
+_UNSET = {'optional_str': "''", 'optional_int': '-1', 'optional_float': '0'}
 
 
 def _data_parameter(option: DataOption) -> ParameterSpec:
     """Return the node parameter of one shared data option."""
     description = option.description[0].upper() + option.description[1:]
     if option.kind.startswith('optional'):
-        unset = "''" if option.kind == 'optional_str' else '-1'
-        description = description.replace('(unset:', f'({unset}:')
+        description = description.replace('(unset:', f'({_UNSET[option.kind]}:')
     if option.applies != 'any':
         description += f'; {option.applies} only'
     return ParameterSpec(
@@ -121,8 +127,9 @@ PARAMETERS = (
                   'name (empty: do not write)'),
     replace(AXES, description=(
         'Number of actuators in the bag: 1 = one input and one output signal; N > 1 = '
-        'Float64MultiArray topics with one element per axis, every axis fitted and all '
-        'models pushed to a multi-axis compensator in one request'), read_only=False),
+        'Float64MultiArray topics with one element per axis (one sample or a chunk of '
+        'samples x axes per message), every axis fitted and all models pushed to a '
+        'multi-axis compensator in one request'), read_only=False),
     ParameterSpec('workers', Type.INTEGER, 0,
                   'axes > 1: processes fitting axes in parallel (0: one per CPU, at most '
                   'one per axis; 1: in this process)', value_range=(0, 1024)),
@@ -281,15 +288,24 @@ def fit_bag_axes(path: str, axes: int, *, options: Optional[DataOptions] = None,
     """
     Fit one model per axis of a multi-axis bag (Float64MultiArray topics).
 
+    Each message holds one sample of every axis, or a chunk of K samples x N axes
+    (``layout.dim`` = samples x axes, as the multi-axis nodes publish it, or K x N values
+    without ``dim``, as they also accept it); the chunk
+    sizes of the input and output topics may differ.  How the samples of a chunk are
+    timed: :func:`mpi_ros.recordings.read_bag_signals` (``options.sample_period``).
+
     Parameters
     ----------
     path : str
         rosbag2 bag.
     axes : int
-        Number of axes; axis k is element k of the input and the output topic.
+        Number of axes; axis k is element (chunk column) k of the input and the output
+        topic, and must be < N for chunked messages.
     options : mpi_ros.recordings.DataOptions, optional
         Topics, scales, ...; topics left at the single-axis defaults become
-        ``/current_commands`` and ``/displacements``.  The indices are set per axis.
+        ``/current_commands`` and ``/displacements``.  The indices are set per axis, and
+        ``array_axes`` to `axes`: a message without ``layout.dim`` must hold K x `axes`
+        values (K samples of every axis), as the multi-axis nodes read it.
     order : 'auto' or tuple of (int, int)
         Model orders, for every axis.
     workers : int
@@ -309,7 +325,11 @@ def fit_bag_axes(path: str, axes: int, *, options: Optional[DataOptions] = None,
     """
     options = options or DataOptions(spelling='parameter')
     defaults = DataOptions()
-    changes: Dict[str, Any] = {}
+    if options.array_axes not in (None, axes):
+        msg = (f'{options.name("array_axes")} is {options.array_axes} but axes is {axes}; '
+               f'leave {options.name("array_axes")} unset (it follows axes) or make them equal')
+        raise DataError(msg)
+    changes: Dict[str, Any] = {'array_axes': axes}
     if options.input_topic == defaults.input_topic:
         changes['input_topic'] = '/current_commands'
     if options.output_topic == defaults.output_topic:
@@ -342,7 +362,8 @@ def _fit_axis(path: str, axis: int, options: DataOptions, order: Order) -> BagFi
     try:
         return fit_bag(path, options=options, order=order)
     except MPIError as err:
-        msg = f'axis {axis} (element {axis} of {options.input_topic}, {options.output_topic}):'
+        msg = (f'axis {axis} (element or column {axis} of {options.input_topic}, '
+               f'{options.output_topic}):')
         raise type(err)(f'{msg} {err}') from err
 
 

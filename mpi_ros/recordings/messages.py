@@ -1,13 +1,29 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """
-Message readers: one number per bag message, chosen by the topic's message type.
+Message readers: the selected samples of each bag message, chosen by the topic's message type.
 
-A recording needs one number per message of a topic: the actuator input x
-[A] or output s [m]. A :class:`MessageReader` takes it from a decoded message;
-which number is described by a :class:`Selection` (a joint and field of a
-``sensor_msgs/msg/JointState``, an element of a
-``std_msgs/msg/Float64MultiArray``). The bag reader picks the reader by the
-topic's type as stored in the bag, through :data:`MESSAGE_READERS`.
+A recording needs the samples of the actuator input x [A] or output s [m]
+each message of a topic carries: one number for most types, a chunk of K
+samples for a chunked ``std_msgs/msg/Float64MultiArray``. A
+:class:`MessageReader` takes them from a decoded message; which number is
+described by a :class:`Selection` (a joint and field of a
+``sensor_msgs/msg/JointState``, an element or axis of a
+``Float64MultiArray``). The bag reader picks the reader by the topic's type
+as stored in the bag, through :data:`MESSAGE_READERS`.
+
+Chunked arrays (the multi-axis nodes' layout, :mod:`mpi_ros.nodes.arrays`)
+    A ``Float64MultiArray`` whose ``layout.dim`` has two entries is a block of
+    ``dim[0].size`` = K samples x ``dim[1].size`` = N axes, row-major from
+    ``layout.data_offset`` with the row stride ``dim[1].stride`` (N when it is
+    smaller). The selected index is the axis (column, < N); the reader returns
+    the K samples of that column, oldest first. A message without ``dim``, or
+    with one or more than two entries, is one sample whose elements are
+    indexed as before (element k after ``data_offset``); so is a block with
+    K = 1. With :attr:`Selection.axes` = N (the data option ``array_axes``,
+    set by the identifier for ``axes`` > 1) such a message is read as the
+    nodes read it: its values after ``data_offset`` are K x N samples x axes.
+    When the samples were taken is the bag reader's business
+    (:func:`mpi_ros.recordings.read_bag_signals`).
 
 Adding a message type is one class and one registry line (the type must be in
 rosbags' ROS 2 Jazzy typestore)::
@@ -19,6 +35,8 @@ rosbags' ROS 2 Jazzy typestore)::
             return float(msg.x)
 
     MESSAGE_READERS = {..., PointXReader.msgtype: PointXReader()}
+
+A type whose messages carry several samples also overrides :meth:`MessageReader.values`.
 """
 
 from __future__ import annotations
@@ -29,6 +47,8 @@ from dataclasses import dataclass
 import functools
 from typing import Any, ClassVar, Mapping
 
+import numpy as np
+import numpy.typing as npt
 from rosbags.typesys import get_typestore, Stores
 
 from ..errors import DataError
@@ -64,11 +84,19 @@ class Selection:
     joint_field : {'position', 'velocity', 'effort'}
         Field of the joint in a ``JointState``.
     index : int or None
-        Element of a ``Float64MultiArray`` after ``layout.data_offset``;
-        None takes the array's only element.
+        Element of a ``Float64MultiArray`` after ``layout.data_offset``, or
+        the axis (column) of a chunked one (``layout.dim`` = samples x axes);
+        None takes the array's only element (the only axis of a chunk).
+    axes : int or None
+        Number of axes N of a ``Float64MultiArray`` without ``layout.dim``:
+        its values are then K x N samples x axes (row-major, K >= 1), as the
+        multi-axis nodes accept them; None reads such a message as one
+        sample (element `index`). A two-entry ``layout.dim`` must agree with
+        it. Other types ignore it.
     names : Mapping[str, str]
         How the user writes the options behind ``topic``, ``joint``,
-        ``joint_field`` and ``index`` (e.g. ``'--input-joint'``), for messages.
+        ``joint_field``, ``index`` and ``axes`` (e.g. ``'--input-joint'``),
+        for messages.
 
     """
 
@@ -76,6 +104,7 @@ class Selection:
     joint: str | None = None
     joint_field: str = 'position'
     index: int | None = None
+    axes: int | None = None
     names: Mapping[str, str] = dataclasses.field(default_factory=dict, compare=False)
 
     def name(self, attribute: str) -> str:
@@ -92,10 +121,12 @@ class Selection:
 
 class MessageReader(abc.ABC):
     """
-    Take the selected number from one decoded message of one type.
+    Take the selected number(s) from one decoded message of one type.
 
     Subclasses set :attr:`msgtype` and :attr:`selectors` and implement
-    :meth:`value`; one line in :data:`MESSAGE_READERS` registers them.
+    :meth:`value`; one line in :data:`MESSAGE_READERS` registers them. A type
+    whose messages carry several samples of the signal (a chunk) also
+    overrides :meth:`values`, which the bag reader calls.
     """
 
     #: Message type the reader decodes, as stored in the bag.
@@ -127,6 +158,31 @@ class MessageReader(abc.ABC):
             If the message does not hold it; the message says what it holds.
 
         """
+
+    def values(self, msg: Any, selection: Selection) -> npt.NDArray[np.float64]:
+        """
+        Return the selected samples of one message, oldest first.
+
+        Parameters
+        ----------
+        msg : object
+            The message, decoded by rosbags.
+        selection : Selection
+            What to take from it.
+
+        Returns
+        -------
+        ndarray of float, shape (K,)
+            The K >= 1 samples, in the unit they were published in; by
+            default the one number of :meth:`value`.
+
+        Raises
+        ------
+        SelectionError
+            If the message does not hold them; the message says what it holds.
+
+        """
+        return np.array([self.value(msg, selection)], dtype=np.float64)
 
 
 class Float64Reader(MessageReader):
@@ -176,13 +232,88 @@ class JointStateReader(MessageReader):
 
 
 class Float64MultiArrayReader(MessageReader):
-    """``std_msgs/msg/Float64MultiArray``: one element of ``data``."""
+    """
+    ``std_msgs/msg/Float64MultiArray``: one element of ``data``, or one axis of a chunk.
+
+    A message whose ``layout.dim`` has two entries is a chunk of samples x axes
+    (module docstring); any other message is one sample.
+    """
 
     msgtype = 'std_msgs/msg/Float64MultiArray'
     selectors = ('index',)
 
     def value(self, msg: Any, selection: Selection) -> float:
-        """Return ``msg.data[layout.data_offset + index]``."""
+        """Return ``msg.data[layout.data_offset + index]`` (a one-sample chunk's element)."""
+        if len(msg.layout.dim) == 2 or selection.axes is not None:
+            samples = self.values(msg, selection)
+            if samples.size != 1:
+                msg_text = (f'it holds a chunk of {samples.size} samples (samples x axes), '
+                            'not one number; read it with values()')
+                raise SelectionError(msg_text)
+            return float(samples[0])
+        return self._element(msg, selection)
+
+    def values(self, msg: Any, selection: Selection) -> npt.NDArray[np.float64]:
+        """Return the selected axis of a chunk (K samples), or ``[value]`` for one sample."""
+        dims = msg.layout.dim
+        offset = int(msg.layout.data_offset)
+        size = len(msg.data)
+        option = selection.name('index')
+        axes_option = selection.name('axes')
+        if len(dims) == 2:
+            samples, axes = int(dims[0].size), int(dims[1].size)
+            row = max(int(dims[1].stride), axes)     # ROS: dim[1].stride is the row stride
+            stride = f', row stride {row}' if row != axes else ''
+            shape = (f'{samples} sample(s) x {axes} axes (layout.dim = samples x axes{stride}'
+                     f'{_offset_note(offset, ", ")})')
+            if samples < 1 or axes < 1:
+                msg_text = (f'its layout announces {shape}: a chunk needs at least one sample '
+                            'and one axis; fix layout.dim in the publisher (dim[0] = samples, '
+                            'dim[1] = axes) or leave dim empty for one sample per message')
+                raise SelectionError(msg_text)
+            needed = offset + (samples - 1) * row + axes
+            if needed > size:
+                msg_text = (f'its layout announces {shape}, which needs {needed} values, but '
+                            f'data holds {size}; fix layout.dim in the publisher (dim[0] = '
+                            'samples, dim[1] = axes) to match the data')
+                raise SelectionError(msg_text)
+            if selection.axes is not None and axes != selection.axes:
+                msg_text = (f'it holds chunks of {shape}, but {axes_option} is '
+                            f'{selection.axes}; set {axes_option} to {axes} (one column per '
+                            'axis) or record the topic of the other actuators')
+                raise SelectionError(msg_text)
+        elif selection.axes is not None:
+            axes = row = selection.axes
+            flat = size - offset
+            if flat < axes or flat % axes:
+                msg_text = (f'it holds {max(flat, 0)} value(s){_offset_note(offset)} and no '
+                            f'layout.dim, not whole samples of {axes_option} {axes} axes '
+                            '(samples x axes, row-major); publish K x N values or set '
+                            f'layout.dim, or set {axes_option} to the number of axes')
+                raise SelectionError(msg_text)
+            samples = flat // axes
+            shape = (f'{samples} sample(s) x {axes} axes ({axes_option} {axes}, no '
+                     f'layout.dim{_offset_note(offset, ", ")})')
+        else:
+            return np.array([self._element(msg, selection)], dtype=np.float64)
+        if selection.index is None:
+            if axes != 1:
+                msg_text = (f'it holds chunks of {shape} and {option} is not set; set '
+                            f'{option} to the axis, one of 0 to {axes - 1}')
+                raise SelectionError(msg_text)
+            index = 0
+        else:
+            index = selection.index
+        if index >= axes:
+            msg_text = (f'{option} {index} is out of range: the message holds {shape}; set '
+                        f'{option} to an axis, one of 0 to {axes - 1}')
+            raise SelectionError(msg_text)
+        start = offset + index
+        return np.array(msg.data[start:start + (samples - 1) * row + 1:row], dtype=np.float64)
+
+    @staticmethod
+    def _element(msg: Any, selection: Selection) -> float:
+        """Return ``msg.data[layout.data_offset + index]`` of a one-sample message."""
         offset = int(msg.layout.data_offset)
         size = len(msg.data) - offset
         option = selection.name('index')
@@ -235,5 +366,5 @@ def _listing(names: list[str]) -> str:
     return ', '.join(repr(name) for name in names) or 'none'
 
 
-def _offset_note(offset: int) -> str:
-    return f' after layout.data_offset {offset}' if offset else ''
+def _offset_note(offset: int, lead: str = ' after ') -> str:
+    return f'{lead}layout.data_offset {offset}' if offset else ''

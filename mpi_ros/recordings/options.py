@@ -44,8 +44,10 @@ class DataOption:
     ----------
     name : str
         Attribute of :class:`DataOptions` (and node parameter name).
-    kind : {'str', 'optional_str', 'optional_int', 'float', 'bool', 'choice'}
-        Value type; ``optional_*`` options may be unset (``''`` or ``-1`` as a
+    kind : str
+        Value type: ``'str'``, ``'optional_str'``, ``'optional_int'``,
+        ``'optional_float'``, ``'float'``, ``'bool'`` or ``'choice'``;
+        ``optional_*`` options may be unset (``''``, ``-1`` or ``0.0`` as a
         node parameter).
     description : str
         One-line description.
@@ -97,6 +99,13 @@ DATA_OPTIONS = (
     DataOption('output_index', 'optional_int',
                'element of a std_msgs/Float64MultiArray output topic (unset: its only '
                'element)', '', 'bag', -1),
+    DataOption('array_axes', 'optional_int',
+               'number of axes N of Float64MultiArray topics without layout.dim: K*N values '
+               'are K samples x N axes (unset: such a message is one sample)', '', 'bag', -1),
+    DataOption('sample_period', 'optional_float',
+               'interval between the samples of a chunked Float64MultiArray message '
+               '(layout.dim = samples x axes) (unset: the log time since the previous '
+               'message divided by the chunk size)', 's', 'bag', 0.0),
     DataOption('time_column', 'optional_str',
                "CSV column of the time ('' if the file has none: time is the sample index)",
                's', 'csv', 'time'),
@@ -141,7 +150,20 @@ class DataOptions:
         Field of the joint in a ``JointState`` topic.
     input_index, output_index : int or None
         Element of a ``std_msgs/msg/Float64MultiArray`` topic (after the
-        layout's ``data_offset``); None takes the array's only element.
+        layout's ``data_offset``); None takes the array's only element. For
+        a chunked message (``layout.dim`` = samples x axes) the axis, i.e.
+        the column of the block.
+    array_axes : int or None
+        Number of axes N of ``Float64MultiArray`` messages without
+        ``layout.dim``: their K x N values are then read as K samples x N
+        axes (row-major), as the multi-axis nodes read them; None reads such
+        a message as one sample. A two-entry ``layout.dim`` must agree.
+        The identifier sets it to ``axes`` for a multi-axis bag.
+    sample_period : float or None
+        Interval [s] between the samples of a chunked
+        ``Float64MultiArray`` message; None (or 0) infers it per message as
+        the log time since the previous message divided by the chunk size
+        (see :func:`mpi_ros.recordings.read_bag_signals`).
     time_column : str or None
         CSV time column; None when the file has none.
     input_column, output_column : str or None
@@ -160,7 +182,8 @@ class DataOptions:
     ------
     DataError
         If a topic is empty, a field is unknown, an index is negative or not
-        a whole number, or a scale is zero or not finite.
+        a whole number, `array_axes` is not a whole number >= 1, the sample
+        period is negative or not finite, or a scale is zero or not finite.
 
     Examples
     --------
@@ -180,6 +203,8 @@ class DataOptions:
     output_field: str = 'position'
     input_index: int | None = None
     output_index: int | None = None
+    array_axes: int | None = None
+    sample_period: float | None = None
     time_column: str | None = 'time'
     input_column: str | None = None
     output_column: str | None = None
@@ -220,6 +245,24 @@ class DataOptions:
                 raise DataError(msg)
             if value is not None:
                 object.__setattr__(self, name, int(value))
+        axes = self.array_axes
+        if axes is not None:
+            whole = isinstance(axes, numbers.Integral) and not isinstance(axes, bool)
+            if not whole or axes < 1:
+                msg = (f'{self.name("array_axes")} must be a whole number >= 1 (the axes of '
+                       'an array message without layout.dim) or unset; found '
+                       f'{show_value(axes)}')
+                raise DataError(msg)
+            object.__setattr__(self, 'array_axes', int(axes))
+        period = self.sample_period
+        if period is not None:
+            number = isinstance(period, numbers.Real) and not isinstance(period, bool)
+            if not number or not math.isfinite(period) or period < 0:
+                msg = (f'{self.name("sample_period")} must be a finite number >= 0 [s] (the '
+                       'interval between the samples of a chunked message; 0 or unset '
+                       f'infers it from the log times); found {show_value(period)}')
+                raise DataError(msg)
+            object.__setattr__(self, 'sample_period', float(period) or None)
         for name in ('time_scale', 'input_scale', 'output_scale'):
             value = getattr(self, name)
             number = isinstance(value, numbers.Real) and not isinstance(value, bool)
@@ -280,10 +323,10 @@ class DataOptions:
         """
         Build options from argparse or node parameter values.
 
-        Unset optional options are None (argparse), ``''`` (text parameters)
-        or a negative number (index parameters); an empty `time_column` means
-        the CSV file has no time column. Keys that are not data options are
-        ignored, missing ones keep their defaults.
+        Unset optional options are None (argparse), ``''`` (text parameters),
+        a negative number (index parameters) or 0 (``sample_period``); an
+        empty `time_column` means the CSV file has no time column. Keys that
+        are not data options are ignored, missing ones keep their defaults.
 
         Parameters
         ----------

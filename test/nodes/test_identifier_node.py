@@ -200,6 +200,7 @@ def test_identifies_from_joint_state_and_array_bags(ros_context, message_bags, b
     ('input_field', 'torque', 'input_field'),
     ('output_scale', 0.0, 'output_scale must be a finite non-zero number; found 0.0'),
     ('input_index', -2, 'input_index out of range'),
+    ('sample_period', -1e-3, 'sample_period must be a finite number >= 0 [s]'),
 ])
 def test_bad_data_parameters_are_rejected(ros_context, parameter, value, needle):
     node = IdentifierNode(context=ros_context)
