@@ -24,9 +24,14 @@ Node parameters
     ``axis<k>.``: ``axis<k>.model.hysteresis.thresholds``, ``.weights``,
     ``.initial_states``, ``axis<k>.model.superposition.thresholds``, ``.weights``,
     ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign`` (plain MPI
-    models; the extensions are single-axis only); ``output.min`` / ``output.max`` (one
-    safe range for all axes), ``enabled``, ``diagnostics_period``, ``qos_depth``,
-    ``qos_reliability``.
+    models; the extensions are single-axis only); ``output.min`` / ``output.max`` (the
+    node-wide safe range) and, optional per axis, ``axis<k>.output.min`` /
+    ``axis<k>.output.max`` (unset: the node-wide value; once set, a key can be changed but
+    not unset again while the node runs); ``enabled``, ``diagnostics_period``,
+    ``qos_depth``, ``qos_reliability``.  Every axis's range (its own keys, or the
+    node-wide ones it falls back to) must be finite with min < max; ``/diagnostics``
+    reports ``output_min`` / ``output_max`` as one value, or as space-separated per-axis
+    lists when the axes' ranges differ.
 
 Model updates
     The single-axis rule, per axis: a request is laid over the running values, and every
@@ -36,8 +41,12 @@ Model updates
     ``set_parameters_atomically`` (the identifier's push) changes several axes
     atomically; ``ros2 param load`` sends the file's ``axis*.model.*`` keys as one group
     too.  The five Gamma keys of an axis in one request describe its whole model (the
-    operating point keys it leaves out return to their defaults).  Until every axis has a
-    model the node is unconfigured and publishes nothing (diagnostics WARN).
+    operating point keys it leaves out return to their defaults).  The output limits,
+    node-wide and per axis, belong to the same request: a request that sets a model and its
+    limits is applied whole (limits first, then the model) or refused whole, and in a
+    ``set_parameters`` request (``ros2 param load``) the model keys and every limit key form
+    one group.  Until every axis has a model the node is unconfigured and publishes nothing
+    (diagnostics WARN).
 """
 
 from dataclasses import replace
@@ -141,12 +150,17 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._specs = dict(specs_by_name((AXES,) + _COMMON))
         declare_parameters(self, (AXES,))
         self.axes = int(self.get_parameter('axes').value)
-        per_axis = axis_parameters(self.axes)
+        per_axis = axis_parameters(self.axes) + _axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
         self._model_keys = [[axis_key(k, key) for key in MODEL_KEYS + OPERATING_POINT_KEYS]
                             for k in range(self.axes)]
-        self._all_model_keys = tuple(key for keys in self._model_keys for key in keys)
-        self._groups = (self._all_model_keys, LIMIT_KEYS)
+        self._limit_keys = [(axis_key(k, 'output.min'), axis_key(k, 'output.max'))
+                            for k in range(self.axes)]
+        self._all_limit_keys = LIMIT_KEYS + tuple(
+            key for keys in self._limit_keys for key in keys)
+        # Models and limits of one set_parameters request succeed or fail together.
+        self._groups = (tuple(key for keys in self._model_keys for key in keys)
+                        + self._all_limit_keys,)
         declare_parameters(self, per_axis + _COMMON)
         self._declared()
 
@@ -271,6 +285,38 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
     def _install_prepared(self, prepared: Dict[str, Any]) -> None:
         self._install(prepared['models'])
 
+    def _limits_candidate(self, names: Any, parameters: List[Parameter]) -> Any:
+        """Return {axis: (min, max)} of every axis whose range the request touches."""
+        if names.isdisjoint(self._all_limit_keys):
+            return None
+        axes = range(self.axes) if not names.isdisjoint(LIMIT_KEYS) else [
+            axis for axis, keys in enumerate(self._limit_keys) if not names.isdisjoint(keys)]
+        return self._axis_limits(parameter_values(self, self._all_limit_keys, parameters),
+                                 axes)
+
+    def _axis_limits(self, values: Dict[str, Any], axes: Any) -> Dict[int, Tuple[float, float]]:
+        """Check the node-wide range and each axis's own (or inherited) range."""
+        ordered_limits(values['output.min'], values['output.max'])
+        limits = {}
+        for axis in axes:
+            names = tuple(key if values[key] is not None else common
+                          for key, common in zip(self._limit_keys[axis], LIMIT_KEYS))
+            limits[axis] = ordered_limits(values[names[0]], values[names[1]], names=names)
+        return limits
+
+    def _set_limits(self, limits: Any) -> None:
+        compensator = self._compensator
+        if compensator is not None:
+            for axis, (low, high) in limits.items():
+                compensator.set_limits(low, high, axis=axis)
+
+    def _effective_limits(self) -> Tuple[List[float], List[float]]:
+        """Return each axis's applied range [A]: its own keys, else the node-wide ones."""
+        values = parameter_values(self, self._all_limit_keys)
+        pairs = [tuple(values[key] if values[key] is not None else values[common]
+                       for key, common in zip(keys, LIMIT_KEYS)) for keys in self._limit_keys]
+        return [pair[0] for pair in pairs], [pair[1] for pair in pairs]
+
     def _install(self, models: Dict[int, MPIModel]) -> None:
         """Apply validated axis models: install into running axes, or build the core."""
         if not models:
@@ -281,9 +327,9 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             if self._compensator is not None:
                 self._compensator.install(axis, model)
         if self._compensator is None and all(m is not None for m in self._models):
+            lows, highs = self._effective_limits()
             self._compensator = MultiAxisCompensator(
-                self._models, output_min=self.get_parameter('output.min').value,
-                output_max=self.get_parameter('output.max').value,
+                self._models, output_min=lows, output_max=highs,
                 enabled=self.get_parameter('enabled').value)
         axes = ', '.join(str(axis) for axis in sorted(models))
         state = 'compensating' if self._compensator is not None else (
@@ -292,7 +338,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     def _configure_from_declared(self) -> None:
         values = parameter_values(self, list(self._specs))
-        ordered_limits(values['output.min'], values['output.max'])
+        self._axis_limits(values, range(self.axes))
         models = {}
         for axis, keys in enumerate(self._model_keys):
             given = [key for key in keys[:len(MODEL_KEYS)] if values[key] is not None]
@@ -345,5 +391,24 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return DiagnosticStatus.OK, 'compensating'
 
     def _status_values(self) -> Dict[str, Any]:
-        return {'axes': self.axes,
-                'model_versions': ' '.join(map(str, self._model_versions))}
+        values: Dict[str, Any] = {
+            'axes': self.axes, 'model_versions': ' '.join(map(str, self._model_versions))}
+        for key, limits in zip(('output_min', 'output_max'), self._effective_limits()):
+            values[key] = limits[0] if len(set(limits)) == 1 else ' '.join(map(str, limits))
+        return values
+
+
+def _axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
+    """Return ``axis<k>.output.min`` / ``.max`` per axis: unset (node-wide) by default."""
+    words = {'output.min': ('lowest', 'below'), 'output.max': ('highest', 'above')}
+    specs = []
+    for k in range(axes):
+        for spec in LIMIT_PARAMETERS:
+            word, side = words[spec.name]
+            other = 'output.max' if spec.name == 'output.min' else 'output.min'
+            specs.append(replace(
+                spec, name=axis_key(k, spec.name), default=None,
+                description=(f'Axis {k}: {word} current command of this axis (its '
+                             f'safe actuator range); unset: {spec.name}; must be {side} '
+                             f'axis{k}.{other} (or {other} when that is unset)')))
+    return tuple(specs)
