@@ -3,6 +3,7 @@
 
 from hypothesis import given, settings, strategies as st
 from mpi_ros.compensation import Compensator, MultiAxisCompensator
+from mpi_ros.errors import ModelError
 from mpi_ros.extensions import CreepModel
 from mpi_ros.memory import TurningPointMemory
 import numpy as np
@@ -148,3 +149,34 @@ def test_an_axis_used_alone_between_blocks_stays_exact():
                          for i, row in enumerate(block)])
     np.testing.assert_array_equal(np.vstack(got), expected[rows])
     np.testing.assert_array_equal(alone, expected[np.r_[30:40, 60:71], 1])
+
+
+def test_limits_of_one_axis_change_that_axis_only():
+    rng = np.random.default_rng(5)
+    models = [random_model(rng, n=6, l=3) for _ in range(3)]
+    multi = MultiAxisCompensator(models, output_min=-1.0, output_max=2.0)
+    singles = [Compensator(m, output_min=-1.0, output_max=2.0) for m in models]
+    ranges = np.array([c.displacement_range for c in singles])
+    first, second = np.array_split(_blocks(rng, ranges, 400), 2)
+    np.testing.assert_array_equal(
+        multi.command(first), [[c.command(v) for c, v in zip(singles, row)] for row in first])
+    multi.set_limits(-0.2, 0.9, axis=1)
+    singles[1].set_limits(-0.2, 0.9)
+    got = multi.command(second)
+    np.testing.assert_array_equal(
+        got, [[c.command(v) for c, v in zip(singles, row)] for row in second])
+    assert [(c.output_min, c.output_max) for c in multi.axes] == [
+        (-1.0, 2.0), (-0.2, 0.9), (-1.0, 2.0)]
+    assert np.all((got[:, 1] >= -0.2) & (got[:, 1] <= 0.9))
+
+
+@pytest.mark.parametrize('axis', [3, -1, 1.0])
+def test_limits_of_a_missing_axis_are_refused(axis):
+    rng = np.random.default_rng(6)
+    multi = MultiAxisCompensator([random_model(rng, n=4, l=2) for _ in range(3)],
+                                 output_min=-1.0, output_max=2.0)
+    with pytest.raises(ModelError, match='axis must be an axis index from 0 to 2'):
+        multi.set_limits(0.0, 1.0, axis=axis)
+    with pytest.raises(ModelError, match='output.min must be finite and below output.max'):
+        multi.set_limits(1.0, 0.5, axis=2)
+    assert [(c.output_min, c.output_max) for c in multi.axes] == [(-1.0, 2.0)] * 3

@@ -112,12 +112,36 @@ class MultiAxisCompensator:
         """Switch one axis to a new (validated) model, bumplessly (:meth:`Compensator.install`)."""
         self._axes[axis].install(model)
 
-    def set_limits(self, output_min: float, output_max: float) -> None:
-        """Give every axis the safe current range [A] (validated, all or none)."""
-        for axis in self._axes:
-            axis._check_limits(output_min, output_max)
-        for axis in self._axes:
-            axis.set_limits(output_min, output_max)
+    def set_limits(self, output_min: float, output_max: float, *,
+                   axis: int | None = None) -> None:
+        """
+        Give every axis, or one, the safe current range [A] (validated, all or none).
+
+        Parameters
+        ----------
+        output_min, output_max : float
+            Lowest and highest current command [A]; finite, ``output_min < output_max``.
+        axis : int, optional
+            Only this axis (0 to N-1); None: every axis.
+
+        Raises
+        ------
+        ModelError
+            When the range is not finite and ordered, or ``axis`` is not an axis.
+
+        """
+        if axis is None:
+            targets = self._axes
+        elif isinstance(axis, int) and 0 <= axis < len(self._axes):
+            targets = [self._axes[axis]]
+        else:
+            msg = (f'axis must be an axis index from 0 to {len(self._axes) - 1}; found '
+                   f'{axis!r}; pass None to set every axis')
+            raise ModelError(msg)
+        for target in targets:
+            target._check_limits(output_min, output_max)
+        for target in targets:
+            target.set_limits(output_min, output_max)
 
     @property
     def enabled(self) -> bool:

@@ -2,9 +2,11 @@
 """
 Compensator node: desired displacement in, current command out, through the inverse (27).
 
-(Over 500 lines: the node's parameter rule - one model-update rule for every parameter
-path, null handling, grouped set_parameters - its raw message path and its diagnostics
-belong to one node; the model logic itself is in :mod:`mpi_ros.compensation`.)
+(Slightly over 500 lines, most of them this docstring: the single-axis model-update rule
+with its null handling and extensions, and the Float64 message path.  What it shares with
+the multi-axis node - the parameter callbacks' frame, grouped set_parameters, topics, loss
+accounting, counters, diagnostics - is in :mod:`mpi_ros.nodes.compensator_base`; the model
+logic itself is in :mod:`mpi_ros.compensation`.)
 
 Topics (relative names, std_msgs/msg/Float64, SI units)
     ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
@@ -74,29 +76,27 @@ ordered, makes the node refuse to start (exit status 1) rather than run a model
 nobody asked for.
 """
 
-import math
 import struct
 import time
 from typing import Any, Dict, List, Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import SetParametersResult
+from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
-from .loss import LossMonitor
-from .multi_axis import AXES
-from .parameters import (
-    check_parameters, declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS,
-    harden_parameter_services, is_null, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS,
-    normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected, ParameterSpec,
-    set_parameters_in_groups, specs_by_name,
+from .compensator_base import (
+    AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT, ENABLED,
+    LIMIT_KEYS, LIMIT_PARAMETERS, new_faults, ordered_limits,
 )
-from .qos import loop_qos
+from .multi_axis import MultiAxisCompensatorNode
+from .parameters import (
+    declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS, is_null, loop_qos_parameters,
+    MODEL_KEYS, MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values,
+    ParameterRejected, ParameterSpec, specs_by_name,
+)
 from .spinning import run_node_main
 from ..compensation import Compensator, gamma_of, inverse_step_of
-from ..errors import MPIError
 from ..extensions import extended_model_from_params, EXTENSION_KEYS
 from ..model import MPIModel
 from ..params import OPERATING_POINT_DEFAULTS
@@ -105,19 +105,8 @@ __all__ = ['CompensatorNode', 'PARAMETERS', 'main', 'make_node']
 
 Type = Parameter.Type
 
-PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
-    ParameterSpec(
-        'output.min', Type.DOUBLE, 0.0,
-        'Lowest current command ever published (safe actuator range); '
-        'must be below output.max', 'A', value_range=(-1.0e3, 1.0e3)),
-    ParameterSpec(
-        'output.max', Type.DOUBLE, 2.0,
-        'Highest current command ever published (safe actuator range); '
-        'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
-    ParameterSpec(
-        'enabled', Type.BOOL, True,
-        'true: invert the MPI model (27); false: pass the best linear map of the '
-        'model instead, for comparison'),
+PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + LIMIT_PARAMETERS + (
+    ENABLED,
     ParameterSpec(
         'sample_period', Type.DOUBLE, 1.0e-3,
         'Nominal interval between desired displacements; extended models (creep, rate '
@@ -129,34 +118,27 @@ PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + (
         '(steady clock when the message is served, as the plant simulator does) or '
         'nominal (sample_period apart, for a stream at a fixed rate)',
         choices=('arrival', 'nominal'), read_only=True),
-    ParameterSpec(
-        'diagnostics_period', Type.DOUBLE, 1.0,
-        'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0)),
+    DIAGNOSTICS_PERIOD,
     *loop_qos_parameters('desired_displacement and current_command'),
     AXES,
 )
 
 _SPECS = specs_by_name(PARAMETERS)
 #: Most desired displacements served in one subscription callback.
-_DRAIN_LIMIT = 1000
+_DRAIN_LIMIT = DRAIN_LIMIT
 #: CDR of a Float64: 4-byte encapsulation header (byte 1: 1 = little-endian), the double.
 _LITTLE = struct.Struct('<d').unpack_from
 _BIG = struct.Struct('>d').unpack_from
 _PACK = struct.Struct('<H2xd').pack
 #: The encapsulation header CDR_LE as the little-endian unsigned short _PACK writes first.
 _CDR_LE = 0x0100
-#: Counters of bad inputs: a diagnostics period with any of them is WARN, and they are logged.
-_FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
-#: At most one log line about bad inputs per this period [s]; checked every second.
-_FAULT_LOG_PERIOD_S = 5.0
-_LIMIT_KEYS = ('output.min', 'output.max')
 _EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
 _ALL_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + _EXTENSION_KEYS
 #: Keys set together within one set_parameters request (set_parameters_in_groups).
-_GROUPS = (_ALL_MODEL_KEYS, _LIMIT_KEYS)
+_GROUPS = (_ALL_MODEL_KEYS, LIMIT_KEYS)
 
 
-class CompensatorNode(Node):
+class CompensatorNode(CompensatorNodeBase):
     """
     Feedforward hysteresis compensator: publishes Gamma^-1[desired] per message.
 
@@ -177,47 +159,21 @@ class CompensatorNode(Node):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        self._declaring = True
-        self._prepared: Optional[Dict[str, Any]] = None
+        self._specs = _SPECS
+        self._groups = _GROUPS
         self._compensator: Optional[Compensator] = None
         self._extended = False
         self._model_kind = 'none'
         self._model_version = 0
-        self._rejected_updates = 0
-        self._last_rejection = ''
-        self._messages_in = 0
-        self._messages_out = 0
-        self._dropped_unconfigured = 0
-        self._last_report: Tuple[float, int, Dict[str, int]] = (time.monotonic(), 0, {})
-        self._fault_log: Tuple[float, Dict[str, int]] = (-math.inf, {})
-        # Validator first: rclpy runs it once per key while declaring (a bad
-        # --params-file override is rejected there), then once per request.
-        self.add_pre_set_parameters_callback(self._complete_model_request)
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
         declare_parameters(self, PARAMETERS)
-        harden_parameter_services(self, groups=_GROUPS, specs=_SPECS)
-        self._declaring = False
+        self._declared()
         # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
         # Time object per message) or None: sample_period apart.
         self._stamp = (time.monotonic if self.get_parameter('message_time').value == 'arrival'
                        else _no_stamp)
         self._configure_from_declared()
-
-        reliability = self.get_parameter('qos_reliability').value
-        qos = loop_qos(self.get_parameter('qos_depth').value, reliability)
-        # Counts what never arrived (sequence gaps, DDS sample-lost, incompatible peers).
-        self._loss = LossMonitor(self, 'desired_displacement', 'current_command', reliability)
-        self._publisher = self.create_publisher(
-            Float64, 'current_command', qos, event_callbacks=self._loss.publisher_callbacks())
-        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self._subscription = self.create_subscription(
-            Float64, 'desired_displacement', self._on_desired_displacement, qos, raw=True,
-            event_callbacks=self._loss.subscription_callbacks())
-        self._loss.publisher_count = self._subscription.get_publisher_count
-        self._timer = self.create_timer(
-            self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
-        self._fault_timer = self.create_timer(1.0, self._every_second)
+        self._open_topics(Float64, 'desired_displacement', 'current_command',
+                          self._on_desired_displacement, 'desired displacements')
 
     # -- public read-only state -------------------------------------------------------
     @property
@@ -229,34 +185,6 @@ class CompensatorNode(Node):
     def compensator(self) -> Optional[Compensator]:
         """Return the core compensator: plain, extended, or ``None`` while unconfigured."""
         return self._compensator
-
-    @property
-    def counters(self) -> Dict[str, int]:
-        """
-        Message and fault counters, as reported on ``/diagnostics``.
-
-        Returns
-        -------
-        dict of str to int
-            The core's ``clamped``, ``nonfinite_input``, ``out_of_range`` (and
-            ``bad_time`` for an extended model) plus ``messages_in``, ``messages_out``,
-            ``messages_lost`` (desired displacements that never reached the node: the
-            larger of ``lost_sequence_gaps``, jumps of the publisher's sequence number,
-            and ``lost_dds_events``, what DDS reported lost), ``incompatible_qos``
-            (peers whose QoS cannot match), ``dropped_unconfigured``,
-            ``rejected_updates`` and ``model_version``.
-
-        """
-        counters = dict(self._compensator.counters) if self._compensator else {}
-        counters.update(
-            messages_in=self._messages_in,
-            messages_out=self._messages_out,
-            **self._loss.counters(),
-            dropped_unconfigured=self._dropped_unconfigured,
-            rejected_updates=self._rejected_updates,
-            model_version=self._model_version,
-        )
-        return counters
 
     def command(self, desired_displacement: float, *,
                 stamp: Optional[float] = None) -> Optional[float]:
@@ -327,29 +255,7 @@ class CompensatorNode(Node):
         loss.served(served)
 
     # -- parameters ---------------------------------------------------------------------
-    def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
-        """
-        Set parameters like the ``set_parameters`` service: model keys together.
-
-        rclpy's ``Node.set_parameters`` sets one key at a time; here, as in the node's
-        ``set_parameters`` service, the request's ``model.*`` keys (and the two output
-        limits) are set in one atomic step each, so a model is applied whole or not at
-        all (see the module docstring).
-
-        Parameters
-        ----------
-        parameter_list : list of rclpy.parameter.Parameter
-            The request.
-
-        Returns
-        -------
-        list of rcl_interfaces.msg.SetParametersResult
-            One result per parameter; the keys of one group share theirs.
-
-        """
-        return set_parameters_in_groups(self, parameter_list, groups=_GROUPS, specs=_SPECS)
-
-    def _complete_model_request(self, parameters: List[Parameter]) -> List[Parameter]:
+    def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
         """Pre-set: resolve null and empty lists; five core keys describe the whole model."""
         completed = []
         for parameter in parameters:
@@ -380,28 +286,6 @@ class CompensatorNode(Node):
                 completed.append(Parameter(key, Type.DOUBLE, off))
         return completed
 
-    def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
-        """Check only: type, range, whole model and limits; keep the candidate for apply."""
-        try:
-            # rclpy's own keys (use_sim_time) are accepted back at their value only (a
-            # ros2 param dump loaded back); any change is refused by check_parameters.
-            checked = [p for p in parameters if p.name in _SPECS or not (
-                self.has_parameter(p.name) and _same(self.get_parameter(p.name), p))]
-            check_parameters(_SPECS, checked, allow_unset=self._declaring)
-            if self._declaring:
-                # One key at a time, the others not declared yet: cross-key checks
-                # run once all keys are declared (_configure_from_declared).
-                return SetParametersResult(successful=True)
-            self._prepared = self._candidate(parameters)
-        except (ParameterRejected, MPIError) as err:
-            self._prepared = None
-            self._rejected_updates += 1
-            reason = self._rejection(parameters, err)
-            self._last_rejection = reason
-            self.get_logger().warning(f'rejected parameter update: {reason}')
-            return SetParametersResult(successful=False, reason=reason)
-        return SetParametersResult(successful=True)
-
     def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
         """Word a refusal: the keys of the request, why, and that the model stays."""
         model_names = [p.name for p in parameters if p.name in _ALL_MODEL_KEYS]
@@ -419,57 +303,35 @@ class CompensatorNode(Node):
                 f'applied; {stays}. Keys that must change together (e.g. a new order) go '
                 'in one request: ros2 param load FILE, or set_parameters_atomically')
 
-    def _candidate(self, parameters: List[Parameter]) -> Dict[str, Any]:
-        names = {parameter.name for parameter in parameters}
-        values = parameter_values(self, list(_SPECS), parameters)
-        prepared: Dict[str, Any] = {}
+    def _model_candidate(self, names: Any, parameters: List[Parameter]) -> Dict[str, Any]:
+        """Build the whole model the request gives (or nothing), checked and inverted."""
         model_names = names.intersection(_ALL_MODEL_KEYS)
+        if not model_names:
+            return {}
+        values = parameter_values(self, list(_SPECS), parameters)
         current = parameter_values(self, list(model_names))
         # Unconfigured, a request that changes nothing (a dump of this node loaded back)
         # is accepted: there is no model to check it against, and nothing to apply.
-        unchanged = self._compensator is None and all(
-            values[key] == current[key] for key in model_names)
-        if model_names and not unchanged:
-            params = _model_params(values)
-            if params is None:
-                missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
-                msg = (f'the node has no model yet, and a model needs all five keys of '
-                       f'Gamma; missing: {missing}')
-                raise ParameterRejected(msg)
-            model = extended_model_from_params(params)
-            gamma_of(model).inverse()  # (12)-(14), (22)-(25) must exist before the swap
-            prepared['model'] = model
-        if names.intersection(_LIMIT_KEYS):
-            prepared['limits'] = _ordered_limits(values['output.min'], values['output.max'])
-        if 'enabled' in names:
-            prepared['enabled'] = values['enabled']
-        if 'sample_period' in names:
-            prepared['sample_period'] = values['sample_period']
-        if 'diagnostics_period' in names:
-            prepared['diagnostics_period'] = values['diagnostics_period']
-        return prepared
+        if self._compensator is None and all(
+                values[key] == current[key] for key in model_names):
+            return {}
+        params = _model_params(values)
+        if params is None:
+            missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
+            msg = (f'the node has no model yet, and a model needs all five keys of '
+                   f'Gamma; missing: {missing}')
+            raise ParameterRejected(msg)
+        model = extended_model_from_params(params)
+        gamma_of(model).inverse()  # (12)-(14), (22)-(25) must exist before the swap
+        return {'model': model}
 
-    def _apply_parameters(self, parameters: List[Parameter]) -> None:
-        """Swap in what the validator prepared (post-set: the values are stored)."""
-        prepared, self._prepared = self._prepared, None
-        if self._declaring or not prepared:
-            return
-        if 'limits' in prepared and self._compensator is not None:
-            self._compensator.set_limits(*prepared['limits'])
-        if 'enabled' in prepared and self._compensator is not None:
-            self._compensator.enabled = prepared['enabled']
-        if 'sample_period' in prepared and self._compensator is not None:
-            self._compensator.sample_period = prepared['sample_period']
+    def _install_prepared(self, prepared: Dict[str, Any]) -> None:
         if 'model' in prepared:
             self._install_model(prepared['model'])
-        if 'diagnostics_period' in prepared:
-            self.destroy_timer(self._timer)
-            self._timer = self.create_timer(
-                prepared['diagnostics_period'], self._publish_diagnostics)
 
     def _configure_from_declared(self) -> None:
         values = parameter_values(self, list(_SPECS))
-        _ordered_limits(values['output.min'], values['output.max'])
+        ordered_limits(values['output.min'], values['output.max'])
         given = [key for key in MODEL_KEYS if values[key] is not None]
         if not given:
             extensions = [key for key in _EXTENSION_KEYS if not _is_off(values[key])]
@@ -513,105 +375,47 @@ class CompensatorNode(Node):
             f'model version {self._model_version} applied ({self._model_kind})')
 
     # -- diagnostics --------------------------------------------------------------------
-    def _publish_diagnostics(self) -> None:
-        self._diagnostics.publish(self.diagnostics())
+    def _core_counters(self) -> Dict[str, int]:
+        return dict(self._compensator.counters) if self._compensator else {}
 
-    def _every_second(self) -> None:
-        self._loss.publishers = self._subscription.get_publisher_count()
-        self.log_faults()
-        self._loss.log(time.monotonic(), 'desired displacements')
+    def _node_counters(self) -> Dict[str, int]:
+        return {'model_version': self._model_version}
 
-    def log_faults(self) -> bool:
+    def _status_name(self) -> str:
+        return f'{self.get_name()}: feedforward'
+
+    def _status(self, losses: List[str], counters: Dict[str, int],
+                before: Dict[str, int]) -> Tuple[Any, str]:
         """
-        Log one warning about the bad inputs since the last one, at most every 5 s.
+        Return the level and message of a diagnostics period.
 
-        Returns
-        -------
-        bool
-            True when a line was logged (there were new non-finite, out-of-range or
-            clamped inputs and the last such line is at least 5 s old).
-
+        WARN after a period in which desired displacements were lost
+        (``messages_lost``) or a peer with incompatible QoS appeared, or in which more than
+        half of ``qos_depth`` messages waited at once (``max_backlog``); WARN while
+        unconfigured (``no model``) and after a period with non-finite, out-of-range or
+        clamped inputs; else OK.
         """
-        now = time.monotonic()
-        last_time, last_counters = self._fault_log
-        if now - last_time < _FAULT_LOG_PERIOD_S or self._compensator is None:
-            return False
-        counters = self._compensator.counters
-        faults = _new_faults(counters, last_counters)
-        if not any(faults.values()):
-            return False
-        self._fault_log = (now, {key: counters.get(key, 0) for key in _FAULT_KEYS})
-        self.get_logger().warning(
-            f'{_describe_faults(faults)} since the last report (non-finite: last command held; '
-            'out of range: beyond the displacement range of the model; clamped: command limited '
-            'to [output.min, output.max])')
-        return True
-
-    def diagnostics(self) -> DiagnosticArray:
-        """
-        Build the diagnostics message (and restart the rate window).
-
-        Returns
-        -------
-        diagnostic_msgs.msg.DiagnosticArray
-            One status named ``<node name>: feedforward`` with ``hardware_id`` the
-            node's fully qualified name: WARN after a period in which desired
-            displacements were lost (``messages_lost``) or a peer with incompatible
-            QoS appeared, or in which more than half of ``qos_depth`` messages waited at
-            once (``max_backlog``); WARN while unconfigured (``no model``) and after a
-            period with non-finite, out-of-range or clamped inputs; else OK.
-
-        """
-        now = time.monotonic()
-        last_time, last_count, last_counters = self._last_report
-        counters = self.counters
-        elapsed = now - last_time
-        rate = (self._messages_in - last_count) / elapsed if elapsed > 0.0 else 0.0
-        self._last_report = (now, self._messages_in, counters)
-
-        status = DiagnosticStatus(name=f'{self.get_name()}: feedforward',
-                                  hardware_id=self.get_fully_qualified_name())
-        faults = _new_faults(counters, last_counters)
-        depth = self.get_parameter('qos_depth').value
-        losses = self._loss.period(counters, last_counters, depth, 'desired displacements')
+        faults = new_faults(counters, before)
         if losses:
-            status.level = DiagnosticStatus.WARN
-            status.message = '; '.join(losses)
-        elif self._compensator is None:
-            status.level = DiagnosticStatus.WARN
-            status.message = ('no model: unconfigured, no commands published; give all '
-                              'five model.* keys of Gamma in one request (ros2 param load, '
-                              'set_parameters_atomically)')
-        elif any(faults.values()):
-            status.level = DiagnosticStatus.WARN
-            status.message = f'{_describe_faults(faults)} in the last period'
-        elif not self.get_parameter('enabled').value:
-            status.level = DiagnosticStatus.OK
-            status.message = 'compensation disabled: best linear map'
-        else:
-            status.level = DiagnosticStatus.OK
-            status.message = 'compensating'
-        values: Dict[str, Any] = dict(counters)
-        values['last_rejected_update'] = self._last_rejection
+            return DiagnosticStatus.WARN, '; '.join(losses)
+        if self._compensator is None:
+            return DiagnosticStatus.WARN, (
+                'no model: unconfigured, no commands published; give all five model.* keys '
+                'of Gamma in one request (ros2 param load, set_parameters_atomically)')
+        if any(faults.values()):
+            return DiagnosticStatus.WARN, f'{describe_faults(faults)} in the last period'
+        if not self.get_parameter('enabled').value:
+            return DiagnosticStatus.OK, 'compensation disabled: best linear map'
+        return DiagnosticStatus.OK, 'compensating'
+
+    def _status_values(self) -> Dict[str, Any]:
         compensator = self._compensator
-        if compensator is not None:
-            values['extension'] = self._model_kind
-            if compensator.has_effect:
-                values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
-        values.update(
-            rate_hz=round(rate, 3),
-            max_backlog=self._loss.last_backlog,
-            qos_depth=depth,
-            input_publishers=self._loss.publishers,
-            enabled=self.get_parameter('enabled').value,
-            output_min=self.get_parameter('output.min').value,
-            output_max=self.get_parameter('output.max').value,
-        )
-        status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
-        array = DiagnosticArray()
-        array.header.stamp = self.get_clock().now().to_msg()
-        array.status = [status]
-        return array
+        if compensator is None:
+            return {}
+        values: Dict[str, Any] = {'extension': self._model_kind}
+        if compensator.has_effect:
+            values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
+        return values
 
 
 def main(args: Optional[List[str]] = None) -> int:
@@ -660,7 +464,6 @@ def make_node(**kwargs: Any) -> Node:
     finally:
         probe.destroy_node()
     if override is not None and isinstance(override.value, int) and override.value > 1:
-        from .multi_axis import MultiAxisCompensatorNode
         return MultiAxisCompensatorNode(**kwargs)
     return CompensatorNode(**kwargs)
 
@@ -689,23 +492,6 @@ def _model_params(values: Dict[str, Any]) -> Optional[Dict[str, Any]]:
     return params
 
 
-def _new_faults(counters: Dict[str, int], before: Dict[str, int]) -> Dict[str, int]:
-    """Return how many inputs of each fault kind came since ``before``."""
-    return {key: max(counters.get(key, 0) - before.get(key, 0), 0) for key in _FAULT_KEYS}
-
-
-def _describe_faults(faults: Dict[str, int]) -> str:
-    """Describe fault counts in words, e.g. ``3 non-finite, 2 clamped inputs``."""
-    words = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
-             'clamped': 'clamped'}
-    parts = [f'{faults[key]} {words[key]}' for key in _FAULT_KEYS if faults[key]]
-    return f'{", ".join(parts) or "no bad"} inputs'
-
-
-def _same(current: Parameter, incoming: Parameter) -> bool:
-    return bool(current.type_ == incoming.type_ and current.value == incoming.value)
-
-
 def _resolve_null(spec: ParameterSpec, parameter: Parameter,
                   current: Parameter) -> Optional[Parameter]:
     """
@@ -725,15 +511,3 @@ def _resolve_null(spec: ParameterSpec, parameter: Parameter,
     if spec.name in OPERATING_POINT_DEFAULTS:
         return Parameter(spec.name, spec.type_, OPERATING_POINT_DEFAULTS[spec.name])
     return parameter
-
-
-def _ordered_limits(output_min: float, output_max: float) -> Tuple[float, float]:
-    if not (math.isfinite(output_min) and math.isfinite(output_max)):
-        msg = f'output.min and output.max must be finite; found {output_min}, {output_max}'
-        raise ParameterRejected(msg)
-    if not output_min < output_max:
-        msg = (f'output.min must be below output.max; found output.min={output_min} A and '
-               f'output.max={output_max} A; set both together with '
-               'set_parameters_atomically when moving the range')
-        raise ParameterRejected(msg)
-    return (output_min, output_max)

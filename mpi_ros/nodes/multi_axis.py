@@ -2,8 +2,9 @@
 """
 Multi-axis compensator node: N actuators, one model each, on samples x axes array topics.
 
-(Slightly over 500 lines: per-axis parameter namespaces, atomic multi-axis updates, the
-array message path and diagnostics of one node.)
+Per-axis parameter namespaces, atomic multi-axis updates and the array message path; the
+parameter callbacks' frame, topics, loss accounting, counters and diagnostics frame are
+shared with the single-axis node (:mod:`mpi_ros.nodes.compensator_base`).
 
 Started by ``mpi-ros compensator --ros-args -p axes:=N`` (N > 1; ``axes`` 1, the default,
 is the single-axis node of :mod:`mpi_ros.nodes.compensator` with its Float64 topics).
@@ -23,9 +24,14 @@ Node parameters
     ``axis<k>.``: ``axis<k>.model.hysteresis.thresholds``, ``.weights``,
     ``.initial_states``, ``axis<k>.model.superposition.thresholds``, ``.weights``,
     ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign`` (plain MPI
-    models; the extensions are single-axis only); ``output.min`` / ``output.max`` (one
-    safe range for all axes), ``enabled``, ``diagnostics_period``, ``qos_depth``,
-    ``qos_reliability``.
+    models; the extensions are single-axis only); ``output.min`` / ``output.max`` (the
+    node-wide safe range) and, optional per axis, ``axis<k>.output.min`` /
+    ``axis<k>.output.max`` (unset: the node-wide value; once set, a key can be changed but
+    not unset again while the node runs); ``enabled``, ``diagnostics_period``,
+    ``qos_depth``, ``qos_reliability``.  Every axis's range (its own keys, or the
+    node-wide ones it falls back to) must be finite with min < max; ``/diagnostics``
+    reports ``output_min`` / ``output_max`` as one value, or as space-separated per-axis
+    lists when the axes' ranges differ.
 
 Model updates
     The single-axis rule, per axis: a request is laid over the running values, and every
@@ -35,30 +41,31 @@ Model updates
     ``set_parameters_atomically`` (the identifier's push) changes several axes
     atomically; ``ros2 param load`` sends the file's ``axis*.model.*`` keys as one group
     too.  The five Gamma keys of an axis in one request describe its whole model (the
-    operating point keys it leaves out return to their defaults).  Until every axis has a
-    model the node is unconfigured and publishes nothing (diagnostics WARN).
+    operating point keys it leaves out return to their defaults).  The output limits,
+    node-wide and per axis, belong to the same request: a request that sets a model and its
+    limits is applied whole (limits first, then the model) or refused whole, and in a
+    ``set_parameters`` request (``ros2 param load``) the model keys and every limit key form
+    one group.  Until every axis has a model the node is unconfigured and publishes nothing
+    (diagnostics WARN).
 """
 
 from dataclasses import replace
-import math
-import time
 from typing import Any, Dict, List, Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
-from rcl_interfaces.msg import SetParametersResult
-from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import Float64MultiArray
 
 from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
-from .loss import LossMonitor
-from .parameters import (
-    check_parameters, declare_parameters, harden_parameter_services, MODEL_KEYS,
-    MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
-    ParameterSpec, set_parameters_in_groups, specs_by_name,
+from .compensator_base import (
+    AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT, ENABLED,
+    FAULT_KEYS, LIMIT_KEYS, LIMIT_PARAMETERS, new_faults, ordered_limits,
 )
-from .qos import loop_qos
+from .parameters import (
+    declare_parameters, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS, normalized,
+    OPERATING_POINT_KEYS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
+)
 from ..compensation import MultiAxisCompensator
 from ..errors import MPIError
 from ..model import MPIModel
@@ -68,21 +75,11 @@ __all__ = ['AXES', 'MultiAxisCompensatorNode', 'axis_key', 'axis_parameters']
 
 Type = Parameter.Type
 
-#: The ``axes`` parameter, declared by both compensator nodes.
-AXES = ParameterSpec(
-    'axes', Type.INTEGER, 1,
-    'Number of actuators this node serves: 1 = one actuator on the Float64 topics '
-    'desired_displacement / current_command with the model.* keys; N > 1 = N actuators on '
-    'the Float64MultiArray topics desired_displacements / current_commands (samples x '
-    'axes) with the keys axis0.model.* ... axis<N-1>.model.*',
-    value_range=(1, 1024), read_only=True)
-
 #: Most array messages served in one subscription callback.
-_DRAIN_LIMIT = 1000
-_LIMIT_KEYS = ('output.min', 'output.max')
-_COMMON_NAMES = ('output.min', 'output.max', 'enabled', 'diagnostics_period', 'qos_depth',
-                 'qos_reliability')
-_FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
+_DRAIN_LIMIT = DRAIN_LIMIT
+#: The node-wide parameters (the single-axis node's, less the extended-model ones).
+_COMMON = LIMIT_PARAMETERS + (ENABLED, DIAGNOSTICS_PERIOD) + loop_qos_parameters(
+    'desired_displacements and current_commands')
 
 
 def axis_key(axis: int, key: str) -> str:
@@ -130,7 +127,7 @@ def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
                  for k in range(axes) for spec in MODEL_PARAMETERS)
 
 
-class MultiAxisCompensatorNode(Node):
+class MultiAxisCompensatorNode(CompensatorNodeBase):
     """
     Feedforward compensator for N actuators on array topics (see the module docstring).
 
@@ -150,84 +147,38 @@ class MultiAxisCompensatorNode(Node):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        from .compensator import PARAMETERS as SINGLE_AXIS
-        common = tuple(spec for spec in SINGLE_AXIS if spec.name in _COMMON_NAMES)
-        self._declaring = True
-        self._prepared: Optional[Dict[str, Any]] = None
-        self._specs = dict(specs_by_name((AXES,) + common))
-        self.add_pre_set_parameters_callback(self._complete_request)
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._specs = dict(specs_by_name((AXES,) + _COMMON))
         declare_parameters(self, (AXES,))
         self.axes = int(self.get_parameter('axes').value)
-        per_axis = axis_parameters(self.axes)
+        per_axis = axis_parameters(self.axes) + _axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
         self._model_keys = [[axis_key(k, key) for key in MODEL_KEYS + OPERATING_POINT_KEYS]
                             for k in range(self.axes)]
-        self._all_model_keys = tuple(key for keys in self._model_keys for key in keys)
-        self._groups = (self._all_model_keys, _LIMIT_KEYS)
-        declare_parameters(self, per_axis + common)
-        harden_parameter_services(self, groups=self._groups, specs=self._specs)
-        self._declaring = False
+        self._limit_keys = [(axis_key(k, 'output.min'), axis_key(k, 'output.max'))
+                            for k in range(self.axes)]
+        self._all_limit_keys = LIMIT_KEYS + tuple(
+            key for keys in self._limit_keys for key in keys)
+        # Models and limits of one set_parameters request succeed or fail together.
+        self._groups = (tuple(key for keys in self._model_keys for key in keys)
+                        + self._all_limit_keys,)
+        declare_parameters(self, per_axis + _COMMON)
+        self._declared()
 
         self._models: List[Optional[MPIModel]] = [None] * self.axes
         self._compensator: Optional[MultiAxisCompensator] = None
         self._model_versions = [0] * self.axes
-        self._rejected_updates = 0
-        self._last_rejection = ''
-        self._messages_in = self._messages_out = self._samples_in = 0
-        self._dropped_unconfigured = 0
+        self._samples_in = 0
         self._malformed = 0
         self._last_malformed = ''
-        self._last_report: Tuple[float, int, Dict[str, int]] = (time.monotonic(), 0, {})
         self._configure_from_declared()
-
-        reliability = self.get_parameter('qos_reliability').value
-        qos = loop_qos(self.get_parameter('qos_depth').value, reliability)
-        self._loss = LossMonitor(self, 'desired_displacements', 'current_commands',
-                                 reliability)
-        self._publisher = self.create_publisher(
-            Float64MultiArray, 'current_commands', qos,
-            event_callbacks=self._loss.publisher_callbacks())
-        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self._subscription = self.create_subscription(
-            Float64MultiArray, 'desired_displacements', self._on_desired_displacements, qos,
-            raw=True, event_callbacks=self._loss.subscription_callbacks())
-        self._loss.publisher_count = self._subscription.get_publisher_count
-        self._timer = self.create_timer(
-            self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
-        self._second_timer = self.create_timer(1.0, self._every_second)
+        self._open_topics(Float64MultiArray, 'desired_displacements', 'current_commands',
+                          self._on_desired_displacements, 'desired displacement arrays')
 
     # -- public read-only state -------------------------------------------------------
     @property
     def compensator(self) -> Optional[MultiAxisCompensator]:
         """Return the core (one Compensator per axis), or None until every axis has a model."""
         return self._compensator
-
-    @property
-    def counters(self) -> Dict[str, int]:
-        """
-        Message and fault counters, as reported on ``/diagnostics``.
-
-        Returns
-        -------
-        dict of str to int
-            The cores' ``clamped``, ``nonfinite_input``, ``out_of_range`` summed over the
-            axes; ``messages_in``, ``messages_out``, ``samples_in``, ``malformed`` (array
-            messages that are not samples x axes), the loss counters, ``rejected_updates``.
-
-        """
-        counters: Dict[str, int] = dict.fromkeys(_FAULT_KEYS, 0)
-        if self._compensator is not None:
-            summed = self._compensator.counters
-            counters.update((key, summed[key]) for key in _FAULT_KEYS)
-        counters.update(
-            messages_in=self._messages_in, messages_out=self._messages_out,
-            samples_in=self._samples_in, malformed=self._malformed,
-            dropped_unconfigured=self._dropped_unconfigured,
-            **self._loss.counters(),
-            rejected_updates=self._rejected_updates)
-        return counters
 
     def command(self, block: Any) -> Any:
         """
@@ -285,24 +236,6 @@ class MultiAxisCompensatorNode(Node):
         loss.served(served)
 
     # -- parameters ---------------------------------------------------------------------
-    def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
-        """
-        Set parameters like the ``set_parameters`` service: all model keys together.
-
-        Parameters
-        ----------
-        parameter_list : list of rclpy.parameter.Parameter
-            The request.
-
-        Returns
-        -------
-        list of rcl_interfaces.msg.SetParametersResult
-            One result per parameter; the keys of one group share theirs.
-
-        """
-        return set_parameters_in_groups(self, parameter_list, groups=self._groups,
-                                        specs=self._specs)
-
     def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
         """Pre-set: normalise values; the five Gamma keys of an axis describe its model."""
         completed = [normalized(self._specs[p.name], p) if p.name in self._specs else p
@@ -319,39 +252,19 @@ class MultiAxisCompensatorNode(Node):
                     completed.append(Parameter(name, self._specs[name].type_, default))
         return completed
 
-    def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
-        """Check only: types, ranges, every touched axis's whole model, the limits."""
-        try:
-            check_parameters(self._specs, parameters, allow_unset=self._declaring)
-            if self._declaring:
-                return SetParametersResult(successful=True)
-            self._prepared = self._candidate(parameters)
-        except (ParameterRejected, MPIError) as err:
-            self._prepared = None
-            self._rejected_updates += 1
-            reason = (f'{err}. Nothing was applied; the running models stay. Keys that must '
-                      'change together go in one request (ros2 param load FILE, or '
-                      'set_parameters_atomically)')
-            self._last_rejection = reason
-            self.get_logger().warning(f'rejected parameter update: {reason}')
-            return SetParametersResult(successful=False, reason=reason)
-        return SetParametersResult(successful=True)
+    def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
+        return (f'{err}. Nothing was applied; the running models stay. Keys that must '
+                'change together go in one request (ros2 param load FILE, or '
+                'set_parameters_atomically)')
 
-    def _candidate(self, parameters: List[Parameter]) -> Dict[str, Any]:
-        names = {p.name for p in parameters}
-        prepared: Dict[str, Any] = {'models': {}}
+    def _model_candidate(self, names: Any, parameters: List[Parameter]) -> Dict[str, Any]:
+        """Build every touched axis's whole model, checked and inverted."""
+        models = {}
         for axis, keys in enumerate(self._model_keys):
             if names.isdisjoint(keys):
                 continue
-            prepared['models'][axis] = self._axis_model(
-                axis, parameter_values(self, keys, parameters))
-        if names.intersection(_LIMIT_KEYS):
-            values = parameter_values(self, list(_LIMIT_KEYS), parameters)
-            prepared['limits'] = _ordered_limits(values['output.min'], values['output.max'])
-        for name in ('enabled', 'diagnostics_period'):
-            if name in names:
-                prepared[name] = parameter_values(self, [name], parameters)[name]
-        return prepared
+            models[axis] = self._axis_model(axis, parameter_values(self, keys, parameters))
+        return {'models': models}
 
     def _axis_model(self, axis: int, values: Dict[str, Any]) -> MPIModel:
         prefix = axis_key(axis, '')
@@ -369,20 +282,40 @@ class MultiAxisCompensatorNode(Node):
             raise ParameterRejected(msg) from err
         return model
 
-    def _apply_parameters(self, parameters: List[Parameter]) -> None:
-        prepared, self._prepared = self._prepared, None
-        if self._declaring or not prepared:
-            return
-        compensator = self._compensator
-        if 'limits' in prepared and compensator is not None:
-            compensator.set_limits(*prepared['limits'])
-        if 'enabled' in prepared and compensator is not None:
-            compensator.enabled = prepared['enabled']
+    def _install_prepared(self, prepared: Dict[str, Any]) -> None:
         self._install(prepared['models'])
-        if 'diagnostics_period' in prepared:
-            self.destroy_timer(self._timer)
-            self._timer = self.create_timer(prepared['diagnostics_period'],
-                                            self._publish_diagnostics)
+
+    def _limits_candidate(self, names: Any, parameters: List[Parameter]) -> Any:
+        """Return {axis: (min, max)} of every axis whose range the request touches."""
+        if names.isdisjoint(self._all_limit_keys):
+            return None
+        axes = range(self.axes) if not names.isdisjoint(LIMIT_KEYS) else [
+            axis for axis, keys in enumerate(self._limit_keys) if not names.isdisjoint(keys)]
+        return self._axis_limits(parameter_values(self, self._all_limit_keys, parameters),
+                                 axes)
+
+    def _axis_limits(self, values: Dict[str, Any], axes: Any) -> Dict[int, Tuple[float, float]]:
+        """Check the node-wide range and each axis's own (or inherited) range."""
+        ordered_limits(values['output.min'], values['output.max'])
+        limits = {}
+        for axis in axes:
+            names = tuple(key if values[key] is not None else common
+                          for key, common in zip(self._limit_keys[axis], LIMIT_KEYS))
+            limits[axis] = ordered_limits(values[names[0]], values[names[1]], names=names)
+        return limits
+
+    def _set_limits(self, limits: Any) -> None:
+        compensator = self._compensator
+        if compensator is not None:
+            for axis, (low, high) in limits.items():
+                compensator.set_limits(low, high, axis=axis)
+
+    def _effective_limits(self) -> Tuple[List[float], List[float]]:
+        """Return each axis's applied range [A]: its own keys, else the node-wide ones."""
+        values = parameter_values(self, self._all_limit_keys)
+        pairs = [tuple(values[key] if values[key] is not None else values[common]
+                       for key, common in zip(keys, LIMIT_KEYS)) for keys in self._limit_keys]
+        return [pair[0] for pair in pairs], [pair[1] for pair in pairs]
 
     def _install(self, models: Dict[int, MPIModel]) -> None:
         """Apply validated axis models: install into running axes, or build the core."""
@@ -394,9 +327,9 @@ class MultiAxisCompensatorNode(Node):
             if self._compensator is not None:
                 self._compensator.install(axis, model)
         if self._compensator is None and all(m is not None for m in self._models):
+            lows, highs = self._effective_limits()
             self._compensator = MultiAxisCompensator(
-                self._models, output_min=self.get_parameter('output.min').value,
-                output_max=self.get_parameter('output.max').value,
+                self._models, output_min=lows, output_max=highs,
                 enabled=self.get_parameter('enabled').value)
         axes = ', '.join(str(axis) for axis in sorted(models))
         state = 'compensating' if self._compensator is not None else (
@@ -405,7 +338,7 @@ class MultiAxisCompensatorNode(Node):
 
     def _configure_from_declared(self) -> None:
         values = parameter_values(self, list(self._specs))
-        _ordered_limits(values['output.min'], values['output.max'])
+        self._axis_limits(values, range(self.axes))
         models = {}
         for axis, keys in enumerate(self._model_keys):
             given = [key for key in keys[:len(MODEL_KEYS)] if values[key] is not None]
@@ -419,71 +352,63 @@ class MultiAxisCompensatorNode(Node):
                 'identifier)')
 
     # -- diagnostics --------------------------------------------------------------------
-    def _publish_diagnostics(self) -> None:
-        self._diagnostics.publish(self.diagnostics())
+    def _core_counters(self) -> Dict[str, int]:
+        counters: Dict[str, int] = dict.fromkeys(FAULT_KEYS, 0)
+        if self._compensator is not None:
+            summed = self._compensator.counters
+            counters.update((key, summed[key]) for key in FAULT_KEYS)
+        return counters
 
-    def _every_second(self) -> None:
-        self._loss.publishers = self._subscription.get_publisher_count()
-        self._loss.log(time.monotonic(), 'desired displacement arrays')
+    def _node_counters(self) -> Dict[str, int]:
+        return {'samples_in': self._samples_in, 'malformed': self._malformed}
 
-    def diagnostics(self) -> DiagnosticArray:
+    def _status_name(self) -> str:
+        return f'{self.get_name()}: feedforward ({self.axes} axes)'
+
+    def _status(self, losses: List[str], counters: Dict[str, int],
+                before: Dict[str, int]) -> Tuple[Any, str]:
         """
-        Build the diagnostics message (and restart the rate window).
+        Return the level and message of a diagnostics period.
 
-        Returns
-        -------
-        diagnostic_msgs.msg.DiagnosticArray
-            One status ``<node name>: feedforward (N axes)``: WARN after a period with
-            lost messages, incompatible peers, a queue more than half full, malformed
-            arrays or non-finite / out-of-range / clamped inputs, and while an axis has
-            no model; else OK.
-
+        WARN after a period with lost messages, incompatible peers, a queue more than half
+        full, malformed arrays or non-finite / out-of-range / clamped inputs, and while an
+        axis has no model; else OK.
         """
-        now = time.monotonic()
-        last_time, last_count, before = self._last_report
-        counters = self.counters
-        elapsed = now - last_time
-        rate = (self._messages_in - last_count) / elapsed if elapsed > 0.0 else 0.0
-        self._last_report = (now, self._messages_in, counters)
-        status = DiagnosticStatus(name=f'{self.get_name()}: feedforward ({self.axes} axes)',
-                                  hardware_id=self.get_fully_qualified_name())
-        depth = self.get_parameter('qos_depth').value
-        problems = self._loss.period(counters, before, depth, 'desired displacement arrays')
+        problems = list(losses)
         malformed = counters['malformed'] - before.get('malformed', 0)
         if malformed:
             problems.append(f'{malformed} malformed arrays in the last period (last: '
                             f'{self._last_malformed})')
-        faults = {key: counters[key] - before.get(key, 0) for key in _FAULT_KEYS}
+        faults = new_faults(counters, before)
         if any(faults.values()):
-            problems.append(', '.join(f'{n} {key}' for key, n in faults.items() if n)
-                            + ' inputs in the last period')
+            problems.append(f'{describe_faults(faults)} in the last period')
         missing = [str(axis) for axis, model in enumerate(self._models) if model is None]
         if missing:
             problems.append(f'no model for axis {", ".join(missing)}: unconfigured, no '
                             'commands published; give every axis its axis<k>.model.* keys')
-        status.level = DiagnosticStatus.WARN if problems else DiagnosticStatus.OK
-        status.message = '; '.join(problems) if problems else 'compensating'
-        values: Dict[str, Any] = dict(counters)
-        values.update(
-            axes=self.axes, model_versions=' '.join(map(str, self._model_versions)),
-            last_rejected_update=self._last_rejection, rate_hz=round(rate, 3),
-            max_backlog=self._loss.last_backlog, qos_depth=depth,
-            input_publishers=self._loss.publishers,
-            enabled=self.get_parameter('enabled').value,
-            output_min=self.get_parameter('output.min').value,
-            output_max=self.get_parameter('output.max').value)
-        status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
-        array = DiagnosticArray()
-        array.header.stamp = self.get_clock().now().to_msg()
-        array.status = [status]
-        return array
+        if problems:
+            return DiagnosticStatus.WARN, '; '.join(problems)
+        return DiagnosticStatus.OK, 'compensating'
+
+    def _status_values(self) -> Dict[str, Any]:
+        values: Dict[str, Any] = {
+            'axes': self.axes, 'model_versions': ' '.join(map(str, self._model_versions))}
+        for key, limits in zip(('output_min', 'output_max'), self._effective_limits()):
+            values[key] = limits[0] if len(set(limits)) == 1 else ' '.join(map(str, limits))
+        return values
 
 
-def _ordered_limits(output_min: float, output_max: float) -> Tuple[float, float]:
-    if not (math.isfinite(output_min) and math.isfinite(output_max)
-            and output_min < output_max):
-        msg = (f'output.min must be finite and below output.max; found output.min='
-               f'{output_min} A and output.max={output_max} A; set both together with '
-               'set_parameters_atomically when moving the range')
-        raise ParameterRejected(msg)
-    return (output_min, output_max)
+def _axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
+    """Return ``axis<k>.output.min`` / ``.max`` per axis: unset (node-wide) by default."""
+    words = {'output.min': ('lowest', 'below'), 'output.max': ('highest', 'above')}
+    specs = []
+    for k in range(axes):
+        for spec in LIMIT_PARAMETERS:
+            word, side = words[spec.name]
+            other = 'output.max' if spec.name == 'output.min' else 'output.min'
+            specs.append(replace(
+                spec, name=axis_key(k, spec.name), default=None,
+                description=(f'Axis {k}: {word} current command of this axis (its '
+                             f'safe actuator range); unset: {spec.name}; must be {side} '
+                             f'axis{k}.{other} (or {other} when that is unset)')))
+    return tuple(specs)

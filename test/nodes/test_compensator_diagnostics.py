@@ -4,7 +4,7 @@ The compensator's /diagnostics levels and its throttled warnings about bad input
 
 WARN while unconfigured ("no model") and after a diagnostics period with non-finite,
 out-of-range or clamped inputs; OK after a clean period. The warning log lines come at
-most once per 5 s: the node's clock (``time.monotonic`` in the module) is replaced by a
+most once per 5 s: the node's clock (``time.monotonic`` in its modules) is replaced by a
 counter the test advances, so nothing here depends on how fast the machine is.
 """
 
@@ -14,6 +14,7 @@ from types import SimpleNamespace
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from mpi_ros.nodes import compensator as compensator_module
+from mpi_ros.nodes import compensator_base
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.parameters import MODEL_KEYS
 from mpi_ros.nodes.spinning import events_executor
@@ -57,7 +58,10 @@ class LogRecorder:
 @pytest.fixture
 def clock(monkeypatch):
     fake = FakeClock()
-    monkeypatch.setattr(compensator_module, 'time', SimpleNamespace(monotonic=fake.monotonic))
+    # The node reads the clock in its module (message times) and in the shared base
+    # (fault log throttle, diagnostics rate window).
+    for module in (compensator_module, compensator_base):
+        monkeypatch.setattr(module, 'time', SimpleNamespace(monotonic=fake.monotonic))
     return fake
 
 

@@ -1,0 +1,481 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+What the two compensator nodes share: parameter rule, topics, loss, counters, diagnostics.
+
+:class:`CompensatorNodeBase` is the shell of both compensator nodes,
+:class:`~mpi_ros.nodes.compensator.CompensatorNode` (one actuator, ``std_msgs/Float64``) and
+:class:`~mpi_ros.nodes.multi_axis.MultiAxisCompensatorNode` (N actuators,
+``std_msgs/Float64MultiArray``).  It holds
+
+- the parameter rule's frame: the three parameter callbacks registered before any key is
+  declared (rclpy runs the validator once per key while declaring, so a bad
+  ``--params-file`` override is rejected there), the validator that only checks and keeps
+  the prepared candidate, the rejection bookkeeping (``rejected_updates``,
+  ``last_rejected_update``, the warning), the post-set swap, the re-created diagnostics
+  timer on ``diagnostics_period``, and the grouped ``set_parameters`` (model keys and the
+  output limits set together, :func:`mpi_ros.nodes.parameters.set_parameters_in_groups`);
+- the topics: the raw subscription and publisher of the loop with their
+  :class:`~mpi_ros.nodes.loss.LossMonitor`, ``/diagnostics`` and the two timers;
+- the message counters, the once-a-second log of losses and bad inputs, and the frame of
+  the diagnostics message (rate window, loss problems, common values).
+
+Each node keeps what differs: its message type and its drain loop (decode, command,
+encode, publish: the per-message path stays in the node so that it costs no extra Python
+call per message), its parameter specs and pre-set completion, its model candidate and
+installation, and its diagnostics status.
+"""
+
+import math
+import time
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from .loss import LossMonitor
+from .parameters import (
+    check_parameters, harden_parameter_services, parameter_values, ParameterRejected,
+    ParameterSpec, set_parameters_in_groups,
+)
+from .qos import loop_qos
+from ..errors import MPIError
+
+__all__ = [
+    'AXES',
+    'CompensatorNodeBase',
+    'DIAGNOSTICS_PERIOD',
+    'DRAIN_LIMIT',
+    'ENABLED',
+    'FAULT_KEYS',
+    'LIMIT_KEYS',
+    'LIMIT_PARAMETERS',
+    'describe_faults',
+    'new_faults',
+    'ordered_limits',
+]
+
+Type = Parameter.Type
+
+#: The ``axes`` parameter, declared by both compensator nodes.
+AXES = ParameterSpec(
+    'axes', Type.INTEGER, 1,
+    'Number of actuators this node serves: 1 = one actuator on the Float64 topics '
+    'desired_displacement / current_command with the model.* keys; N > 1 = N actuators on '
+    'the Float64MultiArray topics desired_displacements / current_commands (samples x '
+    'axes) with the keys axis0.model.* ... axis<N-1>.model.*',
+    value_range=(1, 1024), read_only=True)
+
+#: ``output.min`` and ``output.max``: the safe current range of every command.
+LIMIT_PARAMETERS = (
+    ParameterSpec(
+        'output.min', Type.DOUBLE, 0.0,
+        'Lowest current command ever published (safe actuator range); '
+        'must be below output.max', 'A', value_range=(-1.0e3, 1.0e3)),
+    ParameterSpec(
+        'output.max', Type.DOUBLE, 2.0,
+        'Highest current command ever published (safe actuator range); '
+        'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
+)
+
+ENABLED = ParameterSpec(
+    'enabled', Type.BOOL, True,
+    'true: invert the MPI model (27); false: pass the best linear map of the '
+    'model instead, for comparison')
+
+DIAGNOSTICS_PERIOD = ParameterSpec(
+    'diagnostics_period', Type.DOUBLE, 1.0,
+    'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0))
+
+#: Most messages served in one subscription callback (a flood still lets a stop through).
+DRAIN_LIMIT = 1000
+#: The two output limits, set together within one set_parameters request.
+LIMIT_KEYS = ('output.min', 'output.max')
+#: Counters of bad inputs: a diagnostics period with any of them is WARN, and they are logged.
+FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
+#: At most one log line about bad inputs per this period [s]; checked every second.
+_FAULT_LOG_PERIOD_S = 5.0
+#: Keys whose new value is handed to the post-set callback as it is.
+_PLAIN_KEYS = ('enabled', 'sample_period', 'diagnostics_period')
+_FAULT_WORDS = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
+                'clamped': 'clamped'}
+
+
+class CompensatorNodeBase(Node):
+    """
+    Shell shared by the compensator nodes (see the module docstring).
+
+    A node subclass sets ``self._specs`` and ``self._groups`` before it declares its
+    parameters, then calls :meth:`_declared`, builds its model(s), and calls
+    :meth:`_open_topics` with its drain loop.  It fills the hooks below (``_complete_request``,
+    ``_model_candidate``, ``_install_prepared``, ``_rejection``, ``_core_counters``,
+    ``_node_counters``, ``_status``, ``_status_values``, ``_status_name``).
+
+    Parameters
+    ----------
+    node_name : str
+        Node name.
+    **kwargs
+        Passed on to :class:`rclpy.node.Node` (``context=``, ``parameter_overrides=``...).
+
+    """
+
+    def __init__(self, node_name: str, **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        self._declaring = True
+        self._prepared: Optional[Dict[str, Any]] = None
+        self._specs: Mapping[str, ParameterSpec] = {}
+        self._groups: Tuple[Tuple[str, ...], ...] = ()
+        self._compensator: Any = None
+        self._rejected_updates = 0
+        self._last_rejection = ''
+        self._messages_in = 0
+        self._messages_out = 0
+        self._dropped_unconfigured = 0
+        self._what = 'desired displacements'
+        self._last_report: Tuple[float, int, Dict[str, int]] = (time.monotonic(), 0, {})
+        self._fault_log: Tuple[float, Dict[str, int]] = (-math.inf, {})
+        # Validator first: rclpy runs it once per key while declaring (a bad
+        # --params-file override is rejected there), then once per request.
+        self.add_pre_set_parameters_callback(self._complete_request)
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+
+    def _declared(self) -> None:
+        """Close the declaration phase: serve set_parameters in groups from now on."""
+        harden_parameter_services(self, groups=self._groups, specs=self._specs)
+        self._declaring = False
+
+    def _open_topics(self, message_type: Any, input_topic: str, output_topic: str,
+                     callback: Callable[[bytes], None], what: str) -> None:
+        """Create the raw loop topics (loss-monitored), /diagnostics and the timers."""
+        self._what = what
+        reliability = self.get_parameter('qos_reliability').value
+        qos = loop_qos(self.get_parameter('qos_depth').value, reliability)
+        # Counts what never arrived (sequence gaps, DDS sample-lost, incompatible peers).
+        self._loss = LossMonitor(self, input_topic, output_topic, reliability)
+        self._publisher = self.create_publisher(
+            message_type, output_topic, qos, event_callbacks=self._loss.publisher_callbacks())
+        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._subscription = self.create_subscription(
+            message_type, input_topic, callback, qos, raw=True,
+            event_callbacks=self._loss.subscription_callbacks())
+        self._loss.publisher_count = self._subscription.get_publisher_count
+        self._timer = self.create_timer(
+            self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
+        self._second_timer = self.create_timer(1.0, self._every_second)
+
+    # -- public read-only state -------------------------------------------------------
+    @property
+    def counters(self) -> Dict[str, int]:
+        """
+        Message and fault counters, as reported on ``/diagnostics``.
+
+        Returns
+        -------
+        dict of str to int
+            The core's ``clamped``, ``nonfinite_input``, ``out_of_range`` (summed over the
+            axes of a multi-axis node; and ``bad_time`` for an extended model) plus
+            ``messages_in``, ``messages_out``, ``dropped_unconfigured``, ``messages_lost``
+            (messages that never reached the node: the larger of ``lost_sequence_gaps``,
+            jumps of the publisher's sequence number, and ``lost_dds_events``, what DDS
+            reported lost), ``incompatible_qos`` (peers whose QoS cannot match),
+            ``rejected_updates``, and the node's own (``model_version``; ``samples_in``,
+            ``malformed``).
+
+        """
+        counters = self._core_counters()
+        counters.update(
+            messages_in=self._messages_in,
+            messages_out=self._messages_out,
+            dropped_unconfigured=self._dropped_unconfigured,
+            **self._loss.counters(),
+            rejected_updates=self._rejected_updates,
+        )
+        counters.update(self._node_counters())
+        return counters
+
+    # -- parameters ---------------------------------------------------------------------
+    def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
+        """
+        Set parameters like the ``set_parameters`` service: model keys together.
+
+        rclpy's ``Node.set_parameters`` sets one key at a time; here, as in the node's
+        ``set_parameters`` service, the request's model keys (and the two output limits)
+        are set in one atomic step each, so a model is applied whole or not at all (see
+        the node's module docstring).
+
+        Parameters
+        ----------
+        parameter_list : list of rclpy.parameter.Parameter
+            The request.
+
+        Returns
+        -------
+        list of rcl_interfaces.msg.SetParametersResult
+            One result per parameter; the keys of one group share theirs.
+
+        """
+        return set_parameters_in_groups(self, parameter_list, groups=self._groups,
+                                        specs=self._specs)
+
+    def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
+        """Check only: type, range, whole model(s) and limits; keep the candidate for apply."""
+        try:
+            # rclpy's own keys (use_sim_time) are accepted back at their value only (a
+            # ros2 param dump loaded back); any change is refused by check_parameters.
+            checked = [p for p in parameters if p.name in self._specs or not (
+                self.has_parameter(p.name) and _same(self.get_parameter(p.name), p))]
+            check_parameters(self._specs, checked, allow_unset=self._declaring)
+            if self._declaring:
+                # One key at a time, the others not declared yet: cross-key checks
+                # run once all keys are declared (the node's _configure_from_declared).
+                return SetParametersResult(successful=True)
+            self._prepared = self._candidate(parameters)
+        except (ParameterRejected, MPIError) as err:
+            self._prepared = None
+            self._rejected_updates += 1
+            reason = self._rejection(parameters, err)
+            self._last_rejection = reason
+            self.get_logger().warning(f'rejected parameter update: {reason}')
+            return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    def _candidate(self, parameters: List[Parameter]) -> Dict[str, Any]:
+        """Build what the request would apply; raise ParameterRejected if it is invalid."""
+        names = {parameter.name for parameter in parameters}
+        prepared = self._model_candidate(names, parameters)
+        limits = self._limits_candidate(names, parameters)
+        if limits is not None:
+            prepared['limits'] = limits
+        for name in _PLAIN_KEYS:
+            if name in names:
+                prepared[name] = parameter_values(self, [name], parameters)[name]
+        return prepared
+
+    def _limits_candidate(self, names: Any, parameters: List[Parameter]) -> Any:
+        """Return the checked node-wide limits of the request, None when it sets none."""
+        if names.isdisjoint(LIMIT_KEYS):
+            return None
+        values = parameter_values(self, list(LIMIT_KEYS), parameters)
+        return ordered_limits(values['output.min'], values['output.max'])
+
+    def _apply_parameters(self, parameters: List[Parameter]) -> None:
+        """Swap in what the validator prepared (post-set: the values are stored)."""
+        prepared, self._prepared = self._prepared, None
+        if self._declaring or not prepared:
+            return
+        compensator = self._compensator
+        if compensator is not None:
+            if 'limits' in prepared:
+                self._set_limits(prepared['limits'])
+            for name in ('enabled', 'sample_period'):
+                if name in prepared:
+                    setattr(compensator, name, prepared[name])
+        self._install_prepared(prepared)
+        if 'diagnostics_period' in prepared:
+            self.destroy_timer(self._timer)
+            self._timer = self.create_timer(
+                prepared['diagnostics_period'], self._publish_diagnostics)
+
+    def _set_limits(self, limits: Any) -> None:
+        """Give the running core the prepared limits (node-wide: a (min, max) pair)."""
+        self._compensator.set_limits(*limits)
+
+    # -- hooks of the nodes -------------------------------------------------------------
+    def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
+        """Pre-set: normalise the request and complete a whole model (node specific)."""
+        raise NotImplementedError
+
+    def _model_candidate(self, names: Any, parameters: List[Parameter]) -> Dict[str, Any]:
+        """Return the prepared model(s) of the request (raise ParameterRejected if invalid)."""
+        raise NotImplementedError
+
+    def _install_prepared(self, prepared: Dict[str, Any]) -> None:
+        """Install the prepared model(s) (post-set, after limits and switches)."""
+        raise NotImplementedError
+
+    def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
+        """Word a refusal: what was refused, why, and that the running model stays."""
+        raise NotImplementedError
+
+    def _core_counters(self) -> Dict[str, int]:
+        """Return the core's counters (first in :attr:`counters`)."""
+        raise NotImplementedError
+
+    def _node_counters(self) -> Dict[str, int]:
+        """Return the node's own counters (last in :attr:`counters`)."""
+        raise NotImplementedError
+
+    def _status(self, losses: List[str], counters: Dict[str, int],
+                before: Dict[str, int]) -> Tuple[Any, str]:
+        """Return the diagnostics level and message of the period."""
+        raise NotImplementedError
+
+    def _status_values(self) -> Dict[str, Any]:
+        """Return the node's own diagnostics values (they may replace common ones)."""
+        raise NotImplementedError
+
+    def _status_name(self) -> str:
+        """Return the name of the diagnostics status."""
+        raise NotImplementedError
+
+    # -- diagnostics --------------------------------------------------------------------
+    def _publish_diagnostics(self) -> None:
+        self._diagnostics.publish(self.diagnostics())
+
+    def _every_second(self) -> None:
+        self._loss.publishers = self._subscription.get_publisher_count()
+        self.log_faults()
+        self._loss.log(time.monotonic(), self._what)
+
+    def log_faults(self) -> bool:
+        """
+        Log one warning about the bad inputs since the last one, at most every 5 s.
+
+        Returns
+        -------
+        bool
+            True when a line was logged (there were new non-finite, out-of-range or
+            clamped inputs and the last such line is at least 5 s old).
+
+        """
+        now = time.monotonic()
+        last_time, last_counters = self._fault_log
+        if now - last_time < _FAULT_LOG_PERIOD_S or self._compensator is None:
+            return False
+        counters = self._compensator.counters
+        faults = new_faults(counters, last_counters)
+        if not any(faults.values()):
+            return False
+        self._fault_log = (now, {key: counters.get(key, 0) for key in FAULT_KEYS})
+        self.get_logger().warning(
+            f'{describe_faults(faults)} since the last report (non-finite: last command held; '
+            'out of range: beyond the displacement range of the model; clamped: command limited '
+            'to [output.min, output.max])')
+        return True
+
+    def diagnostics(self) -> DiagnosticArray:
+        """
+        Build the diagnostics message (and restart the rate window).
+
+        Returns
+        -------
+        diagnostic_msgs.msg.DiagnosticArray
+            One status (see the node's ``_status``) with ``hardware_id`` the node's fully
+            qualified name, its counters and ``last_rejected_update``, ``rate_hz``,
+            ``max_backlog``, ``qos_depth``, ``input_publishers``, ``enabled``,
+            ``output_min`` and ``output_max``.
+
+        """
+        now = time.monotonic()
+        last_time, last_count, before = self._last_report
+        counters = self.counters
+        elapsed = now - last_time
+        rate = (self._messages_in - last_count) / elapsed if elapsed > 0.0 else 0.0
+        self._last_report = (now, self._messages_in, counters)
+
+        status = DiagnosticStatus(name=self._status_name(),
+                                  hardware_id=self.get_fully_qualified_name())
+        depth = self.get_parameter('qos_depth').value
+        losses = self._loss.period(counters, before, depth, self._what)
+        status.level, status.message = self._status(losses, counters, before)
+        values: Dict[str, Any] = dict(counters)
+        values['last_rejected_update'] = self._last_rejection
+        values.update(
+            rate_hz=round(rate, 3),
+            max_backlog=self._loss.last_backlog,
+            qos_depth=depth,
+            input_publishers=self._loss.publishers,
+            enabled=self.get_parameter('enabled').value,
+            output_min=self.get_parameter('output.min').value,
+            output_max=self.get_parameter('output.max').value,
+        )
+        values.update(self._status_values())
+        status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
+        array = DiagnosticArray()
+        array.header.stamp = self.get_clock().now().to_msg()
+        array.status = [status]
+        return array
+
+
+def ordered_limits(output_min: float, output_max: float, *,
+                   names: Sequence[str] = LIMIT_KEYS) -> Tuple[float, float]:
+    """
+    Check a safe current range: both finite, the first below the second.
+
+    Parameters
+    ----------
+    output_min, output_max : float
+        Lowest and highest current command [A].
+    names : sequence of str
+        The two parameter names, as the user writes them (for the message).
+
+    Returns
+    -------
+    tuple of float
+        ``(output_min, output_max)``.
+
+    Raises
+    ------
+    ParameterRejected
+        Naming both parameters, their values and what to do.
+
+    """
+    low, high = names
+    if not (math.isfinite(output_min) and math.isfinite(output_max)):
+        msg = f'{low} and {high} must be finite; found {output_min}, {output_max}'
+        raise ParameterRejected(msg)
+    if not output_min < output_max:
+        msg = (f'{low} must be below {high}; found {low}={output_min} A and '
+               f'{high}={output_max} A; set both together with '
+               'set_parameters_atomically when moving the range')
+        raise ParameterRejected(msg)
+    return (output_min, output_max)
+
+
+def new_faults(counters: Mapping[str, int], before: Mapping[str, int]) -> Dict[str, int]:
+    """
+    Return how many inputs of each fault kind came since ``before``.
+
+    Parameters
+    ----------
+    counters, before : mapping of str to int
+        Counters now and at the start of the period (missing keys count 0).
+
+    Returns
+    -------
+    dict of str to int
+        One count per :data:`FAULT_KEYS` entry, never negative.
+
+    """
+    return {key: max(counters.get(key, 0) - before.get(key, 0), 0) for key in FAULT_KEYS}
+
+
+def describe_faults(faults: Mapping[str, int]) -> str:
+    """
+    Describe fault counts in words.
+
+    Parameters
+    ----------
+    faults : mapping of str to int
+        Counts by :data:`FAULT_KEYS` entry.
+
+    Returns
+    -------
+    str
+        e.g. ``3 non-finite, 2 clamped inputs``.
+
+    Examples
+    --------
+    >>> describe_faults({'nonfinite_input': 3, 'out_of_range': 0, 'clamped': 2})
+    '3 non-finite, 2 clamped inputs'
+
+    """
+    parts = [f'{faults[key]} {_FAULT_WORDS[key]}' for key in FAULT_KEYS if faults[key]]
+    return f'{", ".join(parts) or "no bad"} inputs'
+
+
+def _same(current: Parameter, incoming: Parameter) -> bool:
+    return bool(current.type_ == incoming.type_ and current.value == incoming.value)
