@@ -25,12 +25,13 @@ Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 
 ``--axes N`` (N > 1) runs the multi-axis compensator on the Float64MultiArray topics, each
 message carrying ``--chunk`` samples of every axis (``--rate`` is messages per second).
 ``--node relay:MODE`` puts one of the relays of ``relay.py`` (no arithmetic) in place of the
-compensator: the floor (with ``--axes N``, the relay of the array topics).  ``--receiver`` picks how commands are received: ``ordinary`` (a
-deserialising callback on the EventsExecutor, default), ``naive`` (``rclpy.spin``'s
-SingleThreadedExecutor) or ``raw`` (serialized, the queue drained per callback).  Every
-run prints the load average, the CPU per process and per compensator thread, the CPU per
-message, and the largest difference of a command from the single-axis core (from a relay:
-from the desired value it relays, 0).
+compensator: the floor (with ``--axes N``, the relay of the array topics).
+``--receiver`` picks how commands are received: ``ordinary`` (a deserialising callback on
+the EventsExecutor, default), ``naive`` (``rclpy.spin``'s SingleThreadedExecutor) or
+``raw`` (serialized, the queue drained per callback).  Every run prints the load average,
+the CPU per process and per compensator thread, the CPU per message, and the largest
+difference of a command from the single-axis core (from a relay: from the desired value
+it relays, 0).
 
 ``--reliability`` sets the QoS of all three endpoints (a reliable Fast DDS writer wakes its
 event thread on every sample to restart its heartbeat timer: about 10,000 extra wake-ups
