@@ -25,11 +25,13 @@ Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 
 ``--axes N`` (N > 1) runs the multi-axis compensator on the Float64MultiArray topics, each
 message carrying ``--chunk`` samples of every axis (``--rate`` is messages per second).
 ``--node relay:MODE`` puts one of the relays of ``relay.py`` (no arithmetic) in place of the
-compensator: the floor.  ``--receiver`` picks how commands are received: ``ordinary`` (a
-deserialising callback on the EventsExecutor, default), ``naive`` (``rclpy.spin``'s
-SingleThreadedExecutor) or ``raw`` (serialized, the queue drained per callback).  Every
-run prints the load average, the CPU per process and per compensator thread, the CPU per
-message, and the largest difference of a command from the single-axis core.
+compensator: the floor (with ``--axes N``, the relay of the array topics).
+``--receiver`` picks how commands are received: ``ordinary`` (a deserialising callback on
+the EventsExecutor, default), ``naive`` (``rclpy.spin``'s SingleThreadedExecutor) or
+``raw`` (serialized, the queue drained per callback).  Every run prints the load average,
+the CPU per process and per compensator thread, the CPU per message, and the largest
+difference of a command from the single-axis core (from a relay: from the desired value
+it relays, 0).
 
 ``--reliability`` sets the QoS of all three endpoints (a reliable Fast DDS writer wakes its
 event thread on every sample to restart its heartbeat timer: about 10,000 extra wake-ups
@@ -125,7 +127,10 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         ``domain_id``, ``workdir``, ``processes_left`` (PIDs of started processes still
         running at the end; empty), ``cpu_percent`` (``compensator``, ``sender``,
         ``receiver``: CPU time over the load, % of one core), ``qos_depth``,
-        ``reliability``, ``pinned``.
+        ``reliability``, ``pinned``, ``max_error_vs_core`` (largest difference of a
+        command from the single-axis core, when every command arrived from the
+        compensator) or ``max_error_vs_desired`` (from a relay: of a command from the
+        desired value it relays; 0).
 
     """
     import rclpy
@@ -164,7 +169,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     else:
         comp = _ScriptProcess(
             [str(Path(__file__).with_name('relay.py')), '--mode', node_kind.split(':')[1],
-             '--qos-depth', str(qos_depth), '--reliability', reliability],
+             '--qos-depth', str(qos_depth), '--reliability', reliability,
+             '--axes', str(axes)],
             tmp / 'compensator.log')
     out = str(tmp / 'received.npy')
     receiver = subprocess.Popen(
@@ -261,8 +267,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     n = stamps.size
     latency_us = (stamps - sent[:n]) / 1e3
     np.save(tmp / 'latency_us.npy', latency_us)
-    max_error = None
-    if n == count:
+    max_error = relay_error = None
+    if n == count and node_kind != 'compensator':
+        # A relay sends back the desired values themselves: check that instead.
+        relay_error = float(np.max(np.abs(values.reshape(count * chunk, axes) - desired)))
+    elif n == count:
         # Every command against the single-axis core, axis by axis (command_batch gives
         # what per-sample commands give).
         from mpi_ros.compensation import Compensator
@@ -285,7 +294,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'qos_depth': qos_depth, 'reliability': reliability,
         'pinned': pin, 'node': node_kind, 'receiver': receiver_kind,
         'load_average': os.getloadavg(), 'axes': axes, 'chunk': chunk,
-        'max_error_vs_core': max_error,
+        'max_error_vs_core': max_error, 'max_error_vs_desired': relay_error,
     }
     if n:
         p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
@@ -351,6 +360,9 @@ def format_results(results: dict[str, Any]) -> str:
                  f' {per_message / (r["chunk"] * r["axes"]):.2f} us)')
     if r['max_error_vs_core'] is not None:
         lines.append(f'largest |command - single-axis core|: {r["max_error_vs_core"]:.1e} A')
+    if r.get('max_error_vs_desired') is not None:
+        lines.append('relay: largest |command - desired| (the values relayed): '
+                     f'{r["max_error_vs_desired"]:.1e}')
     lines.append(f'compensator exit status: {r["compensator_exit"]}')
     return '\n'.join(lines)
 

@@ -19,7 +19,7 @@ the end of the header; a string is a ``uint32`` length (with its NUL) and its by
 """
 
 import struct
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -116,6 +116,98 @@ def block_of(data: bytes, axes: int) -> npt.NDArray[np.float64]:
         When the layout does not describe ``K x axes`` values that are there, naming
         what was found.
 
+    Notes
+    -----
+    The bytes :func:`encode_float64_multiarray` writes (and rclpy writes for the same
+    layout: labels ``samples`` and ``axes``, ``data_offset`` 0, row stride = axes,
+    little-endian) are read by one ``struct`` call at fixed offsets and one
+    ``numpy.frombuffer`` (about 0.6 us); any other message goes through the general
+    parser (:func:`decode_float64_multiarray`, about 3 us), with the same result.
+
+    """
+    block = _fast_block(data, axes)
+    return _general_block(data, axes) if block is None else block
+
+
+def encode_float64_multiarray(block: npt.NDArray[np.float64]) -> bytes:
+    """
+    Encode a ``samples x axes`` block as the CDR bytes of a ``Float64MultiArray``.
+
+    Parameters
+    ----------
+    block : ndarray of float, shape (K, N)
+        Values, row-major.
+
+    Returns
+    -------
+    bytes
+        ``layout.dim = [samples (K, K*N), axes (N, N)]``, ``data_offset = 0``, ``data``.
+
+    """
+    samples, columns = block.shape
+    values = samples * columns
+    return (_HEADER_START
+            + _LAYOUT(samples, values, 5, b'axes\x00', columns, columns, 0, values)
+            + np.ascontiguousarray(block, dtype='<f8').tobytes())
+
+
+def _fast_block(data: bytes, axes: int) -> Optional[npt.NDArray[np.float64]]:
+    """
+    Return the block of a message laid out as our encoder writes it, or None.
+
+    The bytes qualify when they are little-endian, have two dims labelled ``samples`` and
+    ``axes`` (so every field sits at a fixed offset), ``axes`` columns with a row stride
+    of at most ``axes`` (read as ``axes``, as the general parser does), ``data_offset``
+    0, at least ``K * axes`` values, K >= 1, and bytes for every announced value.  Then
+    the block is the first ``K * axes`` doubles, from byte 60: exactly what
+    :func:`_general_block` returns.  Anything else (big-endian, other labels, a data
+    offset, padded rows, errors) returns None for the general parser to read or refuse.
+
+    Parameters
+    ----------
+    data : bytes
+        The serialized message.
+    axes : int
+        Number of axes (columns) expected.
+
+    Returns
+    -------
+    ndarray of float, shape (K, axes), or None
+        A read-only view of ``data``, or None when the general parser must decide.
+
+    """
+    if len(data) < _FAST_START or data[1] != 1:
+        return None
+    prefix, samples, _, label, columns, stride, offset, length = _FAST_FIELDS(data, 4)
+    values = samples * columns
+    if (prefix != _FAST_PREFIX or label != _FAST_AXES or columns != axes or stride > columns
+            or offset or not 0 < values <= length
+            or _FAST_START + 8 * length > len(data)):
+        return None
+    return np.frombuffer(data, _FLOAT64_LE, values, _FAST_START).reshape(samples, columns)
+
+
+def _general_block(data: bytes, axes: int) -> npt.NDArray[np.float64]:
+    """
+    Return the block :func:`block_of` returns, from the fully parsed message.
+
+    Parameters
+    ----------
+    data : bytes
+        The serialized message.
+    axes : int
+        Number of axes (columns) expected.
+
+    Returns
+    -------
+    ndarray of float, shape (K, axes)
+        The block.
+
+    Raises
+    ------
+    ArrayLayoutError
+        As :func:`block_of`.
+
     """
     dims, offset, values = decode_float64_multiarray(data)
     if len(dims) == 2:
@@ -148,28 +240,6 @@ def block_of(data: bytes, axes: int) -> npt.NDArray[np.float64]:
     return flat.reshape(-1, axes)
 
 
-def encode_float64_multiarray(block: npt.NDArray[np.float64]) -> bytes:
-    """
-    Encode a ``samples x axes`` block as the CDR bytes of a ``Float64MultiArray``.
-
-    Parameters
-    ----------
-    block : ndarray of float, shape (K, N)
-        Values, row-major.
-
-    Returns
-    -------
-    bytes
-        ``layout.dim = [samples (K, K*N), axes (N, N)]``, ``data_offset = 0``, ``data``.
-
-    """
-    samples, columns = block.shape
-    values = samples * columns
-    return (_HEADER_START
-            + _LAYOUT(samples, values, 5, b'axes\x00', columns, columns, 0, values)
-            + np.ascontiguousarray(block, dtype='<f8').tobytes())
-
-
 def _align(pos: int, size: int) -> int:
     return (pos + size - 1) // size * size
 
@@ -179,3 +249,13 @@ def _align(pos: int, size: int) -> int:
 # length; 4 bytes of padding: the doubles start at payload offset 56, aligned to 8.
 _HEADER_START = b'\x00\x01\x00\x00' + struct.pack('<II', 2, 8) + b'samples\x00'
 _LAYOUT = struct.Struct('<II I5s3x II II 4x').pack
+
+# The fast path of block_of (_fast_block): from byte 4 (after the encapsulation header),
+# the dim count (2) and the first label's length (8) and bytes, K and the first stride,
+# the second label's length (5) and bytes, 3 bytes of padding, N, the row stride,
+# data_offset and the data's length; the doubles start at byte 60.
+_FAST_PREFIX = struct.pack('<II', 2, 8) + b'samples\x00'
+_FAST_AXES = struct.pack('<I', 5) + b'axes\x00'
+_FAST_FIELDS = struct.Struct('<16sII9s3xIIII').unpack_from
+_FAST_START = 60
+_FLOAT64_LE = np.dtype('<f8')
