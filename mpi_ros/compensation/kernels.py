@@ -20,7 +20,7 @@ from ..model import _hysteresis_step, _superposition_value
 FloatArray = npt.NDArray[np.float64]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, inline='always')
 def _compensate_step(s_c: float, lo: float, hi: float, r_h: FloatArray, w_h: FloatArray,
                      z_h: FloatArray, r_h_inv: FloatArray, w_h_inv: FloatArray,
                      z_inv: FloatArray, r_s_inv: FloatArray, w_s_inv: FloatArray,
