@@ -6,7 +6,7 @@ import subprocess
 import sys
 
 CORE_MODULES = ['mpi_ros', 'mpi_ros.identification', 'mpi_ros.compensation', 'mpi_ros.params',
-                'mpi_ros.metrics', 'mpi_ros.memory', 'mpi_ros.inverse']
+                'mpi_ros.metrics', 'mpi_ros.memory', 'mpi_ros.inverse', 'mpi_ros.array_layout']
 
 
 def test_core_does_not_import_ros():

@@ -24,6 +24,8 @@ from typing import List, Optional, Tuple
 import numpy as np
 import numpy.typing as npt
 
+from ..array_layout import chunk_layout
+
 __all__ = ['ArrayLayoutError', 'decode_float64_multiarray', 'encode_float64_multiarray',
            'block_of']
 
@@ -210,24 +212,17 @@ def _general_block(data: bytes, axes: int) -> npt.NDArray[np.float64]:
 
     """
     dims, offset, values = decode_float64_multiarray(data)
-    if len(dims) == 2:
-        samples, columns = dims[0][1], dims[1][1]
-        # ROS convention: dim[1].stride is the row stride (dim[0].stride the total).
-        stride = max(dims[1][2], columns)
-        if columns != axes:
-            msg = (f'layout.dim[1].size (axes) is {columns}; this node has axes={axes}: '
+    layout = chunk_layout([(size, stride) for _, size, stride in dims], offset)
+    if layout is not None:
+        if layout.axes != axes:
+            msg = (f'layout.dim[1].size (axes) is {layout.axes}; this node has axes={axes}: '
                    'send one column per axis')
             raise ArrayLayoutError(msg)
-        if samples < 1 or offset + (samples - 1) * stride + columns > values.size:
-            msg = (f'layout says {samples} samples x {columns} axes (row stride {stride}, '
-                   f'data_offset {offset}), data has {values.size} values')
+        if not layout.fits(values.size):
+            msg = (f'layout says {layout.samples} samples x {layout.axes} axes (row stride '
+                   f'{layout.row}, data_offset {offset}), data has {values.size} values')
             raise ArrayLayoutError(msg)
-        # A view: rows of the row stride, cut to the axes (no copy).
-        end = offset + samples * stride
-        if end > values.size:           # the last row may stop after its axes
-            padded = np.concatenate([values[offset:], np.zeros(end - values.size)])
-            return padded.reshape(samples, stride)[:, :columns]
-        return values[offset:end].reshape(samples, stride)[:, :columns]
+        return layout.block(values)
     if dims and len(dims) != 2:
         msg = (f'layout.dim has {len(dims)} entries; expected none (consecutive samples '
                'of every axis) or two (samples, axes)')

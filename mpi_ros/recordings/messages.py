@@ -51,6 +51,7 @@ import numpy as np
 import numpy.typing as npt
 from rosbags.typesys import get_typestore, Stores
 
+from ..array_layout import chunk_layout, ChunkLayout
 from ..errors import DataError
 
 __all__ = [
@@ -260,9 +261,9 @@ class Float64MultiArrayReader(MessageReader):
         size = len(msg.data)
         option = selection.name('index')
         axes_option = selection.name('axes')
-        if len(dims) == 2:
-            samples, axes = int(dims[0].size), int(dims[1].size)
-            row = max(int(dims[1].stride), axes)     # ROS: dim[1].stride is the row stride
+        layout = chunk_layout([(int(d.size), int(d.stride)) for d in dims], offset)
+        if layout is not None:
+            samples, axes, row = layout.samples, layout.axes, layout.row
             stride = f', row stride {row}' if row != axes else ''
             shape = (f'{samples} sample(s) x {axes} axes (layout.dim = samples x axes{stride}'
                      f'{_offset_note(offset, ", ")})')
@@ -271,10 +272,9 @@ class Float64MultiArrayReader(MessageReader):
                             'and one axis; fix layout.dim in the publisher (dim[0] = samples, '
                             'dim[1] = axes) or leave dim empty for one sample per message')
                 raise SelectionError(msg_text)
-            needed = offset + (samples - 1) * row + axes
-            if needed > size:
-                msg_text = (f'its layout announces {shape}, which needs {needed} values, but '
-                            f'data holds {size}; fix layout.dim in the publisher (dim[0] = '
+            if not layout.fits(size):
+                msg_text = (f'its layout announces {shape}, which needs {layout.needed} values,'
+                            f' but data holds {size}; fix layout.dim in the publisher (dim[0] = '
                             'samples, dim[1] = axes) to match the data')
                 raise SelectionError(msg_text)
             if selection.axes is not None and axes != selection.axes:
@@ -308,8 +308,8 @@ class Float64MultiArrayReader(MessageReader):
             msg_text = (f'{option} {index} is out of range: the message holds {shape}; set '
                         f'{option} to an axis, one of 0 to {axes - 1}')
             raise SelectionError(msg_text)
-        start = offset + index
-        return np.array(msg.data[start:start + (samples - 1) * row + 1:row], dtype=np.float64)
+        layout = ChunkLayout(samples, axes, row, offset) if layout is None else layout
+        return layout.column(msg.data, index)
 
     @staticmethod
     def _element(msg: Any, selection: Selection) -> float:
