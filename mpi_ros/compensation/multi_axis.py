@@ -41,9 +41,9 @@ class MultiAxisCompensator:
     few shared arrays (the axis's :class:`Compensator` keeps views of them, so its state
     is the packed one).  Axes with an effect or disabled are served by their own
     :class:`Compensator` (:meth:`Compensator.command_batch`, sample by sample, with the
-    block's ``times`` for an effect's lags).  The pack is rebuilt on the next block after any axis changes
-    (:meth:`install`, :meth:`set_limits`, :attr:`enabled`, or anything done to
-    :attr:`axes`).
+    block's ``times`` for an effect's lags).  The pack is rebuilt on the next block after
+    any axis changes (:meth:`install`, :meth:`set_limits`, :attr:`enabled`, or anything
+    done to :attr:`axes`).
 
     Parameters
     ----------
