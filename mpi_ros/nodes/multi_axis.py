@@ -119,6 +119,8 @@ _COMMON = LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_
 #: extension keys of the effect registry.
 _AXIS_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + tuple(
     spec.name for spec in EXTENSION_PARAMETERS)
+#: The core's counters on /diagnostics, summed over the axes (bad_time: effect axes' lags).
+_CORE_COUNTERS = FAULT_KEYS + ('bad_time',)
 #: Where the extension keys start in _AXIS_MODEL_KEYS.
 _FIRST_EXTENSION = len(MODEL_KEYS + OPERATING_POINT_KEYS)
 #: A single-axis model key at the start of a word, as core error messages name it.
@@ -482,10 +484,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     # -- diagnostics --------------------------------------------------------------------
     def _core_counters(self) -> Dict[str, int]:
-        counters: Dict[str, int] = dict.fromkeys(FAULT_KEYS, 0)
+        counters: Dict[str, int] = dict.fromkeys(_CORE_COUNTERS, 0)
         if self._compensator is not None:
             summed = self._compensator.counters
-            counters.update((key, summed[key]) for key in FAULT_KEYS)
+            counters.update((key, summed[key]) for key in _CORE_COUNTERS)
         return counters
 
     def _node_counters(self) -> Dict[str, int]:
