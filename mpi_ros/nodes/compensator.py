@@ -255,9 +255,10 @@ class CompensatorNode(CompensatorNodeBase):
             if spec is not None and is_null(spec, parameter):
                 current = self.get_parameter_or(
                     parameter.name, Parameter(parameter.name, Type.NOT_SET, None))
-                parameter = resolve_null(spec.name, parameter, current)
-                if parameter is None:
+                instead = resolve_null(spec.name, parameter, current)
+                if instead is None:
                     continue
+                parameter = instead
             completed.append(parameter)
         names = {parameter.name for parameter in completed}
         return completed + whole_model_completion(self, names)

@@ -339,7 +339,8 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     def _timed_command(self, compensator: MultiAxisCompensator, block: Any) -> Any:
         """Command a block with its samples' times (message_time: arrival, see chunk_times)."""
-        now = self._arrival_clock()
+        clock = self._arrival_clock
+        now = clock() if clock is not None else 0.0      # _timed: always a clock
         times = chunk_times(now, self._last_arrival, block.shape[0], compensator.sample_period)
         self._last_arrival = now
         return compensator.command(block, times)
@@ -356,9 +357,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             name = parameter.name
             if name in self._axis_of and is_null(self._specs[name], parameter):
                 current = self.get_parameter_or(name, Parameter(name, Type.NOT_SET, None))
-                parameter = resolve_null(self._axis_of[name][1], parameter, current)
-                if parameter is None:
+                instead = resolve_null(self._axis_of[name][1], parameter, current)
+                if instead is None:
                     continue
+                parameter = instead
             resolved.append(parameter)
         names = {p.name for p in resolved}
         for axis in range(self.axes):
