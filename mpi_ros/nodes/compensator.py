@@ -70,6 +70,10 @@ Extended models (:mod:`mpi_ros.extensions`)
     takes over the turning points of the applied current (play state replayed through
     the new H, (14)), the last command and the counters; its lag states start settled at
     the last command.
+    The multi-axis node (``axes`` > 1) applies these rules to each axis's
+    ``axis<k>.model.*`` keys (:mod:`mpi_ros.nodes.multi_axis`, which also says which times
+    the samples of an array chunk get); the shared helpers are in
+    :mod:`mpi_ros.nodes.compensator_base`.
 
 A ``--params-file`` with an invalid model, or with output limits that are not
 ordered, makes the node refuse to start (exit status 1) rather than run a model
