@@ -9,10 +9,13 @@ single-axis core :class:`mpi_ros.compensation.Compensator` with that axis's mode
 same values and times: ``message_time: nominal`` (``sample_period`` apart), and
 ``arrival`` with the node's clock replaced by a recorded one and the times of
 :func:`mpi_ros.nodes.multi_axis.chunk_times`.  Parameter requests go through the node's
-parameter services (``AsyncParameterClient``, what ``ros2 param`` uses).  No timing is
-asserted; every wait is bounded.
+parameter services (``AsyncParameterClient``, what ``ros2 param`` uses).  Each test
+holds a ROS_DOMAIN_ID of its own (:func:`test.ros_domain.claim_domain`): the node names
+are the usual ``/compensator``, and another run on this machine must not answer.  No
+timing is asserted; every wait is bounded.
 """
 
+import itertools
 import time
 
 from mpi_ros.compensation import Compensator
@@ -29,6 +32,7 @@ from .test_compensator_cli_requests import Cli
 from .test_multi_axis_limits import _file
 from .test_multi_axis_node import _plain, desired_block, message
 from ..core_models import random_model
+from ..ros_domain import claim_domain
 
 AXES = 3
 OUTPUT_MIN, OUTPUT_MAX = -3.0, 3.0
@@ -120,14 +124,30 @@ class Rig:
         return self.node.get_parameter(name).value
 
     def values(self):
-        """Every axis<k>.model.* value, as plain lists and numbers."""
-        return {name: (list(p.value) if isinstance(p.value, (list, tuple)) or hasattr(
+        """Every axis<k>.* value, as plain lists and numbers."""
+        return {(axis, name): (list(p.value) if isinstance(p.value, (list, tuple)) or hasattr(
                     p.value, 'tolist') else p.value)
-                for name, p in self.node._parameters.items() if name.startswith('axis')}
+                for axis in range(AXES)
+                for name, p in self.node.get_parameters_by_prefix(f'axis{axis}').items()}
 
     def diagnostics(self):
         status = self.node.diagnostics().status[0]
         return status, {item.key: item.value for item in status.values}
+
+
+@pytest.fixture
+def ros_context(monkeypatch):
+    """Yield an initialised private rclpy.Context on a local-only domain held by this test."""
+    with claim_domain() as domain_id:
+        monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+        monkeypatch.setenv('ROS_DOMAIN_ID', str(domain_id))
+        monkeypatch.delenv('ROS_LOCALHOST_ONLY', raising=False)
+        context = rclpy.Context()
+        rclpy.init(context=context)
+        try:
+            yield context
+        finally:
+            rclpy.try_shutdown(context=context)
 
 
 @pytest.fixture
@@ -193,7 +213,7 @@ def test_arrival_gives_the_chunk_its_time_rule(rig):
     started = rig(overrides_for(models, message_time='arrival'))
     # The node's steady clock replaced by a recorded one: chunks of 5 samples that come
     # 5 sample periods apart, sooner (a burst: spread evenly) and later (a gap).
-    steps = iter([0.005, 0.002, 0.0004, 0.03, 0.005, 0.001] * 20)
+    steps = itertools.cycle([0.005, 0.002, 0.0004, 0.03, 0.005, 0.001])
     stamps = []
 
     def clock():
