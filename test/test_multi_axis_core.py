@@ -3,8 +3,8 @@
 
 from hypothesis import given, settings, strategies as st
 from mpi_ros.compensation import Compensator, MultiAxisCompensator
-from mpi_ros.errors import ModelError
-from mpi_ros.extensions import CreepModel
+from mpi_ros.errors import DataError, ModelError
+from mpi_ros.extensions import CreepModel, RateDependentModel
 from mpi_ros.memory import TurningPointMemory
 import numpy as np
 import pytest
@@ -180,3 +180,46 @@ def test_limits_of_a_missing_axis_are_refused(axis):
     with pytest.raises(ModelError, match='output.min must be finite and below output.max'):
         multi.set_limits(1.0, 0.5, axis=2)
     assert [(c.output_min, c.output_max) for c in multi.axes] == [(-1.0, 2.0)] * 3
+
+
+def test_times_drive_the_lags_of_the_effect_axes_only():
+    """Row times reach each effect axis's lags; the plain axes ignore them; a bad length fails."""
+    rng = np.random.default_rng(21)
+    gammas = [random_model(rng, n=5, l=2, initial_history=False) for _ in range(3)]
+    models = [CreepModel(gammas[0], np.array([0.01, 0.2]), np.array([0.1, 0.05])), gammas[1],
+              RateDependentModel(gammas[2], 0.004)]
+    multi = MultiAxisCompensator(models, output_min=-1.0, output_max=2.0, sample_period=1e-3)
+    singles = [Compensator(m, output_min=-1.0, output_max=2.0, sample_period=1e-3)
+               for m in models]
+    ranges = np.array([c.displacement_range for c in singles])
+    block = _blocks(rng, ranges, 300)
+    # Irregular, increasing times, one repeated (a bad time: counted, sample_period used).
+    times = 5.0 + np.cumsum(rng.uniform(2e-4, 3e-3, block.shape[0]))
+    times[150] = times[149]
+    got = np.vstack([multi.command(part, part_times) for part, part_times in
+                     zip(np.array_split(block, [1, 40, 41, 200]),
+                         np.array_split(times, [1, 40, 41, 200]))])
+    expected = np.column_stack([[c.command(float(v), time=float(t))
+                                 for v, t in zip(block[:, a], times)]
+                                for a, c in enumerate(singles)])
+    assert np.array_equal(got, expected, equal_nan=True)
+    nominal = np.column_stack([[c.command(float(v)) for v in block[:, a]]
+                               for a, c in enumerate(
+                                   Compensator(m, output_min=-1.0, output_max=2.0)
+                                   for m in models)])
+    assert np.array_equal(nominal[:, 1], expected[:, 1])     # the plain axis: no lag
+    assert np.max(np.abs(nominal[:, 2] - expected[:, 2])) > 1e-6
+    assert multi.counters['bad_time'] == 2                  # axes 0 and 2, once each
+    with pytest.raises(DataError, match='times must give one time per sample'):
+        multi.command(block[:4], times[:3])
+
+
+def test_sample_period_is_set_on_every_axis_and_checked():
+    rng = np.random.default_rng(2)
+    multi = MultiAxisCompensator([random_model(rng, n=3, l=1) for _ in range(2)],
+                                 output_min=-1.0, output_max=2.0, sample_period=2e-3)
+    assert multi.sample_period == 2e-3
+    multi.sample_period = 5e-4
+    assert [axis.sample_period for axis in multi.axes] == [5e-4, 5e-4]
+    with pytest.raises(ModelError, match='sample_period must be finite and > 0'):
+        multi.sample_period = 0.0

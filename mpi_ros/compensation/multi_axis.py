@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .compensator import Compensator, COMPILED_COUNTERS, pack
+from .compensator import _check_sample_period, Compensator, COMPILED_COUNTERS, pack
 from .kernels import _compensate_axes, INDEX_COLUMNS, TABLE_COLUMNS
 from ..errors import DataError, ModelError
 from ..memory import TurningPointMemory
@@ -40,9 +40,10 @@ class MultiAxisCompensator:
     weights, play states, operating point, limits and turning points are packed into a
     few shared arrays (the axis's :class:`Compensator` keeps views of them, so its state
     is the packed one).  Axes with an effect or disabled are served by their own
-    :class:`Compensator`.  The pack is rebuilt on the next block after any axis changes
-    (:meth:`install`, :meth:`set_limits`, :attr:`enabled`, or anything done to
-    :attr:`axes`).
+    :class:`Compensator` (:meth:`Compensator.command_batch`, sample by sample, with the
+    block's ``times`` for an effect's lags).  The pack is rebuilt on the next block after
+    any axis changes (:meth:`install`, :meth:`set_limits`, :attr:`enabled`, or anything
+    done to :attr:`axes`).
 
     Parameters
     ----------
@@ -144,6 +145,21 @@ class MultiAxisCompensator:
             target.set_limits(output_min, output_max)
 
     @property
+    def sample_period(self) -> float:
+        """
+        Return the interval [s] an effect's lags assume when a command has no usable time.
+
+        Setting it (finite, > 0) sets every axis's; plain axes do not use it.
+        """
+        return self._axes[0].sample_period
+
+    @sample_period.setter
+    def sample_period(self, value: float) -> None:
+        _check_sample_period(value)
+        for axis in self._axes:
+            axis.sample_period = float(value)
+
+    @property
     def enabled(self) -> bool:
         """Tell whether every axis applies its inverse (False: best linear maps)."""
         return all(axis.enabled for axis in self._axes)
@@ -153,7 +169,8 @@ class MultiAxisCompensator:
         for axis in self._axes:
             axis.enabled = value
 
-    def command(self, desired: npt.ArrayLike) -> FloatArray:
+    def command(self, desired: npt.ArrayLike,
+                times: npt.ArrayLike | None = None) -> FloatArray:
         """
         Return the commands for a block of desired displacements.
 
@@ -161,6 +178,10 @@ class MultiAxisCompensator:
         ----------
         desired : array_like of float, shape (K, N) or (N,)
             Desired displacements [m]: K samples of N axes (one sample: shape (N,)).
+        times : array_like of float, shape (K,), optional
+            Time stamp [s] of each sample (row), for the lags of the axes with an effect
+            (:meth:`Compensator.command_batch`); the plain axes do not use them.  None:
+            ``sample_period`` between samples.
 
         Returns
         -------
@@ -170,7 +191,8 @@ class MultiAxisCompensator:
         Raises
         ------
         DataError
-            When the block does not have one column per axis.
+            When the block does not have one column per axis, or ``times`` does not give
+            one time per sample.
 
         """
         block = np.asarray(desired, dtype=np.float64)
@@ -180,6 +202,13 @@ class MultiAxisCompensator:
             msg = (f'desired displacements must be samples x axes with {len(self._axes)}'
                    f' axes; found shape {tuple(block.shape)}')
             raise DataError(msg)
+        stamps = None
+        if times is not None:
+            stamps = np.asarray(times, dtype=np.float64).reshape(-1)
+            if stamps.size != rows.shape[0]:
+                msg = (f'times must give one time per sample ({rows.shape[0]}); found '
+                       f'{stamps.size}; pass one time stamp [s] per row, or None')
+                raise DataError(msg)
         if not (rows.flags.c_contiguous and rows.flags.writeable):
             rows = rows.copy()      # one compiled variant (a read-only view would compile another)
         pack = self._pack if self._pack is not None else self._build()
@@ -188,7 +217,7 @@ class MultiAxisCompensator:
         _compensate_axes(rows, out, coefficients, states, index, table, self._counts,
                          self._memory, self._memory_state)
         for axis in others:
-            out[:, axis] = self._axes[axis].command_batch(rows[:, axis])
+            out[:, axis] = self._axes[axis].command_batch(rows[:, axis], stamps)
         return out[0] if single else out
 
     def _warm_up(self) -> None:

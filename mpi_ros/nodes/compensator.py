@@ -70,6 +70,10 @@ Extended models (:mod:`mpi_ros.extensions`)
     takes over the turning points of the applied current (play state replayed through
     the new H, (14)), the last command and the counters; its lag states start settled at
     the last command.
+    The multi-axis node (``axes`` > 1) applies these rules to each axis's
+    ``axis<k>.model.*`` keys (:mod:`mpi_ros.nodes.multi_axis`, which also says which times
+    the samples of an array chunk get); the shared helpers are in
+    :mod:`mpi_ros.nodes.compensator_base`.
 
 A ``--params-file`` with an invalid model, or with output limits that are not
 ordered, makes the node refuse to start (exit status 1) rather than run a model
@@ -87,19 +91,18 @@ from std_msgs.msg import Float64
 
 from .compensator_base import (
     AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT, ENABLED,
-    LIMIT_KEYS, LIMIT_PARAMETERS, new_faults, ordered_limits,
+    is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params, new_faults,
+    ordered_limits, resolve_null, SAMPLE_PERIOD, whole_model_completion,
 )
 from .multi_axis import MultiAxisCompensatorNode
 from .parameters import (
-    declare_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS, is_null, loop_qos_parameters,
-    MODEL_KEYS, MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values,
-    ParameterRejected, ParameterSpec, specs_by_name,
+    declare_parameters, EXTENSION_PARAMETERS, is_null, loop_qos_parameters, MODEL_KEYS,
+    MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
+    specs_by_name,
 )
 from .spinning import run_node_main
-from ..compensation import Compensator, gamma_of, inverse_step_of
-from ..extensions import extended_model_from_params, EXTENSION_KEYS
-from ..model import MPIModel
-from ..params import OPERATING_POINT_DEFAULTS
+from ..compensation import Compensator, gamma_of
+from ..extensions import extended_model_from_params
 
 __all__ = ['CompensatorNode', 'PARAMETERS', 'main', 'make_node']
 
@@ -107,17 +110,8 @@ Type = Parameter.Type
 
 PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + LIMIT_PARAMETERS + (
     ENABLED,
-    ParameterSpec(
-        'sample_period', Type.DOUBLE, 1.0e-3,
-        'Nominal interval between desired displacements; extended models (creep, rate '
-        'dependence, thermal drift) use it when a message has no usable time',
-        's', value_range=(1.0e-6, 10.0)),
-    ParameterSpec(
-        'message_time', Type.STRING, 'arrival',
-        'Time of each desired displacement for the lags of extended models: arrival '
-        '(steady clock when the message is served, as the plant simulator does) or '
-        'nominal (sample_period apart, for a stream at a fixed rate)',
-        choices=('arrival', 'nominal'), read_only=True),
+    SAMPLE_PERIOD,
+    MESSAGE_TIME,
     DIAGNOSTICS_PERIOD,
     *loop_qos_parameters('desired_displacement and current_command'),
     AXES,
@@ -261,30 +255,17 @@ class CompensatorNode(CompensatorNodeBase):
         for parameter in parameters:
             spec = _SPECS.get(parameter.name)
             if spec is not None:
+                parameter = normalized(spec, parameter)
+            if spec is not None and is_null(spec, parameter):
                 current = self.get_parameter_or(
                     parameter.name, Parameter(parameter.name, Type.NOT_SET, None))
-                resolved = _resolve_null(spec, normalized(spec, parameter), current)
-                if resolved is None:
+                instead = resolve_null(spec.name, parameter, current)
+                if instead is None:
                     continue
-                parameter = resolved
+                parameter = instead
             completed.append(parameter)
         names = {parameter.name for parameter in completed}
-        if not names.issuperset(MODEL_KEYS):
-            return completed
-        for key in OPERATING_POINT_KEYS:
-            default = OPERATING_POINT_DEFAULTS[key]
-            if key in names or self.get_parameter(key).value == default:
-                continue
-            completed.append(Parameter(key, _SPECS[key].type_, default))
-        for key in _EXTENSION_KEYS:
-            if key in names or _is_off(self.get_parameter(key).value):
-                continue
-            off = EXTENSION_OFF[key]
-            if isinstance(off, list):
-                completed.append(Parameter(key, Type.DOUBLE_ARRAY, list(off)))
-            else:
-                completed.append(Parameter(key, Type.DOUBLE, off))
-        return completed
+        return completed + whole_model_completion(self, names)
 
     def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
         """Word a refusal: the keys of the request, why, and that the model stays."""
@@ -315,7 +296,7 @@ class CompensatorNode(CompensatorNodeBase):
         if self._compensator is None and all(
                 values[key] == current[key] for key in model_names):
             return {}
-        params = _model_params(values)
+        params = model_params(values)
         if params is None:
             missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
             msg = (f'the node has no model yet, and a model needs all five keys of '
@@ -334,7 +315,7 @@ class CompensatorNode(CompensatorNodeBase):
         ordered_limits(values['output.min'], values['output.max'])
         given = [key for key in MODEL_KEYS if values[key] is not None]
         if not given:
-            extensions = [key for key in _EXTENSION_KEYS if not _is_off(values[key])]
+            extensions = [key for key in _EXTENSION_KEYS if not is_off(values[key])]
             if extensions:
                 msg = (f'{extensions[0]}: a model extension needs the five model.* keys of '
                        'Gamma; add them to the parameters')
@@ -348,7 +329,7 @@ class CompensatorNode(CompensatorNodeBase):
             missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
             msg = f'incomplete model in the parameters: missing {missing}'
             raise ParameterRejected(msg)
-        params = _model_params(values)
+        params = model_params(values)
         if params is None:
             msg = 'incomplete model in the parameters'
             raise ParameterRejected(msg)
@@ -356,10 +337,7 @@ class CompensatorNode(CompensatorNodeBase):
 
     def _install_model(self, model: Any) -> None:
         """Apply a validated model of any kind: the core compensator swaps it in bumplessly."""
-        if inverse_step_of(model) is None and not isinstance(model, MPIModel):
-            self.get_logger().warning(
-                f'{model.cause} cannot be inverted causally: compensating Gamma only; the '
-                'displacement lags the desired one by it')
+        self._warn_if_not_compensated(model)
         if self._compensator is None:
             self._compensator = Compensator(
                 model, output_min=self.get_parameter('output.min').value,
@@ -470,44 +448,3 @@ def make_node(**kwargs: Any) -> Node:
 
 def _no_stamp() -> None:
     return None
-
-
-def _is_off(value: Any) -> bool:
-    """Tell whether an extension key is unset or holds its "off" value (0, empty)."""
-    if value is None:
-        return True
-    if isinstance(value, (int, float)):
-        return value == 0.0
-    return len(value) == 0
-
-
-def _model_params(values: Dict[str, Any]) -> Optional[Dict[str, Any]]:
-    """Return the flat model parameters (core keys + extensions that are on), None if unset."""
-    if any(values[key] is None for key in MODEL_KEYS):
-        return None
-    params = {key: values[key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}
-    for keys in EXTENSION_KEYS.values():
-        if not all(_is_off(values[key]) for key in keys):
-            params.update({key: values[key] for key in keys if values[key] is not None})
-    return params
-
-
-def _resolve_null(spec: ParameterSpec, parameter: Parameter,
-                  current: Parameter) -> Optional[Parameter]:
-    """
-    Resolve a YAML ``null`` in a run-time request (see the module docstring).
-
-    Returns the parameter to set instead, or None to leave it out (the key is unset
-    already); a null for a key of Gamma (or any other key) is returned unchanged for the
-    validator to reject.
-
-    """
-    if not is_null(spec, parameter):
-        return parameter
-    if current.type_ == Type.NOT_SET:
-        return None
-    if spec.name in EXTENSION_OFF:
-        return Parameter(spec.name, spec.type_, EXTENSION_OFF[spec.name])
-    if spec.name in OPERATING_POINT_DEFAULTS:
-        return Parameter(spec.name, spec.type_, OPERATING_POINT_DEFAULTS[spec.name])
-    return parameter

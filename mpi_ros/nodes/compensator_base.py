@@ -17,7 +17,13 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
 - the topics: the raw subscription and publisher of the loop with their
   :class:`~mpi_ros.nodes.loss.LossMonitor`, ``/diagnostics`` and the two timers;
 - the message counters, the once-a-second log of losses and bad inputs, and the frame of
-  the diagnostics message (rate window, loss problems, common values).
+  the diagnostics message (rate window, loss problems, common values);
+- the model-key rules both nodes apply to a model (the single-axis node's ``model.*`` keys,
+  each axis's ``axis<k>.model.*`` keys): when an extension key is "off"
+  (:func:`is_off`), the flat parameters of the model a set of values describes
+  (:func:`model_params`), what a YAML ``null`` means at run time (:func:`resolve_null`),
+  the keys a request with all five keys of Gamma resets (:func:`whole_model_completion`),
+  and the parameters ``sample_period`` and ``message_time`` of the extensions' lags.
 
 Each node keeps what differs: its message type and its drain loop (decode, command,
 encode, publish: the per-message path stays in the node so that it costs no extra Python
@@ -36,11 +42,16 @@ from rclpy.parameter import Parameter
 
 from .loss import LossMonitor
 from .parameters import (
-    check_parameters, harden_parameter_services, parameter_values, ParameterRejected,
-    ParameterSpec, set_parameters_in_groups,
+    check_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS, harden_parameter_services,
+    MODEL_KEYS, OPERATING_POINT_KEYS, parameter_values, ParameterRejected, ParameterSpec,
+    set_parameters_in_groups,
 )
 from .qos import loop_qos
+from ..compensation import inverse_step_of
 from ..errors import MPIError
+from ..extensions import EXTENSION_KEYS
+from ..model import MPIModel
+from ..params import OPERATING_POINT_DEFAULTS
 
 __all__ = [
     'AXES',
@@ -51,9 +62,15 @@ __all__ = [
     'FAULT_KEYS',
     'LIMIT_KEYS',
     'LIMIT_PARAMETERS',
+    'MESSAGE_TIME',
+    'SAMPLE_PERIOD',
     'describe_faults',
+    'is_off',
+    'model_params',
     'new_faults',
     'ordered_limits',
+    'resolve_null',
+    'whole_model_completion',
 ]
 
 Type = Parameter.Type
@@ -87,6 +104,24 @@ ENABLED = ParameterSpec(
 DIAGNOSTICS_PERIOD = ParameterSpec(
     'diagnostics_period', Type.DOUBLE, 1.0,
     'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0))
+
+SAMPLE_PERIOD = ParameterSpec(
+    'sample_period', Type.DOUBLE, 1.0e-3,
+    'Nominal interval between desired displacements; extended models (creep, rate '
+    'dependence, thermal drift) use it when a message has no usable time',
+    's', value_range=(1.0e-6, 10.0))
+
+MESSAGE_TIME = ParameterSpec(
+    'message_time', Type.STRING, 'arrival',
+    'Time of each desired displacement for the lags of extended models: arrival '
+    '(steady clock when the message is served, as the plant simulator does; the last '
+    'sample of an array chunk of K, the earlier ones sample_period apart before it, or '
+    'closer when messages come faster) or nominal (sample_period apart, for a stream at a '
+    'fixed rate)',
+    choices=('arrival', 'nominal'), read_only=True)
+
+#: The single-axis names of the extension keys (from the effect registry).
+_EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
 
 #: Most messages served in one subscription callback (a flood still lets a stop through).
 DRAIN_LIMIT = 1000
@@ -283,6 +318,13 @@ class CompensatorNodeBase(Node):
         """Give the running core the prepared limits (node-wide: a (min, max) pair)."""
         self._compensator.set_limits(*limits)
 
+    def _warn_if_not_compensated(self, model: Any, where: str = '') -> None:
+        """Warn when a model's effect (a dead time) cannot be inverted: Gamma alone is used."""
+        if inverse_step_of(model) is None and not isinstance(model, MPIModel):
+            self.get_logger().warning(
+                f'{where}{model.cause} cannot be inverted causally: compensating Gamma only; '
+                'the displacement lags the desired one by it')
+
     # -- hooks of the nodes -------------------------------------------------------------
     def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
         """Pre-set: normalise the request and complete a whole model (node specific)."""
@@ -475,6 +517,148 @@ def describe_faults(faults: Mapping[str, int]) -> str:
     """
     parts = [f'{faults[key]} {_FAULT_WORDS[key]}' for key in FAULT_KEYS if faults[key]]
     return f'{", ".join(parts) or "no bad"} inputs'
+
+
+def is_off(value: Any) -> bool:
+    """
+    Tell whether an extension key's value is unset or its "off" value (0, empty).
+
+    Parameters
+    ----------
+    value : float, list of float or None
+        The key's value.
+
+    Returns
+    -------
+    bool
+        True for None, 0.0 and an empty list.
+
+    Examples
+    --------
+    >>> is_off(None), is_off(0.0), is_off([]), is_off([0.1])
+    (True, True, True, False)
+
+    """
+    if value is None:
+        return True
+    if isinstance(value, (int, float)):
+        return value == 0.0
+    return len(value) == 0
+
+
+def model_params(values: Mapping[str, Any], prefix: str = '') -> Optional[Dict[str, Any]]:
+    """
+    Return the flat parameters of the model that a set of key values describes.
+
+    Parameters
+    ----------
+    values : mapping of str to value
+        Values (None: unset) of the model keys named ``prefix + key``: Gamma's five, the
+        operating point's and every extension key.
+    prefix : str
+        ``''`` for the single-axis node, ``'axis<k>.'`` for an axis.
+
+    Returns
+    -------
+    dict or None
+        ``{key: value}`` with the single-axis keys: Gamma, the operating point and the
+        keys of every extension that is not off (for
+        :func:`mpi_ros.extensions.extended_model_from_params`); None when a key of Gamma
+        is unset.
+
+    """
+    if any(values[prefix + key] is None for key in MODEL_KEYS):
+        return None
+    params = {key: values[prefix + key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}
+    for keys in EXTENSION_KEYS.values():
+        if not all(is_off(values[prefix + key]) for key in keys):
+            params.update({key: values[prefix + key] for key in keys
+                           if values[prefix + key] is not None})
+    return params
+
+
+def resolve_null(key: str, parameter: Parameter, current: Parameter) -> Optional[Parameter]:
+    """
+    Resolve a YAML ``null`` for a model key in a run-time request.
+
+    A null for a key that is unset already is left out; for an extension key it becomes
+    the key's "off" value, for an operating-point key its default; a null for a key of
+    Gamma is returned unchanged for the validator to refuse (a running model cannot be
+    removed).
+
+    Parameters
+    ----------
+    key : str
+        The single-axis name of the key (``model.creep.weights``, also for
+        ``axis2.model.creep.weights``).
+    parameter : rclpy.parameter.Parameter
+        The incoming value, already checked to be null (:func:`is_null`).
+    current : rclpy.parameter.Parameter
+        The key's current value.
+
+    Returns
+    -------
+    rclpy.parameter.Parameter or None
+        The parameter to set instead, or None to leave it out.
+
+    """
+    if current.type_ == Type.NOT_SET:
+        return None
+    if key in EXTENSION_OFF:
+        off = EXTENSION_OFF[key]
+        if isinstance(off, list):
+            return Parameter(parameter.name, Type.DOUBLE_ARRAY, list(off))
+        return Parameter(parameter.name, Type.DOUBLE, off)
+    if key in OPERATING_POINT_DEFAULTS:
+        default = OPERATING_POINT_DEFAULTS[key]
+        kind = Type.INTEGER if isinstance(default, int) else Type.DOUBLE
+        return Parameter(parameter.name, kind, default)
+    return parameter
+
+
+def whole_model_completion(node: Node, names: Any, prefix: str = '') -> List[Parameter]:
+    """
+    Return the keys a request resets when it carries all five keys of Gamma.
+
+    Such a request describes the whole model: every operating-point key it leaves out
+    goes back to its default and every extension key it leaves out is switched off
+    (keys already there are not repeated).
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        The node (its current values).
+    names : set of str
+        The names of the request.
+    prefix : str
+        ``''`` for the single-axis node, ``'axis<k>.'`` for an axis.
+
+    Returns
+    -------
+    list of rclpy.parameter.Parameter
+        The parameters to add to the request; empty unless all five keys of Gamma
+        (under ``prefix``) are in ``names``.
+
+    """
+    if not names.issuperset(prefix + key for key in MODEL_KEYS):
+        return []
+    added = []
+    for key in OPERATING_POINT_KEYS:
+        name, default = prefix + key, OPERATING_POINT_DEFAULTS[key]
+        if name in names or node.get_parameter(name).value == default:
+            continue
+        kind = Type.INTEGER if isinstance(default, int) else Type.DOUBLE
+        added.append(Parameter(name, kind, default))
+    for key in _EXTENSION_KEYS:
+        name = prefix + key
+        if name in names or is_off(node.get_parameter(name).value):
+            continue
+        off = EXTENSION_OFF[key]
+        if isinstance(off, list):
+            added.append(Parameter(name, Type.DOUBLE_ARRAY, list(off)))
+        else:
+            added.append(Parameter(name, Type.DOUBLE, off))
+    return added
 
 
 def _same(current: Parameter, incoming: Parameter) -> bool:

@@ -20,18 +20,50 @@ Topics (relative names, ``std_msgs/msg/Float64MultiArray``, SI units)
     single-axis node.
 
 Node parameters
-    ``axes`` (read-only); per axis k = 0..N-1 the model keys of the single-axis node under
+    ``axes`` (read-only); per axis k = 0..N-1 every model key of the single-axis node under
     ``axis<k>.``: ``axis<k>.model.hysteresis.thresholds``, ``.weights``,
     ``.initial_states``, ``axis<k>.model.superposition.thresholds``, ``.weights``,
-    ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign`` (plain MPI
-    models; the extensions are single-axis only); ``output.min`` / ``output.max`` (the
-    node-wide safe range) and, optional per axis, ``axis<k>.output.min`` /
-    ``axis<k>.output.max`` (unset: the node-wide value; once set, a key can be changed but
-    not unset again while the node runs); ``enabled``, ``diagnostics_period``,
-    ``qos_depth``, ``qos_reliability``.  Every axis's range (its own keys, or the
-    node-wide ones it falls back to) must be finite with min < max; ``/diagnostics``
-    reports ``output_min`` / ``output_max`` as one value, or as space-separated per-axis
-    lists when the axes' ranges differ.
+    ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign`` and the extension
+    keys of the effect registry (``axis<k>.model.creep.time_constants``, ``.weights``,
+    ``axis<k>.model.rate_dependence.time_constant``, ``axis<k>.model.thermal_drift.*``,
+    ``axis<k>.model.dead_time``: declared from :data:`mpi_ros.extensions.EFFECTS`, unset by
+    default); ``output.min`` / ``output.max`` (the node-wide safe range) and, optional per
+    axis, ``axis<k>.output.min`` / ``axis<k>.output.max`` (unset: the node-wide value; once
+    set, a key can be changed but not unset again while the node runs); ``enabled``,
+    ``sample_period``, ``message_time``, ``diagnostics_period``, ``qos_depth``,
+    ``qos_reliability``.  Every axis's range (its own keys, or the node-wide ones it falls
+    back to) must be finite with min < max; ``/diagnostics`` reports ``output_min`` /
+    ``output_max`` as one value, or as space-separated per-axis lists when the axes'
+    ranges differ, and ``extension``, each axis's model kind as a space-separated list
+    (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``, ``dead_time``; a dead
+    time is not compensated, see ``not_compensated``), with ``axis<k>.slow_state`` for each
+    axis whose effect has lags.
+
+Extended models per axis
+    Each axis follows the single-axis node's rules for its own keys (module docstring of
+    :mod:`mpi_ros.nodes.compensator`): an extension is off while its keys are unset or 0 /
+    empty; at most one extension per axis; a request with all five Gamma keys of an axis
+    describes that axis's whole model (its operating-point keys left out return to their
+    defaults, its extension keys left out switch its extension off); extension keys alone
+    change the extension of the axis's running Gamma (an axis without Gamma refuses them);
+    a YAML ``null`` switches an extension key off, resets an operating-point key, leaves an
+    unset key unset and is refused for a key of Gamma; a swap within the same kind keeps
+    the slow states, a change of kind starts them settled at the axis's last command.  A
+    dead time cannot be inverted: that axis compensates its Gamma alone (a warning is
+    logged).  The plain axes keep the compiled loop; an axis with an effect is stepped by
+    its own compensator, sample by sample, next to it.
+
+Time stamps of a chunk (``message_time``)
+    An array message of K samples arrives at one time.  With ``nominal`` the lags see
+    ``sample_period`` between every two samples, across messages too (no clock is read).
+    With ``arrival`` (the default) the message's last sample is at its arrival time ``t``
+    on the steady clock (as the single-axis node and, for a bag, the recordings reader:
+    last sample at the message time) and the earlier ones ``sample_period`` apart before
+    it, or evenly spread over the time since the previous message's arrival ``t_prev``
+    when that is shorter than K sample periods (a burst of queued messages), so that the
+    times always increase: spacing ``min(sample_period, (t - t_prev) / K)``
+    (:func:`chunk_times`).  K = 1 gives the single-axis node's time, the arrival.  The
+    clock is read only while some axis has an effect with lags.
 
 Model updates
     The single-axis rule, per axis: a request is laid over the running values, and every
@@ -40,8 +72,8 @@ Model updates
     refused with a reason naming the axis and key, and nothing changes.  So one
     ``set_parameters_atomically`` (the identifier's push) changes several axes
     atomically; ``ros2 param load`` sends the file's ``axis*.model.*`` keys as one group
-    too.  The five Gamma keys of an axis in one request describe its whole model (the
-    operating point keys it leaves out return to their defaults).  The output limits,
+    too.  The five Gamma keys of an axis in one request describe its whole model (see
+    Extended models per axis).  The output limits,
     node-wide and per axis, belong to the same request: a request that sets a model and its
     limits is applied whole (limits first, then the model) or refused whole, and in a
     ``set_parameters`` request (``ros2 param load``) the model keys and every limit key form
@@ -50,7 +82,9 @@ Model updates
 """
 
 from dataclasses import replace
-from typing import Any, Dict, List, Optional, Tuple
+import re
+import time
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
@@ -60,26 +94,37 @@ from std_msgs.msg import Float64MultiArray
 from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
 from .compensator_base import (
     AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT, ENABLED,
-    FAULT_KEYS, LIMIT_KEYS, LIMIT_PARAMETERS, new_faults, ordered_limits,
+    FAULT_KEYS, is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params, new_faults,
+    ordered_limits, resolve_null, SAMPLE_PERIOD, whole_model_completion,
 )
 from .parameters import (
-    declare_parameters, loop_qos_parameters, MODEL_KEYS, MODEL_PARAMETERS, normalized,
-    OPERATING_POINT_KEYS, parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
+    declare_parameters, EXTENSION_PARAMETERS, is_null, loop_qos_parameters, MODEL_KEYS,
+    MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
+    ParameterSpec, specs_by_name,
 )
-from ..compensation import MultiAxisCompensator
+from ..compensation import gamma_of, kind_of, MultiAxisCompensator
 from ..errors import MPIError
-from ..model import MPIModel
-from ..params import OPERATING_POINT_DEFAULTS
+from ..extensions import extended_model_from_params
 
-__all__ = ['AXES', 'MultiAxisCompensatorNode', 'axis_key', 'axis_parameters']
+__all__ = ['AXES', 'MultiAxisCompensatorNode', 'axis_key', 'axis_parameters', 'chunk_times']
 
 Type = Parameter.Type
 
 #: Most array messages served in one subscription callback.
 _DRAIN_LIMIT = DRAIN_LIMIT
-#: The node-wide parameters (the single-axis node's, less the extended-model ones).
-_COMMON = LIMIT_PARAMETERS + (ENABLED, DIAGNOSTICS_PERIOD) + loop_qos_parameters(
-    'desired_displacements and current_commands')
+#: The node-wide parameters (the single-axis node's, less its model keys).
+_COMMON = LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_PERIOD) + (
+    loop_qos_parameters('desired_displacements and current_commands'))
+#: One axis's model keys, single-axis names: Gamma's five first, the operating point, the
+#: extension keys of the effect registry.
+_AXIS_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + tuple(
+    spec.name for spec in EXTENSION_PARAMETERS)
+#: The core's counters on /diagnostics, summed over the axes (bad_time: effect axes' lags).
+_CORE_COUNTERS = FAULT_KEYS + ('bad_time',)
+#: Where the extension keys start in _AXIS_MODEL_KEYS.
+_FIRST_EXTENSION = len(MODEL_KEYS + OPERATING_POINT_KEYS)
+#: A single-axis model key at the start of a word, as core error messages name it.
+_MODEL_KEY = re.compile(r'(?<![\w.])(?=model\.\w)')
 
 
 def axis_key(axis: int, key: str) -> str:
@@ -119,12 +164,53 @@ def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
     Returns
     -------
     tuple of ParameterSpec
-        ``MODEL_PARAMETERS`` (Gamma and the operating point) once per axis, renamed.
+        ``MODEL_PARAMETERS`` (Gamma and the operating point) and ``EXTENSION_PARAMETERS``
+        (the effect registry's keys, unset) once per axis, renamed.
 
     """
     return tuple(replace(spec, name=axis_key(k, spec.name),
                          description=f'Axis {k}: {spec.description}')
-                 for k in range(axes) for spec in MODEL_PARAMETERS)
+                 for k in range(axes) for spec in MODEL_PARAMETERS + EXTENSION_PARAMETERS)
+
+
+def chunk_times(arrival: float, previous: Optional[float], samples: int,
+                sample_period: float) -> np.ndarray:
+    """
+    Return the time stamps of the samples of a chunk that arrived at one time.
+
+    The last sample is at ``arrival``; the earlier ones are ``sample_period`` apart before
+    it, or closer, ``(arrival - previous) / samples`` apart, when the chunk came sooner
+    than ``samples`` sample periods after the previous one, so that the first sample still
+    comes after ``previous`` (``message_time: arrival`` of the multi-axis node).
+
+    Parameters
+    ----------
+    arrival : float
+        When the chunk arrived [s] (steady clock).
+    previous : float or None
+        When the previous chunk arrived [s]; None for the first one.
+    samples : int
+        Samples in the chunk, K >= 1.
+    sample_period : float
+        Nominal interval between two samples [s], > 0.
+
+    Returns
+    -------
+    ndarray of float, shape (K,)
+        Time stamps [s], increasing, the last one ``arrival``.
+
+    Examples
+    --------
+    >>> chunk_times(10.0, 9.0, 4, 0.1).tolist()
+    [9.7, 9.8, 9.9, 10.0]
+    >>> chunk_times(10.0, 9.9, 4, 0.1).tolist()
+    [9.925, 9.95, 9.975, 10.0]
+
+    """
+    spacing = sample_period
+    if previous is not None and arrival - previous < samples * sample_period:
+        spacing = (arrival - previous) / samples
+    return arrival - spacing * np.arange(samples - 1, -1, -1, dtype=np.float64)
 
 
 class MultiAxisCompensatorNode(CompensatorNodeBase):
@@ -152,8 +238,11 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self.axes = int(self.get_parameter('axes').value)
         per_axis = axis_parameters(self.axes) + _axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
-        self._model_keys = [[axis_key(k, key) for key in MODEL_KEYS + OPERATING_POINT_KEYS]
+        self._model_keys = [[axis_key(k, key) for key in _AXIS_MODEL_KEYS]
                             for k in range(self.axes)]
+        #: axis<k>.model.* name -> (k, single-axis key).
+        self._axis_of = {axis_key(k, key): (k, key)
+                         for k in range(self.axes) for key in _AXIS_MODEL_KEYS}
         self._limit_keys = [(axis_key(k, 'output.min'), axis_key(k, 'output.max'))
                             for k in range(self.axes)]
         self._all_limit_keys = LIMIT_KEYS + tuple(
@@ -164,9 +253,15 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         declare_parameters(self, per_axis + _COMMON)
         self._declared()
 
-        self._models: List[Optional[MPIModel]] = [None] * self.axes
+        self._models: List[Any] = [None] * self.axes
         self._compensator: Optional[MultiAxisCompensator] = None
         self._model_versions = [0] * self.axes
+        # message_time: arrival reads the steady clock (CLOCK_MONOTONIC) per message while
+        # some axis has an effect with lags (_timed); nominal never does.
+        self._arrival_clock: Optional[Callable[[], float]] = (
+            time.monotonic if self.get_parameter('message_time').value == 'arrival' else None)
+        self._timed = False
+        self._last_arrival: Optional[float] = None
         self._samples_in = 0
         self._malformed = 0
         self._last_malformed = ''
@@ -180,7 +275,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         """Return the core (one Compensator per axis), or None until every axis has a model."""
         return self._compensator
 
-    def command(self, block: Any) -> Any:
+    def command(self, block: Any, *, times: Any = None) -> Any:
         """
         Compute (and count) the commands of one samples x axes block, without publishing.
 
@@ -188,6 +283,9 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         ----------
         block : array_like of float, shape (K, N)
             Desired displacements [m].
+        times : array_like of float, shape (K,), optional
+            Time stamp [s] of each sample, for the lags of the axes with an effect; None:
+            ``sample_period`` apart.
 
         Returns
         -------
@@ -198,7 +296,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         compensator = self._compensator
         if compensator is None:
             return None
-        return compensator.command(np.asarray(block, dtype=np.float64))
+        return compensator.command(np.asarray(block, dtype=np.float64), times)
 
     # -- message path -----------------------------------------------------------------
     def _on_desired_displacements(self, data: bytes) -> None:
@@ -223,7 +321,11 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                 if compensator is None:
                     self._dropped_unconfigured += 1
                 else:
-                    publish(encode_float64_multiarray(compensator.command(block)))
+                    if self._timed:
+                        commands = self._timed_command(compensator, block)
+                    else:
+                        commands = compensator.command(block)
+                    publish(encode_float64_multiarray(commands))
                     self._messages_out += 1
             served += 1
             if served >= _DRAIN_LIMIT:
@@ -235,22 +337,35 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             loss.taken(info['publication_sequence_number'])
         loss.served(served)
 
+    def _timed_command(self, compensator: MultiAxisCompensator, block: Any) -> Any:
+        """Command a block with its samples' times (message_time: arrival, see chunk_times)."""
+        clock = self._arrival_clock
+        now = clock() if clock is not None else 0.0      # _timed: always a clock
+        times = chunk_times(now, self._last_arrival, block.shape[0], compensator.sample_period)
+        self._last_arrival = now
+        return compensator.command(block, times)
+
     # -- parameters ---------------------------------------------------------------------
     def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
-        """Pre-set: normalise values; the five Gamma keys of an axis describe its model."""
+        """Pre-set: normalise values and resolve null; Gamma's five keys: the whole model."""
         completed = [normalized(self._specs[p.name], p) if p.name in self._specs else p
                      for p in parameters]
         if self._declaring:
             return completed
-        names = {p.name for p in completed}
+        resolved = []
+        for parameter in completed:
+            name = parameter.name
+            if name in self._axis_of and is_null(self._specs[name], parameter):
+                current = self.get_parameter_or(name, Parameter(name, Type.NOT_SET, None))
+                instead = resolve_null(self._axis_of[name][1], parameter, current)
+                if instead is None:
+                    continue
+                parameter = instead
+            resolved.append(parameter)
+        names = {p.name for p in resolved}
         for axis in range(self.axes):
-            if not names.issuperset(axis_key(axis, key) for key in MODEL_KEYS):
-                continue
-            for key in OPERATING_POINT_KEYS:
-                name, default = axis_key(axis, key), OPERATING_POINT_DEFAULTS[key]
-                if name not in names and self.get_parameter(name).value != default:
-                    completed.append(Parameter(name, self._specs[name].type_, default))
-        return completed
+            resolved += whole_model_completion(self, names, axis_key(axis, ''))
+        return resolved
 
     def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
         return (f'{err}. Nothing was applied; the running models stay. Keys that must '
@@ -261,24 +376,35 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         """Build every touched axis's whole model, checked and inverted."""
         models = {}
         for axis, keys in enumerate(self._model_keys):
-            if names.isdisjoint(keys):
+            touched = names.intersection(keys)
+            if not touched:
                 continue
-            models[axis] = self._axis_model(axis, parameter_values(self, keys, parameters))
+            values = parameter_values(self, keys, parameters)
+            # An axis without a model and a request that changes none of its keys (a dump
+            # of this node loaded back) is accepted: there is nothing to check or apply.
+            if self._models[axis] is None and all(
+                    values[key] == parameter_values(self, [key])[key] for key in touched):
+                continue
+            models[axis] = self._axis_model(axis, values, sorted(touched))
         return {'models': models}
 
-    def _axis_model(self, axis: int, values: Dict[str, Any]) -> MPIModel:
+    def _axis_model(self, axis: int, values: Dict[str, Any], given: List[str]) -> Any:
+        """Build one axis's whole model (plain or extended) from its key values, inverted."""
         prefix = axis_key(axis, '')
-        params = {name[len(prefix):]: value for name, value in values.items()}
-        missing = [axis_key(axis, key) for key in MODEL_KEYS if params[key] is None]
-        if missing:
-            msg = (f'axis {axis} has no model yet, and a model needs all five keys of Gamma;'
-                   f' missing: {", ".join(missing)}')
+        params = model_params(values, prefix)
+        if params is None:
+            missing = [axis_key(axis, key) for key in MODEL_KEYS
+                       if values[axis_key(axis, key)] is None]
+            msg = (f'axis {axis} has no model yet, so {_listed(given)} cannot apply: a model '
+                   f'needs all five keys of Gamma; missing: {", ".join(missing)}; give them '
+                   'in the same request')
             raise ParameterRejected(msg)
         try:
-            model = MPIModel.from_params(params)
-            model.inverse()       # (12)-(14), (22)-(25) must exist before the swap
+            model = extended_model_from_params(params)
+            gamma_of(model).inverse()   # (12)-(14), (22)-(25) must exist before the swap
         except MPIError as err:
-            msg = f'axis {axis} ({prefix}model.*): {err}'
+            named = _MODEL_KEY.sub(prefix, str(err))
+            msg = f'axis {axis} ({prefix}model.*): {named}'
             raise ParameterRejected(msg) from err
         return model
 
@@ -317,11 +443,12 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                        for key, common in zip(keys, LIMIT_KEYS)) for keys in self._limit_keys]
         return [pair[0] for pair in pairs], [pair[1] for pair in pairs]
 
-    def _install(self, models: Dict[int, MPIModel]) -> None:
+    def _install(self, models: Dict[int, Any]) -> None:
         """Apply validated axis models: install into running axes, or build the core."""
         if not models:
             return
         for axis, model in models.items():
+            self._warn_if_not_compensated(model, f'axis {axis}: ')
             self._models[axis] = model
             self._model_versions[axis] += 1
             if self._compensator is not None:
@@ -330,9 +457,13 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             lows, highs = self._effective_limits()
             self._compensator = MultiAxisCompensator(
                 self._models, output_min=lows, output_max=highs,
-                enabled=self.get_parameter('enabled').value)
-        axes = ', '.join(str(axis) for axis in sorted(models))
-        state = 'compensating' if self._compensator is not None else (
+                enabled=self.get_parameter('enabled').value,
+                sample_period=self.get_parameter('sample_period').value)
+        compensator = self._compensator
+        self._timed = (compensator is not None and self._arrival_clock is not None
+                       and any(axis.has_effect for axis in compensator.axes))
+        axes = ', '.join(f'{axis} ({kind_of(models[axis])})' for axis in sorted(models))
+        state = 'compensating' if compensator is not None else (
             f'{sum(m is None for m in self._models)} axes still without a model')
         self.get_logger().info(f'model applied to axis {axes} ({state})')
 
@@ -342,8 +473,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         models = {}
         for axis, keys in enumerate(self._model_keys):
             given = [key for key in keys[:len(MODEL_KEYS)] if values[key] is not None]
-            if given:
-                models[axis] = self._axis_model(axis, {key: values[key] for key in keys})
+            extensions = [key for key in keys[_FIRST_EXTENSION:] if not is_off(values[key])]
+            if given or extensions:
+                models[axis] = self._axis_model(axis, {key: values[key] for key in keys},
+                                                given + extensions)
         self._install(models)
         if self._compensator is None:
             self.get_logger().info(
@@ -353,10 +486,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     # -- diagnostics --------------------------------------------------------------------
     def _core_counters(self) -> Dict[str, int]:
-        counters: Dict[str, int] = dict.fromkeys(FAULT_KEYS, 0)
+        counters: Dict[str, int] = dict.fromkeys(_CORE_COUNTERS, 0)
         if self._compensator is not None:
             summed = self._compensator.counters
-            counters.update((key, summed[key]) for key in FAULT_KEYS)
+            counters.update((key, summed[key]) for key in _CORE_COUNTERS)
         return counters
 
     def _node_counters(self) -> Dict[str, int]:
@@ -395,7 +528,26 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             'axes': self.axes, 'model_versions': ' '.join(map(str, self._model_versions))}
         for key, limits in zip(('output_min', 'output_max'), self._effective_limits()):
             values[key] = limits[0] if len(set(limits)) == 1 else ' '.join(map(str, limits))
+        causes = ['-' if model is None else getattr(model, 'cause', 'none')
+                  for model in self._models]
+        values['extension'] = ' '.join(causes)
+        uncompensated = [str(axis) for axis, model in enumerate(self._models)
+                         if model is not None and kind_of(model).endswith('(not compensated)')]
+        if uncompensated:
+            values['not_compensated'] = ' '.join(uncompensated)
+        if self._compensator is not None:
+            for axis, compensator in enumerate(self._compensator.axes):
+                if compensator.has_effect:
+                    values[axis_key(axis, 'slow_state')] = ' '.join(
+                        f'{v:.6g}' for v in compensator.slow_state)
         return values
+
+
+def _listed(names: List[str]) -> str:
+    """Name the given keys: up to two by name, else how many."""
+    if len(names) <= 2:
+        return ', '.join(names)
+    return f'{len(names)} keys ({names[0]}, ...)'
 
 
 def _axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
