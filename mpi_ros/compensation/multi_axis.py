@@ -209,44 +209,24 @@ class MultiAxisCompensator:
                 msg = (f'times must give one time per sample ({rows.shape[0]}); found '
                        f'{stamps.size}; pass one time stamp [s] per row, or None')
                 raise DataError(msg)
-        out = np.empty(rows.shape)
-        self.command_into(rows, out, stamps)
-        return out[0] if single else out
-
-    def command_into(self, block: FloatArray, out: FloatArray,
-                     times: FloatArray | None = None) -> None:
-        """
-        Write the commands for a block into ``out``, with no checks (the message path).
-
-        Parameters
-        ----------
-        block : ndarray of float64, shape (K, N)
-            Desired displacements [m]; may be read-only (a view of message bytes).
-        out : ndarray of float64, shape (K, N), C-contiguous, writable
-            Receives the current commands [A] (e.g. a view into an output message).
-        times : ndarray of float, shape (K,), optional
-            As for :meth:`command`.
-
-        """
-        if not block.flags.c_contiguous:
-            block = np.ascontiguousarray(block)     # one compiled variant per writability
+        if not (rows.flags.c_contiguous and rows.flags.writeable):
+            rows = rows.copy()      # one compiled variant (a read-only view would compile another)
         pack = self._pack if self._pack is not None else self._build()
         coefficients, states, index, table, others = pack
-        _compensate_axes(block, out, coefficients, states, index, table, self._counts,
+        out = np.empty(rows.shape)
+        _compensate_axes(rows, out, coefficients, states, index, table, self._counts,
                          self._memory, self._memory_state)
         for axis in others:
-            out[:, axis] = self._axes[axis].command_batch(block[:, axis], times)
+            out[:, axis] = self._axes[axis].command_batch(rows[:, axis], stamps)
+        return out[0] if single else out
 
     def _warm_up(self) -> None:
-        """Run the compiled loop once on copies (the first blocks do not compile it)."""
+        """Run the compiled loop once on copies (the first block does not compile it)."""
         coefficients, states, index, table, _ = self._build()
         start = table[:, TABLE_COLUMNS.index('displacement_lo')].reshape(1, -1)
-        read_only = start.copy()
-        read_only.flags.writeable = False           # blocks decoded from message bytes
-        for block in (start.copy(), read_only):
-            _compensate_axes(block, np.empty(start.shape), coefficients, states.copy(),
-                             index, table.copy(), np.zeros_like(self._counts),
-                             np.zeros((len(self._axes), 4)), np.zeros_like(self._memory_state))
+        _compensate_axes(start.copy(), np.empty(start.shape), coefficients, states.copy(),
+                         index, table.copy(), np.zeros_like(self._counts),
+                         np.zeros((len(self._axes), 4)), np.zeros_like(self._memory_state))
 
     def _build(self) -> tuple[Any, ...]:
         """Pack the axes (:func:`~mpi_ros.compensation.compensator.pack`); note the others."""

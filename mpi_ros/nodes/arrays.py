@@ -19,15 +19,15 @@ the end of the header; a string is a ``uint32`` length (with its NUL) and its by
 """
 
 import struct
-from typing import Dict, List, Optional, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
 
 from ..array_layout import chunk_layout
 
-__all__ = ['ArrayLayoutError', 'OutputBlocks', 'decode_float64_multiarray',
-           'encode_float64_multiarray', 'block_of']
+__all__ = ['ArrayLayoutError', 'decode_float64_multiarray', 'encode_float64_multiarray',
+           'block_of']
 
 #: One dimension of ``layout.dim``: label, size, stride.
 Dimension = Tuple[str, int, int]
@@ -151,60 +151,6 @@ def encode_float64_multiarray(block: npt.NDArray[np.float64]) -> bytes:
     return (_HEADER_START
             + _LAYOUT(samples, values, 5, b'axes\x00', columns, columns, 0, values)
             + np.ascontiguousarray(block, dtype='<f8').tobytes())
-
-
-class OutputBlocks:
-    """
-    Reusable outgoing messages: the commands are computed straight into a message's bytes.
-
-    For each block length K seen, one ``bytearray`` holding the encoded
-    ``Float64MultiArray`` of :func:`encode_float64_multiarray` (header and layout written
-    once) and a writable ``K x N`` numpy view of its doubles.  The node writes a block's
-    commands into the view and publishes the bytearray (``publish_raw`` copies it), so no
-    block, no ``tobytes`` and no header are made per message.  At most ``limit`` lengths
-    are kept (the oldest is dropped).
-
-    Parameters
-    ----------
-    axes : int
-        N, columns of every block.
-    limit : int
-        Most block lengths kept.
-
-    """
-
-    def __init__(self, axes: int, limit: int = 64) -> None:
-        self.axes = int(axes)
-        self.limit = int(limit)
-        self._blocks: Dict[int, Tuple[bytearray, npt.NDArray[np.float64]]] = {}
-
-    def get(self, samples: int) -> Tuple[bytearray, npt.NDArray[np.float64]]:
-        """
-        Return the message for a block of ``samples`` rows and the view to write into.
-
-        Parameters
-        ----------
-        samples : int
-            K.
-
-        Returns
-        -------
-        message : bytearray
-            The serialized message (its values are what the view holds).
-        view : ndarray of float, shape (K, N)
-            Writable, C-contiguous little-endian doubles inside ``message`` (native on
-            every ROS 2 platform; CDR is written little-endian here).
-
-        """
-        found = self._blocks.get(samples)
-        if found is None:
-            message = bytearray(encode_float64_multiarray(np.zeros((samples, self.axes))))
-            view = np.frombuffer(message, _FLOAT64_LE, samples * self.axes, _FAST_START)
-            found = (message, view.reshape(samples, self.axes))
-            if len(self._blocks) >= self.limit:
-                del self._blocks[next(iter(self._blocks))]
-            self._blocks[samples] = found
-        return found
 
 
 def _fast_block(data: bytes, axes: int) -> Optional[npt.NDArray[np.float64]]:

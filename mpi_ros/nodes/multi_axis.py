@@ -91,7 +91,7 @@ import numpy as np
 from rclpy.parameter import Parameter
 from std_msgs.msg import Float64MultiArray
 
-from .arrays import ArrayLayoutError, block_of, OutputBlocks
+from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
 from .compensator_base import (
     AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT, ENABLED,
     FAULT_KEYS, is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params, new_faults,
@@ -261,7 +261,6 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._arrival_clock: Optional[Callable[[], float]] = (
             time.monotonic if self.get_parameter('message_time').value == 'arrival' else None)
         self._timed = False
-        self._outputs = OutputBlocks(self.axes)
         self._last_arrival: Optional[float] = None
         self._samples_in = 0
         self._malformed = 0
@@ -302,12 +301,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
     # -- message path -----------------------------------------------------------------
     def _on_desired_displacements(self, data: bytes) -> None:
         # As the single-axis node: raw messages, every queued one served here, sequence
-        # numbers of the ones taken here checked for gaps.  A block is decoded as a numpy
-        # view of the bytes, and the commands are computed straight into a reusable
-        # outgoing message (mpi_ros.nodes.arrays.OutputBlocks), which is published.
+        # numbers of the ones taken here checked for gaps.  A block is decoded by one
+        # numpy view of the bytes and answered by one tobytes (mpi_ros.nodes.arrays).
         take = self._subscription.handle.take_message
         publish = self._publisher.handle.publish_raw
-        outputs = self._outputs
         loss = self._loss
         loss.delivered()
         served = 0
@@ -324,11 +321,11 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                 if compensator is None:
                     self._dropped_unconfigured += 1
                 else:
-                    message, commands = outputs.get(block.shape[0])
-                    compensator.command_into(
-                        block, commands, self._times(compensator, block) if self._timed
-                        else None)
-                    publish(message)
+                    if self._timed:
+                        commands = self._timed_command(compensator, block)
+                    else:
+                        commands = compensator.command(block)
+                    publish(encode_float64_multiarray(commands))
                     self._messages_out += 1
             served += 1
             if served >= _DRAIN_LIMIT:
@@ -340,13 +337,13 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             loss.taken(info['publication_sequence_number'])
         loss.served(served)
 
-    def _times(self, compensator: MultiAxisCompensator, block: Any) -> Any:
-        """Return a block's sample times (message_time: arrival, see chunk_times)."""
+    def _timed_command(self, compensator: MultiAxisCompensator, block: Any) -> Any:
+        """Command a block with its samples' times (message_time: arrival, see chunk_times)."""
         clock = self._arrival_clock
         now = clock() if clock is not None else 0.0      # _timed: always a clock
         times = chunk_times(now, self._last_arrival, block.shape[0], compensator.sample_period)
         self._last_arrival = now
-        return times
+        return compensator.command(block, times)
 
     # -- parameters ---------------------------------------------------------------------
     def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:

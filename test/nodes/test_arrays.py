@@ -189,16 +189,3 @@ def test_the_test_writer_writes_what_rclpy_writes(message):
     for position in padded:                     # rclpy leaves its padding uninitialised
         written[position] = rclpys[position]
     assert rclpys == written
-
-
-def test_output_blocks_are_the_encoded_messages_of_what_is_written():
-    from mpi_ros.nodes.arrays import OutputBlocks
-    outputs = OutputBlocks(3, limit=2)
-    rng = np.random.default_rng(4)
-    for samples in (1, 5, 1, 7, 5):
-        message, view = outputs.get(samples)
-        values = rng.normal(size=(samples, 3))
-        view[:] = values
-        assert bytes(message) == encode_float64_multiarray(values)
-        np.testing.assert_array_equal(block_of(bytes(message), 3), values)
-    assert len(outputs._blocks) == 2                        # the oldest lengths dropped
