@@ -161,3 +161,47 @@ def test_two_publishers_interleaving_their_numbers_count_nothing(rig):
         settle(executor, node)
     assert node.counters['messages_in'] == 32
     assert node.counters['messages_lost'] == 0
+
+
+def test_a_blocked_multi_axis_node_counts_the_arrays_its_queue_dropped(ros_context):
+    # The same overload for the multi-axis node: 500 one-sample arrays of 8 axes into a
+    # 10-deep queue while it is not spun.
+    from mpi_ros.nodes.multi_axis import axis_key, MultiAxisCompensatorNode
+    from std_msgs.msg import Float64MultiArray
+    axes = 8
+    overrides = [Parameter('axes', value=axes), Parameter('qos_depth', value=10),
+                 Parameter('output.min', value=0.2), Parameter('output.max', value=1.8),
+                 Parameter('diagnostics_period', value=3600.0)]
+    overrides += [Parameter(axis_key(k, key), value=value)
+                  for k in range(axes) for key, value in MODEL.items()]
+    node = MultiAxisCompensatorNode(context=ros_context, parameter_overrides=overrides)
+    source = rclpy.create_node('desired_source', context=ros_context)
+    publisher = source.create_publisher(Float64MultiArray, 'desired_displacements', 10000)
+    executor = events_executor(ros_context)
+    executor.add_node(node)
+    executor.add_node(source)
+    try:
+        spin_until(executor, lambda: publisher.get_subscription_count() >= 1)
+
+        def arrays(count):
+            for _ in range(count):
+                publisher.publish(Float64MultiArray(data=[GOOD] * axes))
+
+        arrays(5)
+        settle(executor, node)
+        assert node.counters['messages_lost'] == 0
+        node.diagnostics()
+        served = node.counters['messages_in']
+        arrays(500)
+        settle(executor, node)
+        taken = node.counters['messages_in'] - served
+        lost = node.counters['messages_lost']
+        assert taken <= 10 + 1 and lost > 0 and taken + lost <= 500
+        status = node.diagnostics().status[0]
+        assert status.level == DiagnosticStatus.WARN
+        assert f'{lost} desired displacement arrays lost' in status.message
+        assert int({kv.key: kv.value for kv in status.values}['messages_lost']) == lost
+    finally:
+        executor.shutdown()
+        source.destroy_node()
+        node.destroy_node()
