@@ -22,7 +22,7 @@ from ..memory import TurningPointMemory
 from ..model import _hysteresis_step, _superposition_value, MPIModel
 
 __all__ = ['Compensator', 'ExtendedCompensator', 'FeedforwardCompensator', 'InverseStep',
-           'Pack', 'gamma_of', 'inverse_step_of', 'kind_of', 'pack']
+           'Pack', 'gamma_of', 'inverse_step_of', 'kind_of', 'loop_block', 'pack']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -323,9 +323,7 @@ class Compensator:
             Current commands [A], finite and inside ``[output_min, output_max]``.
 
         """
-        values = np.ascontiguousarray(desired, dtype=np.float64).reshape(-1)
-        if not values.flags.writeable:
-            values = values.copy()  # one compiled variant (a read-only view would compile another)
+        values = loop_block(np.asarray(desired, dtype=np.float64).reshape(-1))
         if self._step is not None or not self.enabled:
             stamps = (None,) * values.size if times is None else np.asarray(times, float)
             return np.array([self.command(float(v), time=None if t is None else float(t))
@@ -471,6 +469,30 @@ Pack = tuple[FloatArray, FloatArray, npt.NDArray[np.int64], FloatArray]
 
 _LAST = TABLE_COLUMNS.index('last_command')
 _COMPILED = INDEX_COLUMNS.index('compiled')
+
+
+def loop_block(block: FloatArray) -> FloatArray:
+    """
+    Return ``block`` as the compiled loop takes it: C-contiguous and writable.
+
+    One compiled variant serves every block: a read-only view (a block decoded from
+    message bytes) or a strided one would make numba compile another in the middle of a
+    stream (7.9 ms with a warm cache, seconds with a cold one), so those are copied.
+
+    Parameters
+    ----------
+    block : ndarray of float64
+        Desired displacements.
+
+    Returns
+    -------
+    ndarray of float64
+        ``block`` itself, or a C-contiguous copy.
+
+    """
+    if block.flags.c_contiguous and block.flags.writeable:
+        return block
+    return np.array(block, order='C')
 
 
 def pack(axes: list[Compensator]) -> Pack:

@@ -13,6 +13,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
+from .screening import SATURATION_RANGES
 from ..inverse import hysteresis_inverse_laws, hysteresis_inverse_states
 from ..memory import memory_push
 from ..model import _hysteresis_step, _superposition_value
@@ -82,7 +83,7 @@ def _compensate_axes(desired: FloatArray, out: FloatArray, coefficients: FloatAr
                 continue
             if s_c < lo or s_c > hi:
                 count[2] += 1
-                margin = 10.0 * (hi - lo)
+                margin = SATURATION_RANGES * (hi - lo)
                 s_c = min(max(s_c, lo - margin), hi + margin)
             current, raw = _compensate_step(s_c, row[5], row[6], r_h, w_h, z_h, r_h_inv,
                                             w_h_inv, z_inv, r_s_inv, w_s_inv, point)

@@ -14,18 +14,16 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .compensator import _check_sample_period, Compensator, COMPILED_COUNTERS, pack
-from .kernels import _compensate_axes, INDEX_COLUMNS, TABLE_COLUMNS
+from .compensator import (
+    _check_sample_period, _COMPILED, _LAST, Compensator, COMPILED_COUNTERS, loop_block, pack,
+)
+from .kernels import _compensate_axes, TABLE_COLUMNS
 from ..errors import DataError, ModelError
 from ..memory import TurningPointMemory
 
 __all__ = ['MultiAxisCompensator']
 
 FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-
-_LAST = TABLE_COLUMNS.index('last_command')
-_COMPILED = INDEX_COLUMNS.index('compiled')
 
 
 class MultiAxisCompensator:
@@ -209,8 +207,7 @@ class MultiAxisCompensator:
                 msg = (f'times must give one time per sample ({rows.shape[0]}); found '
                        f'{stamps.size}; pass one time stamp [s] per row, or None')
                 raise DataError(msg)
-        if not (rows.flags.c_contiguous and rows.flags.writeable):
-            rows = rows.copy()      # one compiled variant (a read-only view would compile another)
+        rows = loop_block(rows)
         pack = self._pack if self._pack is not None else self._build()
         coefficients, states, index, table, others = pack
         out = np.empty(rows.shape)

@@ -18,6 +18,11 @@ __all__ = ['screen_desired', 'LinearMap', 'operating_range', 'best_linear_map']
 
 FloatArray = npt.NDArray[np.float64]
 
+#: Desired values beyond this many operating ranges outside it are saturated there (the
+#: clamped command is the same, and the inverse's arithmetic stays finite).  The compiled
+#: block loop (:func:`~mpi_ros.compensation.kernels._compensate_axes`) uses it too.
+SATURATION_RANGES = 10.0
+
 
 def screen_desired(desired: object, counters: dict[str, int],
                    displacement_range: tuple[float, float]) -> float | None:
@@ -53,7 +58,7 @@ def screen_desired(desired: object, counters: dict[str, int],
     lo, hi = displacement_range
     if s_c < lo or s_c > hi:
         counters['out_of_range'] += 1
-        margin = 10.0 * (hi - lo)
+        margin = SATURATION_RANGES * (hi - lo)
         s_c = min(max(s_c, lo - margin), hi + margin)
     return s_c
 
