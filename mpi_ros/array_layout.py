@@ -7,7 +7,8 @@ A message whose ``layout.dim`` has two entries holds ``dim[0].size`` = K samples
 ``dim[1].stride`` values (the ROS convention: ``dim[1].stride`` is the row stride,
 ``dim[0].stride`` the total; a stride below N is read as N).  The multi-axis nodes'
 decoder (:mod:`mpi_ros.nodes.arrays`) and the bag reader
-(:mod:`mpi_ros.recordings.messages`) both read blocks through :func:`chunk_layout`; each
+(:mod:`mpi_ros.recordings.messages`) both read blocks through :func:`chunk_layout`, and a
+message without ``dim`` of a known axis count through :func:`consecutive_layout`; each
 phrases its own errors (what the user has to change differs).
 """
 
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['ChunkLayout', 'chunk_layout']
+__all__ = ['ChunkLayout', 'chunk_layout', 'consecutive_layout']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -112,3 +113,34 @@ def chunk_layout(dims: Sequence[tuple[int, int]], data_offset: int) -> ChunkLayo
         return None
     (samples, _), (axes, stride) = dims
     return ChunkLayout(int(samples), int(axes), max(int(stride), int(axes)), int(data_offset))
+
+
+def consecutive_layout(size: int, data_offset: int, axes: int) -> ChunkLayout | None:
+    """
+    Return the chunk of a message without ``layout.dim``: consecutive samples of N axes.
+
+    Parameters
+    ----------
+    size : int
+        Number of values in ``data``.
+    data_offset : int
+        ``layout.data_offset``.
+    axes : int
+        N.
+
+    Returns
+    -------
+    ChunkLayout or None
+        K = (size - data_offset) / N samples, rows N apart; None when the values after
+        the offset are not a positive whole number of samples.
+
+    Examples
+    --------
+    >>> consecutive_layout(7, 1, 3).samples, consecutive_layout(7, 0, 3)
+    (2, None)
+
+    """
+    flat = size - data_offset
+    if axes < 1 or flat < axes or flat % axes:
+        return None
+    return ChunkLayout(flat // axes, axes, axes, data_offset)

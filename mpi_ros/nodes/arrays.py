@@ -24,7 +24,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 import numpy.typing as npt
 
-from ..array_layout import chunk_layout
+from ..array_layout import chunk_layout, consecutive_layout
 
 __all__ = ['ArrayLayoutError', 'decode_float64_multiarray', 'encode_float64_multiarray',
            'block_of']
@@ -227,12 +227,13 @@ def _general_block(data: bytes, axes: int) -> npt.NDArray[np.float64]:
         msg = (f'layout.dim has {len(dims)} entries; expected none (consecutive samples '
                'of every axis) or two (samples, axes)')
         raise ArrayLayoutError(msg)
-    flat = values[offset:]
-    if flat.size == 0 or flat.size % axes:
-        msg = (f'{flat.size} values are not whole samples of axes={axes} (samples x axes, '
-               'row-major); send a multiple of the axis count or set layout.dim')
+    layout = consecutive_layout(values.size, offset, axes)
+    if layout is None:
+        msg = (f'{max(values.size - offset, 0)} values are not whole samples of axes={axes}'
+               ' (samples x axes, row-major); send a multiple of the axis count or set'
+               ' layout.dim')
         raise ArrayLayoutError(msg)
-    return flat.reshape(-1, axes)
+    return layout.block(values)
 
 
 def _align(pos: int, size: int) -> int:

@@ -51,7 +51,7 @@ import numpy as np
 import numpy.typing as npt
 from rosbags.typesys import get_typestore, Stores
 
-from ..array_layout import chunk_layout, ChunkLayout
+from ..array_layout import chunk_layout, consecutive_layout
 from ..errors import DataError
 
 __all__ = [
@@ -283,15 +283,15 @@ class Float64MultiArrayReader(MessageReader):
                             'axis) or record the topic of the other actuators')
                 raise SelectionError(msg_text)
         elif selection.axes is not None:
-            axes = row = selection.axes
-            flat = size - offset
-            if flat < axes or flat % axes:
-                msg_text = (f'it holds {max(flat, 0)} value(s){_offset_note(offset)} and no '
-                            f'layout.dim, not whole samples of {axes_option} {axes} axes '
-                            '(samples x axes, row-major); publish K x N values or set '
+            axes = selection.axes
+            layout = consecutive_layout(size, offset, axes)
+            if layout is None:
+                msg_text = (f'it holds {max(size - offset, 0)} value(s){_offset_note(offset)}'
+                            f' and no layout.dim, not whole samples of {axes_option} {axes}'
+                            ' axes (samples x axes, row-major); publish K x N values or set '
                             f'layout.dim, or set {axes_option} to the number of axes')
                 raise SelectionError(msg_text)
-            samples = flat // axes
+            samples = layout.samples
             shape = (f'{samples} sample(s) x {axes} axes ({axes_option} {axes}, no '
                      f'layout.dim{_offset_note(offset, ", ")})')
         else:
@@ -308,7 +308,6 @@ class Float64MultiArrayReader(MessageReader):
             msg_text = (f'{option} {index} is out of range: the message holds {shape}; set '
                         f'{option} to an axis, one of 0 to {axes - 1}')
             raise SelectionError(msg_text)
-        layout = ChunkLayout(samples, axes, row, offset) if layout is None else layout
         return layout.column(msg.data, index)
 
     @staticmethod
