@@ -42,7 +42,8 @@ class InverseStep(Protocol):
     and the previous command), ``invert`` (the current for the step output ``v`` of S',
     through ``inverse(v, beta)`` = ``x0 + H~'[v]`` with ``H~`` = H whose first weight is
     raised by ``beta``, by (12)-(14)), then ``advance`` with the applied (clamped) current,
-    which returns what the material (H) sees.  ``state`` holds the effect's slow states.
+    which returns what the material (H) sees, and ``observe`` with H's output for it (lags
+    fed by the displacement).  ``state`` holds the effect's slow states.
     """
 
     state: FloatArray
@@ -62,6 +63,9 @@ class InverseStep(Protocol):
 
     def advance(self, current: float, previous: float, started: bool) -> float:
         """Update the slow states with the applied current; return the material's input."""
+
+    def observe(self, hysteresis_output: float) -> None:
+        """Take H's output [A] for the applied current (after ``start``: settle on it)."""
 
 
 def gamma_of(model: Any) -> MPIModel:
@@ -161,7 +165,8 @@ class Compensator:
         self._changing()
         gamma = gamma_of(model)
         step = inverse_step_of(model)
-        if step is not None and not step.carry(self._step):
+        fresh = step is not None and not step.carry(self._step)
+        if step is not None and fresh:
             step.start(self.last_command)
         inverse = gamma.inverse()
         h, s_inv, h_inv = gamma.hysteresis, inverse.superposition, inverse.hysteresis
@@ -178,6 +183,8 @@ class Compensator:
             np.ascontiguousarray(s_inv.weights),
             np.array([gamma.input_offset, gamma.output_offset, float(gamma.output_sign)]))
         _warm_up(self._kernel, lo, self.output_min, self.output_max)
+        if step is not None and fresh:
+            step.observe(float(np.dot(h.weights, z_h)))      # H's output in the replayed state
         self._step = step
         self.model = model
         self.gamma = gamma
@@ -238,7 +245,7 @@ class Compensator:
 
     @property
     def slow_state(self) -> FloatArray:
-        """Return the effect's slow states (creep lags [A], lagged current [A], thermal [A^2])."""
+        """Return the effect's slow states (creep lags [m], lagged current [A], thermal [A^2])."""
         return np.zeros(0) if self._step is None else self._step.state.copy()
 
     def command(self, desired: float, *, time: float | None = None) -> float:
@@ -293,7 +300,7 @@ class Compensator:
                 raw = previous
             current = min(max(raw, self.output_min), self.output_max)
             material = step.advance(current, previous, started)
-            _hysteresis_step(material - x0, r_h, w_h, z_h)
+            step.observe(_hysteresis_step(material - x0, r_h, w_h, z_h))
             self._started = True
         if current != raw:
             c['clamped'] += 1

@@ -19,7 +19,8 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['lag_coefficients', 'first_order_lag', 'lag_bank', 'delay']
+__all__ = ['lag_coefficients', 'first_order_lag', 'lag_bank', 'lag_feedback_inverse',
+           'delay']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -86,6 +87,66 @@ def lag_bank(time: npt.ArrayLike, signal: npt.ArrayLike,
     return _lag_bank(np.ascontiguousarray(time, dtype=np.float64),
                      np.ascontiguousarray(signal, dtype=np.float64),
                      np.ascontiguousarray(np.atleast_1d(time_constants), dtype=np.float64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _lag_feedback_inverse(t: FloatArray, y: FloatArray, taus: FloatArray,
+                          w: FloatArray) -> FloatArray:  # pragma: no cover - compiled
+    n = t.shape[0]
+    k = taus.shape[0]
+    g = np.empty(n)
+    q = np.empty(k)
+    p = np.empty(k)
+    b = np.empty(k)
+    g[0] = y[0] / (1.0 + np.sum(w))
+    for j in range(k):
+        q[j] = g[0]
+    for i in range(1, n):
+        h = t[i] - t[i - 1]
+        known = 0.0
+        gain = 1.0
+        for j in range(k):
+            one_minus_a = -math.expm1(-h / taus[j])
+            b[j] = 1.0 - taus[j] * one_minus_a / h
+            p[j] = (1.0 - one_minus_a) * q[j] + one_minus_a * g[i - 1] - b[j] * g[i - 1]
+            known += w[j] * p[j]
+            gain += w[j] * b[j]
+        g[i] = (y[i] - known) / gain
+        for j in range(k):
+            q[j] = p[j] + b[j] * g[i]
+    return g
+
+
+def lag_feedback_inverse(time: npt.ArrayLike, signal: npt.ArrayLike,
+                         time_constants: npt.ArrayLike, weights: npt.ArrayLike) -> FloatArray:
+    """
+    Return ``g`` with ``signal = g + sum_j w_j L_j[g]``, the lags settled at ``g_0``.
+
+    The exact inverse of ``g + lag_bank(time, g, time_constants) @ weights``.
+
+    Parameters
+    ----------
+    time : array_like of float, shape (N,)
+        Sample times [s], strictly increasing.
+    signal : array_like of float, shape (N,)
+        The signal with the lags fed in (any unit).
+    time_constants : array_like of float, shape (k,)
+        Time constants [s], > 0.
+    weights : array_like of float, shape (k,)
+        Weights ``w_j >= 0`` [1].
+
+    Returns
+    -------
+    ndarray of float, shape (N,)
+        ``g``, in the unit of ``signal``.
+
+    """
+    return _lag_feedback_inverse(np.ascontiguousarray(time, dtype=np.float64),
+                                 np.ascontiguousarray(signal, dtype=np.float64),
+                                 np.ascontiguousarray(np.atleast_1d(time_constants),
+                                                      dtype=np.float64),
+                                 np.ascontiguousarray(np.atleast_1d(weights),
+                                                      dtype=np.float64))
 
 
 def first_order_lag(time: npt.ArrayLike, signal: npt.ArrayLike,
