@@ -17,14 +17,17 @@ import numpy.typing as npt
 from scipy.optimize import minimize_scalar
 
 from ..errors import DataError, ModelError
-from ..identification import fit_model, scaled_design
+from ..identification import fit_model, scaled_design, select_order
 from ..metrics import rms_range_error
 from ..model import MPIModel
 
 __all__ = ['check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
+           'Order', 'resolve_order',
            'scalar_parameter', 'search_fit', 'vector_parameter']
 
 FloatArray = npt.NDArray[np.float64]
+#: The ``order`` argument of the fits: ``(n, l)``, or ``'auto'`` (see :func:`resolve_order`).
+Order = tuple[int, int] | str
 #: The result of one trial fit in :func:`search_fit` (a model).
 ResultT = TypeVar('ResultT')
 
@@ -62,6 +65,54 @@ def check_series(time: npt.ArrayLike, *signals: npt.ArrayLike) -> tuple[FloatArr
         msg = 'time must hold at least 2 strictly increasing sample times [s]'
         raise DataError(msg)
     return tuple(arrays)
+
+
+def resolve_order(current: FloatArray, displacement: FloatArray,
+                  order: Order) -> tuple[tuple[int, int], bool]:
+    """
+    Return the order ``(n, l)`` of Gamma to fit an effect with, and whether it was chosen.
+
+    ``'auto'`` gives :func:`mpi_ros.identification.select_order` on the record as it is: a
+    provisional order to find the effect's parameters with.  A fit then selects the order
+    again on the effect-free signals (the lagged or delayed current, the creep-free
+    output), because an effect Gamma does not model biases the selection: on records with
+    an eddy-current lag or a dead time it picks (6, 3) where the lagged current picks
+    (14, 7)-(16, 8), and the extended compensator of the low order tracks 3x worse
+    (docs/diagnosis.md).
+
+    Parameters
+    ----------
+    current : ndarray of float, shape (N,)
+        Coil current [A].
+    displacement : ndarray of float, shape (N,)
+        Displacement [m].
+    order : (int, int) or 'auto'
+        The fit's ``order`` argument.
+
+    Returns
+    -------
+    order : (int, int)
+        ``(n, l)``.
+    chosen : bool
+        True for ``'auto'`` (select again on the effect-free signals).
+
+    Raises
+    ------
+    DataError
+        When ``order`` is neither ``'auto'`` nor a pair of integers >= 0.
+
+    """
+    if isinstance(order, str):
+        if order != 'auto':
+            msg = f"order must be 'auto' or a pair (n, l); found {order!r}"
+            raise DataError(msg)
+        chosen, _ = select_order(current, displacement)
+        return chosen, True
+    n, l = (int(v) for v in order)  # noqa: E741
+    if n < 0 or l < 0:
+        msg = f'model orders must be >= 0; found n={n}, l={l}'
+        raise DataError(msg)
+    return (n, l), False
 
 
 def scalar_parameter(mapping: Mapping[str, Any], key: str, *, minimum: float = 0.0,

@@ -45,11 +45,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, hold_evidence, residual_axes, vector_parameter
+from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
+    vector_parameter
 from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
 from .effect import Effect, EffectParameter
 from ..errors import ModelError
-from ..identification import identify_weights
+from ..identification import identify_weights, select_order
 from ..model import _superposition_value, MPIModel
 
 __all__ = ['CreepModel', 'CreepInverse', 'creep_time_constants', 'fit_creep',
@@ -277,7 +278,7 @@ def creep_time_constants(time: npt.ArrayLike, *, per_decade: float = 2.0,
 
 
 def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.ArrayLike, *,
-              order: tuple[int, int], time_constants: npt.ArrayLike | None = None,
+              order: Order, time_constants: npt.ArrayLike | None = None,
               epsilon: float = 1e-6) -> CreepModel:
     """
     Identify an MPI model with creep: Gamma and the creep weights together in the QP.
@@ -295,8 +296,10 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
         Coil current [A].
     displacement : array_like of float, shape (N,)
         Displacement [m].
-    order : (int, int)
-        ``(n, l)`` of Gamma.
+    order : (int, int) or 'auto'
+        ``(n, l)`` of Gamma; ``'auto'``: found by
+        :func:`~mpi_ros.identification.select_order` on the record, then again on the
+        creep-free output (see :func:`~mpi_ros.extensions._common.resolve_order`).
     time_constants : array_like of float, optional
         Creep time constants [s]; :func:`creep_time_constants` of ``time`` by default.
     epsilon : float
@@ -311,8 +314,20 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     t, x, y = check_series(time, current, displacement)
     taus = (creep_time_constants(t) if time_constants is None
             else np.asarray(time_constants, dtype=np.float64))
+    n_l, chosen = resolve_order(x, y, order)
+    model = _creep_rounds(t, x, y, n_l, taus, np.zeros(taus.size), epsilon)
+    if chosen:
+        free = lag_feedback_inverse(t, y, taus, model.weights)
+        final, _ = select_order(x, free)
+        if final != n_l:
+            model = _creep_rounds(t, x, y, final, taus, model.weights, epsilon)
+    return model
+
+
+def _creep_rounds(t: FloatArray, x: FloatArray, y: FloatArray, order: tuple[int, int],
+                  taus: FloatArray, weights: FloatArray, epsilon: float) -> CreepModel:
+    # The rounds of fit_creep at one order, from the given weights.
     n, l = order  # noqa: E741
-    weights = np.zeros(taus.size)
     design, w_h, w_s_inv, _, constant, _ = identify_weights(x, y, n, l, epsilon=epsilon)
     v = design.scaled_output(y)                     # the same design in every round
     for _ in range(_ROUNDS):

@@ -20,9 +20,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
-    fit_gamma, lag_search_limits, scalar_parameter, search_fit
+    fit_gamma, lag_search_limits, Order, resolve_order, scalar_parameter, search_fit
 from ._signals import delay
 from .effect import Effect, EffectParameter
+from ..identification import select_order
 from ..model import MPIModel
 
 __all__ = ['DeadTimeModel', 'fit_dead_time', 'DEAD_TIME']
@@ -88,7 +89,7 @@ class DeadTimeModel:
 
 
 def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.ArrayLike,
-                  *, order: tuple[int, int], epsilon: float = 1e-6) -> DeadTimeModel:
+                  *, order: Order, epsilon: float = 1e-6) -> DeadTimeModel:
     """
     Identify Gamma and the dead time (search over lags, one QP per trial).
 
@@ -105,8 +106,10 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
         Coil current [A].
     displacement : array_like of float, shape (N,)
         Displacement [m].
-    order : (int, int)
-        ``(n, l)`` of Gamma.
+    order : (int, int) or 'auto'
+        ``(n, l)`` of Gamma; ``'auto'``: found by
+        :func:`~mpi_ros.identification.select_order` on the record, then again on the
+        delayed current (see :func:`~mpi_ros.extensions._common.resolve_order`).
     epsilon : float
         Bound of (8)/(19).
 
@@ -118,12 +121,20 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     """
     t, x, y = check_series(time, current, displacement)
     dt, longest = lag_search_limits(t)
+    n_l, chosen = resolve_order(x, y, order)
     # Every trial lag is scored on the same determined samples: after the raw current's
     # burn-in and the longest trial lag.
-    start = determined_start(t, x, y, order, settle=longest)
+    start = determined_start(t, x, y, n_l, settle=longest)
     lag, model, _ = search_fit(
-        lambda v: fit_gamma(delay(t, x, v), y, order, epsilon, start=start),
+        lambda v: fit_gamma(delay(t, x, v), y, n_l, epsilon, start=start),
         np.concatenate([[0.0], np.geomspace(dt, longest, 10)]))
+    if chosen:
+        # The order again, for the current as the output sees it.
+        delayed = delay(t, x, lag)
+        final, _ = select_order(delayed, y)
+        if final != n_l:
+            model, _ = fit_gamma(delayed, y, final, epsilon,
+                                 start=determined_start(t, x, y, final, settle=longest))
     return DeadTimeModel(model, lag)
 
 

@@ -20,9 +20,11 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
-    fit_gamma, lag_search_limits, residual_axes, scalar_parameter, search_fit
+    fit_gamma, lag_search_limits, Order, residual_axes, resolve_order, scalar_parameter, \
+    search_fit
 from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter
+from ..identification import select_order
 from ..model import MPIModel
 
 __all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',
@@ -150,7 +152,7 @@ class RateDependenceInverse:
 
 
 def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
-                        displacement: npt.ArrayLike, *, order: tuple[int, int],
+                        displacement: npt.ArrayLike, *, order: Order,
                         epsilon: float = 1e-6) -> RateDependentModel:
     """
     Identify Gamma and the input-lag time constant (1-D search, one QP per trial).
@@ -168,8 +170,10 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
         Coil current [A].
     displacement : array_like of float, shape (N,)
         Displacement [m].
-    order : (int, int)
-        ``(n, l)`` of Gamma.
+    order : (int, int) or 'auto'
+        ``(n, l)`` of Gamma; ``'auto'``: found by
+        :func:`~mpi_ros.identification.select_order` on the record, then again on the
+        lagged current (see :func:`~mpi_ros.extensions._common.resolve_order`).
     epsilon : float
         Bound of (8)/(19).
 
@@ -181,15 +185,23 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     """
     t, x, y = check_series(time, current, displacement)
     dt, longest = lag_search_limits(t)
+    n_l, chosen = resolve_order(x, y, order)
     # Every trial (and the lag-free fit) is scored on the same determined samples: after
     # the raw current's burn-in and three of the longest trial time constants.
-    start = determined_start(t, x, y, order, settle=3.0 * longest)
+    start = determined_start(t, x, y, n_l, settle=3.0 * longest)
     tau, model, error = search_fit(
-        lambda v: fit_gamma(first_order_lag(t, x, v), y, order, epsilon, start=start),
+        lambda v: fit_gamma(first_order_lag(t, x, v), y, n_l, epsilon, start=start),
         np.geomspace(0.5 * dt, longest, 10))
-    base, base_error = fit_gamma(x, y, order, epsilon, start=start)
+    base, base_error = fit_gamma(x, y, n_l, epsilon, start=start)
     if base_error <= error:
         return RateDependentModel(base, 0.0)
+    if chosen:
+        # The order again, for the current the material sees.
+        lagged = first_order_lag(t, x, tau)
+        final, _ = select_order(lagged, y)
+        if final != n_l:
+            model, _ = fit_gamma(lagged, y, final, epsilon,
+                                 start=determined_start(t, x, y, final, settle=3.0 * longest))
     return RateDependentModel(model, tau)
 
 

@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, hold_evidence, residual_axes, scalar_parameter, \
-    search_fit
+from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
+    scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter
 from ..identification import identify_weights
@@ -193,7 +193,7 @@ def _fit_at(t: FloatArray, x: FloatArray, y: FloatArray, n: int, l: int,  # noqa
 
 
 def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
-                      displacement: npt.ArrayLike, *, order: tuple[int, int],
+                      displacement: npt.ArrayLike, *, order: Order,
                       epsilon: float = 1e-6) -> ThermalDriftModel:
     """
     Identify Gamma, ``tau_T`` and ``w_T`` (1-D search, one joint QP per trial).
@@ -206,8 +206,10 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
         Coil current [A].
     displacement : array_like of float, shape (N,)
         Displacement [m].
-    order : (int, int)
-        ``(n, l)`` of Gamma.
+    order : (int, int) or 'auto'
+        ``(n, l)`` of Gamma; ``'auto'``: found by
+        :func:`~mpi_ros.identification.select_order` on the record (the drift enters
+        inside S, so there is no drift-free signal to select it on again).
     epsilon : float
         Bound of (8)/(19).
 
@@ -218,7 +220,7 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
 
     """
     t, x, y = check_series(time, current, displacement)
-    n, l = order  # noqa: E741
+    (n, l), _ = resolve_order(x, y, order)  # noqa: E741
     duration = float(t[-1] - t[0])
     _, model, _ = search_fit(lambda v: _fit_at(t, x, y, n, l, v, epsilon),
                              np.geomspace(duration / 20.0, 5.0 * duration, 5), refine=4)
