@@ -6,12 +6,13 @@ import warnings
 from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.compensation import FeedforwardCompensator
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
-from mpi_ros.errors import ModelError, MPIWarning
-from mpi_ros.excitation import identification_excitation
+from mpi_ros.errors import DataError, ModelError, MPIWarning
+from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.extensions import compensator_from_params, CreepModel, DeadTimeModel, \
     extended_model_from_params, ExtendedCompensator, fit_creep, fit_dead_time, \
     fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
-from mpi_ros.extensions._signals import delay, first_order_lag
+from mpi_ros.extensions._signals import delay, first_order_lag, lag_bank, \
+    lag_feedback_inverse
 from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error
 from mpi_ros.params import OPERATING_POINT_KEYS
@@ -246,3 +247,104 @@ def test_extension_fits_do_not_depend_on_the_operating_point(fit, effect, bias):
     burn_in = 2000
     error = np.sqrt(np.mean((plain.simulate(t, x) - y)[burn_in:] ** 2)) / span
     assert error < 0.01, error           # 0.3 % measured: the fit itself is good
+
+
+@pytest.mark.parametrize('seed', range(3))
+def test_creep_lags_the_displacement_of_gamma(seed):
+    # Issue 18: s = y0 + sign (G + sum_j w_j C_j[G]), G = S[H[x - x0]]; lag_feedback_inverse
+    # takes the creep out again exactly.
+    rng = np.random.default_rng(seed)
+    t, x = _signal(rng)
+    creep = _models(rng)[0]
+    gamma = creep.model.with_operating_point(input_offset=0.3, output_offset=2e-5,
+                                             output_sign=-1)
+    creep = CreepModel(gamma, creep.time_constants, creep.weights)
+    g = -(gamma.simulate(x) - 2e-5)
+    y = creep.simulate(t, x)
+    span = np.ptp(y)
+    np.testing.assert_allclose(
+        y, 2e-5 - (g + lag_bank(t, g, creep.time_constants) @ creep.weights),
+        rtol=0.0, atol=1e-12 * span)
+    np.testing.assert_allclose(y, gamma.simulate(x) + creep.creep_term(t, x), rtol=0.0,
+                               atol=1e-12 * span)
+    np.testing.assert_allclose(
+        lag_feedback_inverse(t, -(y - 2e-5), creep.time_constants, creep.weights), g,
+        rtol=0.0, atol=1e-12 * span)
+
+
+def test_creep_lags_follow_the_applied_displacement():
+    # A clamped command moves the actuator less than desired: the compensator's lags
+    # follow G of the currents it applied, as the model would.
+    rng = np.random.default_rng(4)
+    t, x = _signal(rng)
+    creep = _models(rng)[0]
+    comp = ExtendedCompensator(creep, output_min=0.6, output_max=1.4)
+    commands = np.array([comp.command(s, time=tk)
+                         for s, tk in zip(creep.simulate(t, x), t)])
+    assert comp.counters['clamped'] > 100
+    g = creep.model.output_sign * (creep.model.simulate(commands) - creep.model.output_offset)
+    np.testing.assert_allclose(comp.slow_state, lag_bank(t, g, creep.time_constants)[-1],
+                               rtol=0.0, atol=1e-12 * np.ptp(g))
+
+
+def test_creep_swap_keeps_the_creep_to_come():
+    # A model pushed in the middle of a run (here: the same actuator, its sensor zero moved
+    # by d) takes over the creep still to come: the commands go on as without the swap.
+    rng = np.random.default_rng(5)
+    t, x = _signal(rng)
+    creep = _models(rng)[0]
+    desired = creep.simulate(t, x)
+    d = 3e-6
+    moved = CreepModel(creep.model.with_operating_point(
+        output_offset=creep.model.output_offset + d), creep.time_constants, creep.weights)
+    half = t.size // 2
+    steady = ExtendedCompensator(creep, output_min=-10.0, output_max=10.0)
+    swapped = ExtendedCompensator(creep, output_min=-10.0, output_max=10.0)
+    expected = [steady.command(s, time=tk) for s, tk in zip(desired, t)]
+    commands = [swapped.command(s, time=tk) for s, tk in zip(desired[:half], t[:half])]
+    swapped.swap_model(moved)
+    commands += [swapped.command(s + d, time=tk) for s, tk in zip(desired[half:], t[half:])]
+    np.testing.assert_allclose(commands, expected, rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(commands, x, rtol=0.0, atol=EXACT)
+
+
+@pytest.mark.parametrize('effect, fit, order', [
+    ({'creep_gain': 0.06}, fit_creep, (14, 7)),
+    ({'eddy_time_constant_s': 0.005}, fit_rate_dependence, 'auto'),
+])
+def test_extension_wins_on_a_tracking_trajectory(effect, fit, order):
+    # Issue 18: the demo's protocol in-process.  A 60 s identification record at 1 kHz from
+    # the plant with the effect; a 30 s tracking trajectory at 200 Hz in the middle 80 % of
+    # the recorded output after a 1 s lead from rest (another mean current than the
+    # record); each compensator in front of a fresh plant.  The extended compensator must
+    # cut the RMS tracking error to <= 0.85 x the plain one.  Measured: creep 0.53 % ->
+    # 0.22 % (the creep of the current, before: 1.30 %); rate dependence, orders chosen
+    # (auto): 0.91 % -> 0.23 % (the plain order (6, 3) for both: 0.78 %).
+    cfg = ActuatorConfig(noise_std_m=4e-8, **effect)
+    t, x = identification_excitation(60.0, sample_rate=1000.0, seed=1)
+    y = MagnetostrictiveActuator(cfg, seed=1).simulate(t, x)
+    plain = identify(x, y, order=order).model
+    extended = fit(t, x, y, order=order)
+    span = np.ptp(y[t > 1.0])
+    _, tracked = tracking_trajectory(30.0, sample_rate=200.0, low=y[t > 1.0].min() + 0.1 * span,
+                                     high=y[t > 1.0].max() - 0.1 * span)
+    desired = np.concatenate([np.linspace(y[0], tracked[0], 200), tracked])
+    times = np.arange(desired.size) / 200.0
+    rms = []
+    for model in (plain, extended):
+        comp = compensator_from_params(model.to_params(), output_min=0.2, output_max=1.8,
+                                       sample_period=0.005)
+        plant = MagnetostrictiveActuator(cfg, seed=3)
+        measured = np.array([plant.step(tk, comp.command(sk, time=tk))
+                             for sk, tk in zip(desired, times)])
+        error = (measured - desired)[200:]
+        rms.append(np.sqrt(np.mean(error ** 2)) / np.max(np.abs(desired[200:])))
+    assert rms[1] <= 0.85 * rms[0], rms
+
+
+def test_fit_order_must_be_auto_or_a_pair():
+    t, x = _signal(np.random.default_rng(6))
+    with pytest.raises(DataError, match=r"order must be 'auto' or a pair \(n, l\); found 'best'"):
+        fit_rate_dependence(t, x, x, order='best')
+    with pytest.raises(DataError, match='model orders must be >= 0; found n=-1, l=2'):
+        fit_dead_time(t, x, x, order=(-1, 2))

@@ -65,7 +65,7 @@ class InverseStep(Protocol):
         """Update the slow states with the applied current; return the material's input."""
 
     def observe(self, hysteresis_output: float) -> None:
-        """Take H's output [A] for the applied current (after ``start``: settle on it)."""
+        """Take H's output [A] for the applied current (after ``start`` or ``carry``: settle)."""
 
 
 def gamma_of(model: Any) -> MPIModel:
@@ -165,8 +165,7 @@ class Compensator:
         self._changing()
         gamma = gamma_of(model)
         step = inverse_step_of(model)
-        fresh = step is not None and not step.carry(self._step)
-        if step is not None and fresh:
+        if step is not None and not step.carry(self._step):
             step.start(self.last_command)
         inverse = gamma.inverse()
         h, s_inv, h_inv = gamma.hysteresis, inverse.superposition, inverse.hysteresis
@@ -183,8 +182,8 @@ class Compensator:
             np.ascontiguousarray(s_inv.weights),
             np.array([gamma.input_offset, gamma.output_offset, float(gamma.output_sign)]))
         _warm_up(self._kernel, lo, self.output_min, self.output_max)
-        if step is not None and fresh:
-            step.observe(float(np.dot(h.weights, z_h)))      # H's output in the replayed state
+        if step is not None:
+            step.observe(float(np.dot(h.weights, z_h)))     # H's output in the (replayed) state
         self._step = step
         self.model = model
         self.gamma = gamma

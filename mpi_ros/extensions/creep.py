@@ -204,16 +204,19 @@ class CreepInverse:
         self._p = np.zeros(self.state.size)
 
     def carry(self, other: object) -> bool:
-        """Take over the lags of another creep step with as many lags (moved to this ``y0``)."""
+        """
+        Take over the creep still to come from another creep step with as many lags.
+
+        Each lag keeps its distance to ``G`` (the creep pending with its time constant, in
+        metres); the next :meth:`observe` puts the lags at that distance from this model's
+        ``G``, so a new Gamma or operating point does not move the pending creep.
+
+        """
         if not (isinstance(other, CreepInverse) and other.state.size == self.state.size):
             return False
-        # The same output history in this model's G: sign (y - y0), the creep included.
-        old, new = other.model.model, self.model.model
-        scale = float(new.output_sign * old.output_sign)
-        shift = (new.output_sign * (old.output_offset - new.output_offset)
-                 / (1.0 + float(np.sum(self.model.weights))))
-        self.state = scale * other.state + shift
-        self._last = scale * other._last + shift
+        sign = float(self.model.model.output_sign * other.model.model.output_sign)
+        self._p = sign * (other.state - other._last)
+        self._b = np.ones(self.state.size)
         return True
 
     def prepare(self, previous: float, interval: float, started: bool) -> None:
@@ -239,7 +242,7 @@ class CreepInverse:
         return current
 
     def observe(self, hysteresis_output: float) -> None:
-        """Advance the lags with ``G = S[h]`` of the applied current (settle them after start)."""
+        """Advance the lags with ``G = S[h]`` of the applied current (after start: settle)."""
         g = _superposition_value(hysteresis_output, *self._s)
         self.state = self._p + self._b * g
         self._last = g
