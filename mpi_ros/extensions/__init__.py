@@ -2,20 +2,22 @@
 """
 Physically motivated extensions of the MPI model, one module per cause.
 
-=====================  ==========================================  ===========================
-cause                  model                                       extra parameter keys
-=====================  ==========================================  ===========================
-``creep``              ``y0 + sign S[H[u] + sum_j w_Cj C_j[u]]``   ``model.creep.*``
-``rate_dependence``    ``Gamma[L_tau_e[x]]``                       ``model.rate_dependence.*``
-``thermal_drift``      ``y0 + sign S[H[u] + w_T L_tau_T[x^2]]``    ``model.thermal_drift.*``
-``dead_time``          ``Gamma[x](t - L)``                         ``model.dead_time``
-=====================  ==========================================  ===========================
+=====================  =============================================  ===========================
+cause                  model                                          extra parameter keys
+=====================  =============================================  ===========================
+``creep``              ``y0 + sign (G + sum_j w_Cj C_j[G])``,         ``model.creep.*``
+                       ``G = S[H[u]]``
+``rate_dependence``    ``Gamma[L_tau_e[x]]``                          ``model.rate_dependence.*``
+``thermal_drift``      ``y0 + sign S[H[u] + w_T L_tau_T[x^2]]``       ``model.thermal_drift.*``
+``dead_time``          ``Gamma[x](t - L)``                            ``model.dead_time``
+=====================  =============================================  ===========================
 
 ``u = x - x0``; Gamma carries the operating point (``model.input_offset`` ``x0``,
 ``model.output_offset`` ``y0``, ``model.output_sign``), and every extended model keeps it
 in ``simulate`` and in its parameter form.  The fits use
 :func:`mpi_ros.identification.identify`'s design (operating point, detected sign, constant
-term, burn-in), so an extension is fitted on the same samples as the plain model.
+term, burn-in), so an extension is fitted on the same samples as the plain model; with
+``order='auto'`` a fit selects Gamma's order again on the effect-free signals.
 
 Every module owns everything about its effect and describes it by one
 :class:`~mpi_ros.extensions.effect.Effect` (parameter keys and "off" values, model class,
