@@ -26,7 +26,10 @@ For every effect (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``,
    rest reading, then ``--track-duration`` s of :func:`mpi_ros.excitation.tracking_trajectory`
    in the middle 80 % of the recorded output range.
 4. **Score** the tracking part: RMS = rms(s - s_c) / max|s_c| and the control error (38)
-   max|s - s_c| / max|s_c|, for plain and extended, and their ratios (extended / plain).
+   max|s - s_c| / max|s_c|, for plain and extended, and their ratios (extended / plain);
+   ``late``: how far behind schedule the samples went out (99th percentile and worst, of
+   both runs; a late sample is still answered in lock step, and both nodes time it by its
+   real arrival).
 
 A dead time cannot be inverted causally: its "extended" compensator is Gamma of the
 dead-time fit alone (the compensator warns); the row shows what that does, no win.
@@ -303,7 +306,7 @@ def run(args):
                 times, desired, lead = desired_trajectory(train, args.rate,
                                                           args.track_duration)
                 row = {'effect': effect, 'seed': seed, 'verdict': verdict,
-                       'order': (plain.n, plain.l), 'late_p99': 0.0, 'late_max': 0.0,
+                       'order': (plain.n, plain.l), 'late_p99': None, 'late_max': None,
                        'extended_order': (gamma_of(extended).n, gamma_of(extended).l)}
                 for name, model in (('plain', plain), ('extended', extended)):
                     params = model.to_params()
@@ -316,8 +319,8 @@ def run(args):
                     else:
                         measured, p99, worst = loop.track(effect, seed, params_file, times,
                                                           desired)
-                        row['late_p99'] = max(row['late_p99'], p99)
-                        row['late_max'] = max(row['late_max'], worst)
+                        row['late_p99'] = max(row['late_p99'] or 0.0, p99)
+                        row['late_max'] = max(row['late_max'] or 0.0, worst)
                     row[name] = score(desired, measured, lead)
                     np.save(out / f'{tag}_{name}.npy', np.stack([times, desired, measured]))
                 row['seconds'] = time.monotonic() - started
@@ -335,17 +338,19 @@ def format_row(row):
     """Return one markdown table row."""
     (p_rms, p_38), (e_rms, e_38) = row['plain'], row['extended']
     orders = f"{row['order']}, {row['extended_order']}"
+    late = ('-' if row['late_p99'] is None
+            else f"{1e3 * row['late_p99']:.1f} / {1e3 * row['late_max']:.1f}")
     return (f"| {row['effect']} | {row['seed']} | {row['verdict']} | {orders} "
             f'| {100 * p_rms:.2f} % | {100 * p_38:.2f} % | {100 * e_rms:.2f} % '
-            f'| {100 * e_38:.2f} % | {e_rms / p_rms:.2f} | {e_38 / p_38:.2f} |')
+            f'| {100 * e_38:.2f} % | {e_rms / p_rms:.2f} | {e_38 / p_38:.2f} | {late} |')
 
 
 def format_table(rows):
     """Return the markdown table of all rows."""
     lines = ['| plant effect | seed | diagnosis (gain) | orders plain, extended | plain RMS '
              '| plain (38) '
-             '| extended RMS | extended (38) | RMS ratio | (38) ratio |',
-             '|---|---|---|---|---|---|---|---|---|---|']
+             '| extended RMS | extended (38) | RMS ratio | (38) ratio | late p99 / max [ms] |',
+             '|---|---|---|---|---|---|---|---|---|---|---|']
     return '\n'.join(lines + [format_row(row) for row in rows])
 
 
@@ -392,8 +397,8 @@ def main(argv=None):
         print(f'error: {err}', file=sys.stderr)
         return 1
     mode = 'offline (no DDS)' if args.offline else f'over DDS, ROS_DOMAIN_ID {domain}'
-    late = max((row['late_max'] for row in rows), default=0.0)
-    late99 = max((row['late_p99'] for row in rows), default=0.0)
+    late = max((row['late_max'] or 0.0 for row in rows), default=0.0)
+    late99 = max((row['late_p99'] or 0.0 for row in rows), default=0.0)
     print(f'# Closed loop, plain vs extended compensator ({mode})\n')
     print(f'{platform.node()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; '
           f'record {RECORD_DURATION:g} s at {RECORD_RATE:g} Hz, loop {args.rate:g} Hz, '
