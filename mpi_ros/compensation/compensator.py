@@ -42,8 +42,10 @@ class InverseStep(Protocol):
     and the previous command), ``invert`` (the current for the step output ``v`` of S',
     through ``inverse(v, beta)`` = ``x0 + H~'[v]`` with ``H~`` = H whose first weight is
     raised by ``beta``, by (12)-(14)), then ``advance`` with the applied (clamped) current,
-    which returns what the material (H) sees, and ``observe`` with H's output for it (lags
-    fed by the displacement).  ``state`` holds the effect's slow states.
+    which returns what the material (H) sees.  A step whose lags are fed by the
+    displacement also has ``observe(hysteresis_output)``: it gets H's output [A] for the
+    applied current after every command, and once after ``start`` or ``carry`` (then it
+    settles on it).  ``state`` holds the effect's slow states.
     """
 
     state: FloatArray
@@ -63,9 +65,6 @@ class InverseStep(Protocol):
 
     def advance(self, current: float, previous: float, started: bool) -> float:
         """Update the slow states with the applied current; return the material's input."""
-
-    def observe(self, hysteresis_output: float) -> None:
-        """Take H's output [A] for the applied current (after ``start`` or ``carry``: settle)."""
 
 
 def gamma_of(model: Any) -> MPIModel:
@@ -182,8 +181,9 @@ class Compensator:
             np.ascontiguousarray(s_inv.weights),
             np.array([gamma.input_offset, gamma.output_offset, float(gamma.output_sign)]))
         _warm_up(self._kernel, lo, self.output_min, self.output_max)
-        if step is not None:
-            step.observe(float(np.dot(h.weights, z_h)))     # H's output in the (replayed) state
+        self._observe: Callable[[float], None] | None = getattr(step, 'observe', None)
+        if self._observe is not None:
+            self._observe(float(np.dot(h.weights, z_h)))    # H's output in the (replayed) state
         self._step = step
         self.model = model
         self.gamma = gamma
@@ -299,7 +299,9 @@ class Compensator:
                 raw = previous
             current = min(max(raw, self.output_min), self.output_max)
             material = step.advance(current, previous, started)
-            step.observe(_hysteresis_step(material - x0, r_h, w_h, z_h))
+            h_out = _hysteresis_step(material - x0, r_h, w_h, z_h)
+            if self._observe is not None:
+                self._observe(h_out)
             self._started = True
         if current != raw:
             c['clamped'] += 1

@@ -147,9 +147,6 @@ class RateDependenceInverse:
         self.state[0] = material
         return material
 
-    def observe(self, hysteresis_output: float) -> None:
-        """Nothing to do: no lag is fed by H's output."""
-
 
 def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
                         displacement: npt.ArrayLike, *, order: Order,

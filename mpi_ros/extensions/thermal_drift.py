@@ -172,9 +172,6 @@ class ThermalDriftInverse:
         self.state[0] = self._thermal if self._thermal is not None else current ** 2
         return current
 
-    def observe(self, hysteresis_output: float) -> None:
-        """Nothing to do: no lag is fed by H's output."""
-
 
 def _fit_at(t: FloatArray, x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
             tau: float, epsilon: float) -> tuple[ThermalDriftModel, float]:
