@@ -5,6 +5,7 @@ The convex QP (34)-(36).
 The generalised error's Gram matrix (with the constant term eliminated), OSQP, the weights.
 """
 
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
@@ -18,7 +19,16 @@ from ..errors import IdentificationError
 from ..model import MPIModel
 from ..play import play_operator
 
-__all__ = ['fit_generalized_error', 'fit_model', 'generalized_error_gram', 'identify_weights']
+__all__ = ['SLOPE_FLOOR', 'GramParts', 'fit_generalized_error', 'fit_model',
+           'generalized_error_gram', 'identify_weights', 'regressor_gram']
+
+
+#: Lower bound of the slopes of S' (19) in the scaled units of the QP, where the mean slope
+#: is 1 (output and H span the same scaled range): S is at most 10 times steeper than on
+#: average.  The paper's bound is "a small positive number"; with 1e-6 a band of the output
+#: the fitted samples leave undetermined (a held-out block, a part of a single loop) gets an
+#: S' slope of 1e-6, an S that multiplies there by 1e6, and simulations 1e5 % off.
+SLOPE_FLOOR = 0.1
 
 
 def generalized_error_gram(*blocks: FloatArray) -> FloatArray:
@@ -45,7 +55,9 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
                           n_hysteresis: int, n_superposition: int,
                           superposition_center: int, epsilon: float = 1e-6,
                           extra_lower: FloatArray | None = None,
-                          fixed_zero: npt.ArrayLike | None = None) -> tuple[
+                          fixed_zero: npt.ArrayLike | None = None,
+                          tolerance: float = 1e-9,
+                          slope_floor: float | None = None) -> tuple[
                               FloatArray, FloatArray, FloatArray, Any]:
     """
     Solve the QP (34)-(36) for the weights ``w_H``, ``w'_S`` (and optional extras).
@@ -74,6 +86,12 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
         Lower bounds of the extra weights (default 0).
     fixed_zero : array_like of int, optional
         Indices of plays (other than the first) whose weight is fixed at 0.
+    tolerance : float
+        OSQP's absolute and relative tolerance (1e-9; looser for trial fits that are only
+        compared, which are not polished either).
+    slope_floor : float, optional
+        Lower bound of the slopes of S' in (19), scaled units (at least ``epsilon``);
+        :data:`SLOPE_FLOOR` by default.
 
     Returns
     -------
@@ -95,6 +113,7 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     ridge = 1e-9 * max(float(np.mean(np.diag(gram))), 1e-300)
     gram[np.diag_indices(nv)] += ridge
     hysteresis_center = 0
+    floor = max(epsilon, SLOPE_FLOOR if slope_floor is None else slope_floor)
     # Constraint rows: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
     rows = [np.concatenate([equality_row, np.zeros(m + k)])]
     lower = [1.0]
@@ -114,7 +133,7 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
         else:
             row[n1 + i:n1 + c + 1] = 1.0
         rows.append(row)
-        lower.append(epsilon)
+        lower.append(floor)
         upper.append(np.inf)
     x_lower = np.zeros(k) if extra_lower is None else np.asarray(extra_lower, dtype=float)
     for i in range(k):
@@ -128,8 +147,8 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     hi = np.array(upper)
     solver = osqp.OSQP()
     solver.setup(P=sp.csc_matrix(np.triu(gram)), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
-                 verbose=False, eps_abs=1e-9, eps_rel=1e-9, max_iter=200000,
-                 polishing=True, polish_refine_iter=10)
+                 verbose=False, eps_abs=tolerance, eps_rel=tolerance, max_iter=200000,
+                 polishing=tolerance <= 1e-9, polish_refine_iter=10)
     res = solver.solve(raise_error=False)
     # 'solved inaccurate' and 'maximum iterations reached' (tolerances of 1e-9 not met,
     # typical when the data determine some weights only weakly, e.g. no hysteresis) are
@@ -162,13 +181,112 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     w_h[sorted(zero)] = 0.0
     w_s = v[n1:n1 + m].copy()
     slopes = np.empty(m)
-    slopes[c:] = np.maximum(np.cumsum(w_s[c:]), epsilon)
-    slopes[:c + 1] = np.maximum(np.cumsum(w_s[:c + 1][::-1])[::-1], epsilon)
+    slopes[c:] = np.maximum(np.cumsum(w_s[c:]), floor)
+    slopes[:c + 1] = np.maximum(np.cumsum(w_s[:c + 1][::-1])[::-1], floor)
     w_s[c] = slopes[c]
     w_s[c + 1:] = np.diff(slopes[c:])
     w_s[:c] = -np.diff(slopes[:c + 1])
     w_x = np.maximum(v[n1 + m:], x_lower) if k else v[n1 + m:]
     return w_h, w_s, w_x, res.info
+
+
+@dataclass(frozen=True)
+class GramParts:
+    """
+    Gram matrices of the regressors ``[H_rH[x], -S_r'S[y], extra]`` per class of rows.
+
+    Attributes
+    ----------
+    grams : ndarray of float, shape (C, nv, nv)
+        ``Phi_c^T Phi_c`` (sums, not means) over the rows of class ``c``.
+    sums : ndarray of float, shape (C, nv)
+        Column sums over the rows of each class.
+    counts : ndarray of int, shape (C,)
+        Rows of each class.
+    end_state : ndarray of float, shape (n+1,)
+        Play outputs after the last row run.
+
+    """
+
+    grams: FloatArray
+    sums: FloatArray
+    counts: npt.NDArray[np.int64]
+    end_state: FloatArray
+
+    def __add__(self, other: 'GramParts') -> 'GramParts':
+        """Return the parts of both row sets (the end state of ``other``)."""
+        return GramParts(self.grams + other.grams, self.sums + other.sums,
+                         self.counts + other.counts, other.end_state)
+
+    def normalised(self, selected: tuple[int, ...]) -> tuple[FloatArray, FloatArray, int]:
+        """Return the mean Gram matrix, column means and count over the given classes."""
+        count = int(sum(int(self.counts[c]) for c in selected))
+        gram = sum(self.grams[c] for c in selected)
+        total = sum(self.sums[c] for c in selected)
+        scale = 1.0 / max(count, 1)
+        return np.asarray(gram) * scale, np.asarray(total) * scale, count
+
+
+def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: FloatArray, *,
+                   state: FloatArray, classes: npt.NDArray[np.int8], n_classes: int,
+                   extra: FloatArray | None = None, start: int = 0, stop: int | None = None,
+                   chunk: int = 32768) -> GramParts:
+    """
+    Accumulate the Gram matrices of (34) per class of rows, chunk by chunk.
+
+    The plays run over every sample from ``start`` (from ``state``); rows of class -1
+    only advance them.  The full N x nv regressor matrix is never formed.
+
+    Parameters
+    ----------
+    xs, ys : ndarray of float, shape (N,)
+        Scaled input and output.
+    r_h, r_s_inv : ndarray of float
+        Scaled thresholds of H and S'.
+    state : ndarray of float, shape (n+1,)
+        Play outputs before sample ``start`` (scaled).
+    classes : ndarray of int8, shape (N,)
+        Class of each row: 0 .. n_classes - 1, or -1 for rows left out.
+    n_classes : int
+        Number of classes.
+    extra : ndarray of float, shape (N, k), optional
+        Extra regressors.
+    start, stop : int
+        The rows to run.
+    chunk : int
+        Rows per chunk.
+
+    Returns
+    -------
+    GramParts
+        Gram matrices, sums and counts per class, and the plays' end state.
+
+    """
+    stop = xs.size if stop is None else stop
+    nv = r_h.size + r_s_inv.size + (0 if extra is None else extra.shape[1])
+    grams = np.zeros((n_classes, nv, nv))
+    sums = np.zeros((n_classes, nv))
+    counts = np.zeros(n_classes, dtype=np.int64)
+    z = np.array(state, dtype=np.float64)
+    for a in range(start, stop, chunk):
+        part = slice(a, min(a + chunk, stop))
+        plays, z = play_operator(xs[part], r_h, z)
+        labels = classes[part]
+        used = labels >= 0
+        if not np.any(used):
+            continue
+        blocks = [plays[used], -dead_zone_operator(ys[part][used], r_s_inv)]
+        if extra is not None:
+            blocks.append(extra[part][used])
+        phi = np.hstack(blocks)
+        labels = labels[used]
+        for c in range(n_classes):
+            rows = phi if n_classes == 1 else phi[labels == c]
+            if rows.shape[0]:
+                grams[c] += rows.T @ rows
+                sums[c] += rows.sum(axis=0)
+                counts[c] += rows.shape[0]
+    return GramParts(grams, sums, counts, z)
 
 
 def _mpi_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: FloatArray, *,

@@ -184,7 +184,7 @@ def read_csv(path: PathLike, options: DataOptions, *, comment: str | None = '#')
                          f'line {line}); samples are kept in file order')
     return Recording(time, values['input'] * options.input_scale,
                      values['output'] * options.output_scale, source=str(source),
-                     notes=tuple(notes))
+                     notes=tuple(notes), timed=time_column is not None)
 
 
 def read_csv_table(

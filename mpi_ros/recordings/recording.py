@@ -50,6 +50,9 @@ class Recording:
     notes : tuple of str
         What the reader changed or noticed (dropped, sorted or duplicate
         samples), one sentence each; empty when the data was clean.
+    timed : bool
+        False when the record has no time base (a CSV file without a time column: ``time``
+        is then the sample index); the identification then estimates no dynamics.
 
     Raises
     ------
@@ -69,6 +72,7 @@ class Recording:
     displacement: FloatArray
     source: str = ''
     notes: tuple[str, ...] = ()
+    timed: bool = True
 
     def __post_init__(self) -> None:
         """Validate and freeze the arrays."""
@@ -92,6 +96,7 @@ class Recording:
             raise DataError(msg)
         object.__setattr__(self, 'source', str(self.source))
         object.__setattr__(self, 'notes', tuple(str(note) for note in self.notes))
+        object.__setattr__(self, 'timed', bool(self.timed))
 
     def __len__(self) -> int:
         """Return the number of samples N."""

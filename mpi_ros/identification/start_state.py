@@ -1,0 +1,234 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The start state of a record: how the actuator came to its first sample.
+
+The plays' states at the first sample (``z_H0``, (32) in the paper, where the actuator rests
+demagnetised at the origin) are not in the record, but its history leaves a small family of
+states, one per kind of history.  With the input ``u0`` at the first sample and a play of
+threshold ``r`` (both in the input unit, relative to the operating point):
+
+- ``descent``: at rest after the input came down to ``u0`` from far above (a step down, or
+  the end of a descending sweep): ``z = u0 + r``;
+- ``ascent``: after it came up from far below: ``z = u0 - r``;
+- ``virgin``: demagnetised at an input ``v`` (the physical zero of the drive, or the middle
+  of the range), then loaded to ``u0``: ``z = clip(v, u0 - r, u0 + r)``;
+- ``reversal`` at ``p``: the input last turned at ``p`` (a maximum above ``u0``, after a
+  rise from far below, or a minimum below it, after a descent from far above), then went to
+  ``u0``: ``z = clip(p -/+ r, u0 - r, u0 + r)``;
+- ``reversals`` at ``p1, p2``: the two last turning points (mid-history: a record cut
+  from a longer run), on either side of ``u0``;
+- ``periodic``: the record is one period of an excitation the actuator had been following:
+  the state at its end, moved to ``u0``.
+
+The simple kinds (descent, ascent, virgin, periodic) are one convex QP (34)-(36) each on the
+whole record; rows after the input has covered twice the largest threshold do not depend on
+the candidate (wiping-out property), so their Gram matrix is accumulated once.  The
+histories with turning points (a grid of levels, some dozens) are then scored with the best
+simple candidate's weights by the generalised error before the plays are determined (cheap:
+no QP), and the best one is refitted.  The candidate with the smallest generalised error is
+the record's start state; it is written into ``model.hysteresis.initial_states``, so that
+the model simulated from the record's first sample reproduces the record.
+"""
+
+from collections.abc import Callable
+from dataclasses import dataclass
+import math
+from typing import Any
+
+import numpy as np
+
+from .design import burn_in, FloatArray
+from ..play import play_operator
+
+__all__ = ['StartState', 'start_candidates', 'turning_point_candidates', 'START_KINDS']
+
+#: The kinds of history a start state is chosen from.
+START_KINDS = ('descent', 'ascent', 'virgin', 'reversal', 'reversals', 'periodic')
+
+
+@dataclass(frozen=True)
+class StartState:
+    """
+    One candidate history before a record's first sample.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`START_KINDS`.
+    levels : tuple of float
+        ``virgin``: the demagnetised input; ``reversal`` / ``reversals``: the inputs of the
+        last turning points, oldest first (scaled input units, like the thresholds).
+
+    """
+
+    kind: str
+    levels: tuple[float, ...] = ()
+
+    def states(self, u0: float, thresholds: FloatArray,
+               end_state: FloatArray | None = None) -> FloatArray:
+        """
+        Return the play outputs at the first sample for this history.
+
+        Parameters
+        ----------
+        u0 : float
+            The first input (scaled).
+        thresholds : ndarray of float, shape (n+1,)
+            Play thresholds (scaled).
+        end_state : ndarray of float, shape (n+1,), optional
+            The plays' state at the end of the record (``periodic`` only).
+
+        Returns
+        -------
+        ndarray of float, shape (n+1,)
+            Play outputs (scaled), each inside ``[u0 - r, u0 + r]``.
+
+        """
+        r = np.asarray(thresholds, dtype=np.float64)
+        lo, hi = u0 - r, u0 + r
+        if self.kind == 'virgin':
+            return np.clip(np.full(r.size, self.levels[0] if self.levels else 0.0), lo, hi)
+        if self.kind == 'periodic':
+            z = np.zeros(r.size) if end_state is None else np.asarray(end_state, float)
+            return np.clip(z, lo, hi)
+        if self.kind not in ('descent', 'ascent', 'reversal', 'reversals'):
+            msg = f'unknown start state {self.kind!r}; one of {", ".join(START_KINDS)}'
+            raise ValueError(msg)
+        path = [*self.levels, u0]
+        if self.kind == 'descent':
+            rising_first = False
+        elif self.kind == 'ascent':
+            rising_first = True
+        else:
+            rising_first = path[1] < path[0]      # a maximum first: reached from below
+        far = float(np.max(r)) * 4.0 + abs(u0) + 4.0
+        history = np.array([-far if rising_first else far, *path])
+        _, z = play_operator(history, r, np.zeros(r.size))
+        return np.clip(np.asarray(z, dtype=np.float64), lo, hi)
+
+    def describe(self, to_input: Callable[[float], float], unit: str = 'A') -> str:
+        """
+        Say in words how the actuator came to the first sample.
+
+        Parameters
+        ----------
+        to_input : callable
+            Maps a scaled input level to the input's own unit.
+        unit : str
+            The input's unit.
+
+        Returns
+        -------
+        str
+            E.g. ``'at rest after a descent to the first value'``.
+
+        """
+        if self.kind == 'descent':
+            return 'at rest after a descent to the first value'
+        if self.kind == 'ascent':
+            return 'at rest after an ascent to the first value'
+        if self.kind == 'periodic':
+            return 'in the state the record ends in (one period of a repeated excitation)'
+        levels = ' and '.join(f'{to_input(v):.4g} {unit}' for v in self.levels)
+        if self.kind == 'virgin':
+            return f'demagnetised (virgin) at {levels}, then loaded to the first value'
+        return f'after turning points of the input at {levels}'
+
+    def to_json(self, to_input: Callable[[float], float]) -> dict[str, Any]:
+        """Return ``{'kind', 'levels'}`` with the levels in the input's unit."""
+        return {'kind': self.kind, 'levels': [to_input(float(v)) for v in self.levels]}
+
+
+def start_candidates(u: FloatArray, zero_level: float | None = None) -> list[StartState]:
+    """
+    Return the simple candidate histories for a record's scaled input (one QP each).
+
+    Parameters
+    ----------
+    u : ndarray of float, shape (N,)
+        Scaled input.
+    zero_level : float, optional
+        The scaled level of the drive's physical zero (a virgin candidate there, besides one
+        at the middle of the range), when it lies within the range.
+
+    Returns
+    -------
+    list of StartState
+        ``descent``, ``ascent``, ``periodic`` and the virgin states.
+
+    """
+    lo, hi = float(np.min(u)), float(np.max(u))
+    out = [StartState('descent'), StartState('ascent'), StartState('periodic'),
+           StartState('virgin', (0.5 * (lo + hi),))]
+    if zero_level is not None and lo < zero_level < hi and abs(zero_level - 0.5 * (lo + hi)) \
+            > 0.05 * (hi - lo):
+        out.append(StartState('virgin', (float(zero_level),)))
+    return out
+
+
+def turning_point_candidates(u: FloatArray, grid: int = 9) -> list[StartState]:
+    """
+    Return the histories with one or two turning points on a grid of levels.
+
+    Parameters
+    ----------
+    u : ndarray of float, shape (N,)
+        Scaled input.
+    grid : int
+        Levels spread over the input's range.
+
+    Returns
+    -------
+    list of StartState
+        ``reversal`` at each level away from the first input; ``reversals`` at pairs of
+        levels on either side of it (the older one beyond the newer one's opposite side).
+
+    """
+    u0 = float(u[0])
+    lo, hi = float(np.min(u)), float(np.max(u))
+    gap = 0.05 * (hi - lo)
+    levels = [p for p in np.linspace(lo, hi, grid).tolist() if abs(p - u0) > gap]
+    out = [StartState('reversal', (p,)) for p in levels]
+    above = [p for p in levels if p > u0]
+    below = [p for p in levels if p < u0]
+    for newer in above:                       # came down from `newer` to u0 ...
+        for older in below:                   # ... after coming up from `older`
+            out.append(StartState('reversals', (older, newer)))
+    for newer in below:
+        for older in above:
+            out.append(StartState('reversals', (older, newer)))
+    return out
+
+
+def determined_from(u: FloatArray, largest_threshold: float) -> int:
+    """
+    Return the first sample whose play outputs no longer depend on the start state.
+
+    Parameters
+    ----------
+    u : ndarray of float, shape (N,)
+        Scaled input.
+    largest_threshold : float
+        The largest play threshold (scaled).
+
+    Returns
+    -------
+    int
+        The sample after which the input has covered twice the threshold (N if never).
+
+    """
+    if largest_threshold <= 0.0:
+        return 1
+    return min(burn_in(u, 2.0 * largest_threshold) + 1, int(u.size))
+
+
+def end_state(u: FloatArray, thresholds: FloatArray) -> FloatArray:
+    """Return the plays' state after the record, started at rest after a descent."""
+    z0 = np.clip(float(u[0]) + thresholds, float(u[0]) - thresholds, float(u[0]) + thresholds)
+    _, z = play_operator(u, thresholds, z0)
+    return np.asarray(z, dtype=np.float64)
+
+
+def finite_or(value: float, fallback: float) -> float:
+    """Return ``value`` if finite, else ``fallback``."""
+    return value if math.isfinite(value) else fallback
