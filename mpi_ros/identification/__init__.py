@@ -108,9 +108,10 @@ class IdentificationResult:
     order : tuple of int
         ``(n, l)``.
     nonlinearity_error : float
-        (37) of the model's simulation on the fitted samples, with the output's range in
-        place of ``max|Gamma[x]|`` (the two agree when the output starts at 0, as in the
-        paper; the range does not depend on the sensor's zero) [fraction].
+        (37) of the model's simulation on the fitted samples (those the weights were
+        fitted on; :attr:`whole_record_rms_error` covers every sample), with the output's
+        range in place of ``max|Gamma[x]|`` (the two agree when the output starts at 0, as
+        in the paper; the range does not depend on the sensor's zero) [fraction].
     rms_error : float
         RMS error of the simulation on the fitted samples over the output's range.
     samples : int
@@ -350,8 +351,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     fit = fit_record(record, n, l, dynamics=found, choose=choose)
     notes.extend(fit.notes)
     sim = fit.simulate()
-    fitted = keep.copy()
-    fitted[:fit.burn_in] = False
+    fitted = fit.fitted if fit.fitted is not None else keep
     rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
     whole = float(np.sqrt(np.mean((sim - y) ** 2)) / np.ptp(y))
     design = fit.design
@@ -405,13 +405,18 @@ def _check_levels(x: FloatArray, y: FloatArray) -> None:
     _check_excitation(x, y, 0, 0)
 
 
+#: Fewer samples than this are too few to lower the order for: the order stays and the
+#: excitation check refuses the record if it is below two samples per weight.
+_SHORT_RECORD = 60
+
+
 def _supported_order(size: int, n: int, l: int,  # noqa: E741
                      auto: bool) -> tuple[int, int, str]:
     # At least ten samples per weight (a short record, such as one quasi-static loop of a
     # few hundred samples, gets a lower order and a note, not a refusal).
     weights = n + 1 + 2 * l + 1
-    if auto or size >= 10 * weights:
-        return n, l, ''
+    if auto or size >= 10 * weights or size < _SHORT_RECORD:
+        return n, l, ''          # below _SHORT_RECORD samples the excitation check refuses
     scale = (size / 10.0 - 2.0) / (n + 2 * l) if n + 2 * l > 0 else 0.0
     n2 = max(int(n * scale), 0)
     l2 = max(int(l * scale), 0)  # noqa: E741

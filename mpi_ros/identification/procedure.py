@@ -55,6 +55,10 @@ _DYNAMICS_GAIN = 0.1
 #: A dead time and a lag whose held-out errors are within this fraction tie.
 _TIE = 0.03
 
+#: The weights are fitted on the samples after the plays are determined when those are at
+#: least this share of the training samples (else on all, with the start state jointly).
+_DETERMINED_SHARE = 0.5
+
 #: A start state explains the record's start when the generalised RMS error before the
 #: plays are determined is at most this many times the error after, or below
 #: :data:`_START_FLOOR` (1 % of H's scaled range of 2): model error, not a wrong state.
@@ -251,6 +255,11 @@ class RecordFit:
         Samples at the start left out of the fit because no start state explains them.
     info : object
         OSQP's info structure of the final solve.
+    notes : list of str
+        What the fit noticed (burn-in, weights fitted after the start).
+    fitted : ndarray of bool, shape (N,)
+        The samples the weights were fitted on (training rows, outside ringing, after a
+        burn-in, and, when enough samples follow, after the plays are determined).
 
     """
 
@@ -263,6 +272,7 @@ class RecordFit:
     burn_in: int = 0
     info: Any = None
     notes: list[str] = field(default_factory=list)
+    fitted: npt.NDArray[np.bool_] | None = None
 
     def simulate(self) -> FloatArray:
         """Return the model's output over the record, each segment from its start state."""
@@ -430,6 +440,27 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         segments = [replace(s, start_state=StartState('virgin', (0.0,))) for s in segments]
         choose = False
     notes: list[str] = []
+    prefix = fitter.prefix_rows(segments)
+    train_rows = int(np.count_nonzero(classes == 0))
+    determined = int(np.count_nonzero((classes == 0) & ~prefix))
+    if record.anchor != 'origin' and determined >= _DETERMINED_SHARE * train_rows:
+        # Enough samples after the plays are determined: they alone fit the weights (an
+        # actuator's own initial loading curve is not the PI model's), and the start state
+        # is the history that explains the samples before best with those weights.
+        scored = classes == 0
+        classes[prefix] = -1
+        fitter = _Fitter(xs, ys, design, classes, record.epsilon, scored)
+        weights = fitter.solve(fitter.parts(_placeholder(segments)), tolerance)
+        if choose or any(s.start_state is None and s.start == 0 for s in segments):
+            segments = fitter.choose_by_prefix(segments, weights)
+        parts = fitter.parts(segments)
+        model_fit = _finish(record, design, fitter, parts, weights, segments, x, held, 0,
+                            notes)
+        if np.any(prefix):
+            notes.append(f'the weights are fitted on the {determined} samples after the'
+                         ' plays are determined; the samples before (the start) choose the'
+                         ' start state')
+        return model_fit
     if choose or any(s.start_state is None and s.start == 0 for s in segments):
         segments = fitter.choose_starts(segments)
     if burn_in:
@@ -448,25 +479,44 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         notes.append(f'the first {burn} samples are left out of the fit: no start state'
                      ' explains them (the record starts on a transient or after a history'
                      ' none of the candidates covers)')
+    return _finish(record, design, fitter, parts, weights, segments, x, held, burn, notes)
+
+
+def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
+            parts: GramParts, weights: tuple[FloatArray, FloatArray, float, Any],
+            segments: list[Segment], x: FloatArray, held: npt.NDArray[np.bool_] | None,
+            burn: int, notes: list[str]) -> RecordFit:
+    # The model with the first segment's start state, and its errors.
     w_h, w_s, constant, info = weights
-    z0 = segments[0].start_state.states(
-        float(xs[0]), design.hysteresis_thresholds,
-        end_state(xs[:segments[0].stop], design.hysteresis_thresholds)) \
-        if segments[0].start_state is not None else np.zeros(w_h.size)
+    xs = fitter.xs
+    first = segments[0].start_state
+    z0 = (first.states(float(xs[0]), design.hysteresis_thresholds,
+                       end_state(xs[:segments[0].stop], design.hysteresis_thresholds))
+          if first is not None else np.zeros(w_h.size))
     model = design.model(w_h, w_s, constant, initial_states=z0)
     train = fitter.error(parts, weights, 0) * design.x_scale
     held_error = (fitter.error(parts, weights, 1) * design.x_scale
                   if held is not None else math.nan)
-    return RecordFit(model, design, segments, x, train, held_error, burn, info, notes)
+    return RecordFit(model, design, segments, x, train, held_error, burn, info, notes,
+                     fitter.classes == 0)
+
+
+def _placeholder(segments: list[Segment]) -> list[Segment]:
+    # Any start state: the rows it affects are left out.
+    return [replace(seg, start_state=seg.start_state or (
+        StartState('periodic') if i == 0 else None)) for i, seg in enumerate(segments)]
 
 
 class _Fitter:
     """Gram matrices per segment and start state, and the QP on their sum."""
 
     def __init__(self, xs: FloatArray, ys: FloatArray, design: ScaledDesign,
-                 classes: npt.NDArray[np.int8], epsilon: float) -> None:
+                 classes: npt.NDArray[np.int8], epsilon: float,
+                 scored: npt.NDArray[np.bool_] | None = None) -> None:
         self.xs, self.ys, self.design = xs, ys, design
         self.classes = classes
+        # Rows that score a start state (training rows, also those left out of the QP).
+        self.scored = classes == 0 if scored is None else scored
         self.epsilon = epsilon
         self.r_h = design.hysteresis_thresholds
         self.r_s = design.inverse_superposition_thresholds
@@ -485,7 +535,7 @@ class _Fitter:
     def _segment_parts(self, seg: Segment, z0: FloatArray) -> GramParts:
         # Rows of the segment once its plays are determined do not depend on its start
         # state: accumulated once and reused.
-        split = seg.start + determined_from(self.xs[seg.start:seg.stop], float(self.r_h[-1]))
+        split = self.split(seg)
         prefix = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
                                 classes=self.classes, n_classes=2, start=seg.start,
                                 stop=split)
@@ -546,6 +596,37 @@ class _Fitter:
                  + c * c * count) / count
         return math.sqrt(max(value, 0.0))
 
+    def split(self, seg: Segment) -> int:
+        """Return the first sample of a segment whose plays no longer depend on its start."""
+        return seg.start + determined_from(self.xs[seg.start:seg.stop], float(self.r_h[-1]))
+
+    def prefix_rows(self, segments: list[Segment]) -> npt.NDArray[np.bool_]:
+        """Return the samples before each segment's plays are determined."""
+        mask = np.zeros(self.xs.size, dtype=bool)
+        for seg in segments:
+            mask[seg.start:self.split(seg)] = True
+        return mask
+
+    def choose_by_prefix(self, segments: list[Segment],
+                         weights: tuple[FloatArray, FloatArray, float, Any]) -> list[Segment]:
+        """Choose each segment's start state with fixed weights by the error before."""
+        chosen = _placeholder(segments)
+        for i, seg in enumerate(segments):
+            u = self.xs[seg.start:seg.stop]
+            candidates: list[StartState | None] = [*start_candidates(u),
+                                                   *turning_point_candidates(u)]
+            if i > 0:
+                candidates.insert(0, None)
+            previous = self._previous_state(chosen, i)
+            best: tuple[float, StartState | None] | None = None
+            for cand in candidates:
+                error = self._prefix_error(seg, cand, weights, previous)
+                if best is None or error < best[0] * (1.0 - 1e-6):
+                    best = (error, cand)
+            if best is not None:
+                chosen[i] = replace(seg, start_state=best[1])
+        return chosen
+
     def choose_starts(self, segments: list[Segment]) -> list[Segment]:
         """
         Choose each segment's start state (see :mod:`.start_state`).
@@ -557,10 +638,9 @@ class _Fitter:
         """
         chosen = [replace(seg, start_state=seg.start_state or (
             StartState('periodic') if i == 0 else None)) for i, seg in enumerate(segments)]
-        zero = -self.design.input_offset / self.design.x_scale
         for i, seg in enumerate(segments):
             u = self.xs[seg.start:seg.stop]
-            candidates: list[StartState | None] = list(start_candidates(u, zero))
+            candidates: list[StartState | None] = list(start_candidates(u))
             if i > 0:
                 candidates.insert(0, None)                  # continues from the previous
             best: tuple[float, StartState | None, Any] | None = None
@@ -576,7 +656,10 @@ class _Fitter:
             scored = [(self._prefix_error(seg, cand, best[2], previous), cand)
                       for cand in turning_point_candidates(u)]
             scored.append((self._prefix_error(seg, best[1], best[2], previous), best[1]))
-            top = min(scored, key=lambda item: item[0])
+            top = scored[-1]
+            for item in scored:
+                if item[0] < top[0] * (1.0 - 1e-6):
+                    top = item
             if top[1] is not best[1]:
                 error, _ = self._trial(chosen, i, top[1])
                 if error < best[0] * (1.0 - 1e-6):
@@ -604,15 +687,15 @@ class _Fitter:
         # determined, with fixed weights: what a start state changes.
         if weights is None:
             return math.inf
-        split = seg.start + determined_from(self.xs[seg.start:seg.stop], float(self.r_h[-1]))
-        rows = slice(seg.start, split)
-        train = self.classes[rows] == 0
+        split = self.split(seg)
+        rows_ = slice(seg.start, split)
+        train = self.scored[rows_]
         if not np.any(train):
             return 0.0
         z0 = self._state(replace(seg, start_state=cand), previous)
-        plays, _ = play_operator(self.xs[rows], self.r_h, z0)
+        plays, _ = play_operator(self.xs[rows_], self.r_h, z0)
         w_h, w_s, constant, _ = weights
-        s_part = dead_zone_operator(self.ys[rows], self.r_s) @ w_s
+        s_part = dead_zone_operator(self.ys[rows_], self.r_s) @ w_s
         e = (plays @ w_h - s_part + constant)[train]
         return float(np.sqrt(np.mean(e * e)))
 
@@ -672,31 +755,36 @@ def refuse_if_unmodellable(record: PreparedRecord, correlation: float) -> None:
     found, large = a.band_sweeps
     if a.verdict == 'butterfly':
         lo, hi = a.band if a.band is not None else (math.nan, math.nan)
-        msg = (f'butterfly loop (ferroelectric switching): in {found} of the {large} large'
+        msg = (f'the output is not monotone in the input: a butterfly loop (ferroelectric'
+               f' switching) or another non-monotone map; in {found} of the {large} large'
                f' sweeps of the input the output moves against it by up to {move:.3g} % of'
                f' its range, over the input band {lo:.4g} to {hi:.4g} (samples {first} to'
                f' {last}), well inside the sweep, not after the reversal; no delay or lag'
                f' shorter than {_limit(a)} explains it, and no ringing window covers it.'
                ' The MPI model (a monotone hysteresis) cannot represent it: lower the'
-               ' amplitude below the coercive field, or record a unipolar excitation')
+               ' amplitude below the coercive field, record a unipolar excitation, or check'
+               ' the input and output columns/topics')
         raise IdentificationError(msg)
     if a.verdict == 'switching':
-        msg = (f'switching transients (ferroelectric switching, as in a butterfly loop):'
-               f' while the input holds after a step, the output moves against it by up to'
+        msg = (f'the output is not monotone in the input: switching transients'
+               f' (ferroelectric switching, as in a butterfly loop); while the input holds'
+               f' after a step, the output moves against it by up to'
                f' {move:.3g} % of its range (samples {first} to {last}), for longer than'
                f' {_limit(a)}, without ringing; the MPI model cannot represent it: stay'
                ' below the coercive field, or leave the switching part out of the record')
         raise IdentificationError(msg)
     if abs(correlation) < _MIN_CORRELATION:
-        msg = (f'the output is not related to the input as a hysteresis: their correlation'
-               f' is {correlation:.2f} outside ringing windows (a hysteresis loop gives'
+        msg = (f'the output is not monotone in the input, nor related to it as a hysteresis:'
+               f' their correlation is {correlation:.2f} outside ringing windows (a'
+               f' hysteresis loop gives'
                f' 0.3 or more) and the output moves against the input by up to {move:.3g} %'
                ' of its range within one sweep; check the input and output columns/topics'
                ' and that they belong to one experiment')
         raise IdentificationError(msg)
     if a.verdict == 'unexplained':
-        msg = (f'the output moves against the input by up to {move:.3g} % of its range'
-               f' within one sweep (samples {first} to {last}); neither a delay or lag'
+        msg = (f'the output is not monotone in the input: it moves against the input by up'
+               f' to {move:.3g} % of its range within one sweep (samples {first} to {last});'
+               f' neither a delay or lag'
                f' shorter than {_limit(a)} ({100 * a.explained_counter_move:.3g} % would be'
                ' left), nor ringing after a step, nor switching over a fixed input band'
                ' explains it: drift, transients or a second input dominate; the MPI model'

@@ -10,8 +10,9 @@ threshold ``r`` (both in the input unit, relative to the operating point):
 - ``descent``: at rest after the input came down to ``u0`` from far above (a step down, or
   the end of a descending sweep): ``z = u0 + r``;
 - ``ascent``: after it came up from far below: ``z = u0 - r``;
-- ``virgin``: demagnetised at an input ``v`` (the physical zero of the drive, or the middle
-  of the range), then loaded to ``u0``: ``z = clip(v, u0 - r, u0 + r)``;
+- ``virgin``: demagnetised at an input ``v`` (on a grid over the range: where the drive's
+  zero lies is not known, the identification does not depend on a bias), then loaded to
+  ``u0``: ``z = clip(v, u0 - r, u0 + r)``;
 - ``reversal`` at ``p``: the input last turned at ``p`` (a maximum above ``u0``, after a
   rise from far below, or a minimum below it, after a descent from far above), then went to
   ``u0``: ``z = clip(p -/+ r, u0 - r, u0 + r)``;
@@ -139,7 +140,7 @@ class StartState:
         return {'kind': self.kind, 'levels': [to_input(float(v)) for v in self.levels]}
 
 
-def start_candidates(u: FloatArray, zero_level: float | None = None) -> list[StartState]:
+def start_candidates(u: FloatArray) -> list[StartState]:
     """
     Return the simple candidate histories for a record's scaled input (one QP each).
 
@@ -147,28 +148,21 @@ def start_candidates(u: FloatArray, zero_level: float | None = None) -> list[Sta
     ----------
     u : ndarray of float, shape (N,)
         Scaled input.
-    zero_level : float, optional
-        The scaled level of the drive's physical zero (a virgin candidate there, besides one
-        at the middle of the range), when it lies within the range.
 
     Returns
     -------
     list of StartState
-        ``descent``, ``ascent``, ``periodic`` and the virgin states.
+        ``descent``, ``ascent``, ``periodic`` and virgin at the middle of the range.
 
     """
     lo, hi = float(np.min(u)), float(np.max(u))
-    out = [StartState('descent'), StartState('ascent'), StartState('periodic'),
-           StartState('virgin', (0.5 * (lo + hi),))]
-    if zero_level is not None and lo < zero_level < hi and abs(zero_level - 0.5 * (lo + hi)) \
-            > 0.05 * (hi - lo):
-        out.append(StartState('virgin', (float(zero_level),)))
-    return out
+    return [StartState('descent'), StartState('ascent'), StartState('periodic'),
+            StartState('virgin', (0.5 * (lo + hi),))]
 
 
 def turning_point_candidates(u: FloatArray, grid: int = 9) -> list[StartState]:
     """
-    Return the histories with one or two turning points on a grid of levels.
+    Return the histories on a grid of levels: virgin there, one or two turning points.
 
     Parameters
     ----------
@@ -180,15 +174,19 @@ def turning_point_candidates(u: FloatArray, grid: int = 9) -> list[StartState]:
     Returns
     -------
     list of StartState
-        ``reversal`` at each level away from the first input; ``reversals`` at pairs of
-        levels on either side of it (the older one beyond the newer one's opposite side).
+        ``virgin`` at each level; ``reversal`` at each level away from the first input;
+        ``reversals`` at pairs of levels on either side of it.
 
     """
     u0 = float(u[0])
     lo, hi = float(np.min(u)), float(np.max(u))
     gap = 0.05 * (hi - lo)
-    levels = [p for p in np.linspace(lo, hi, grid).tolist() if abs(p - u0) > gap]
-    out = [StartState('reversal', (p,)) for p in levels]
+    grid_levels = np.linspace(lo, hi, grid).tolist()
+    # Demagnetised at a level of the grid (where the drive's zero lies is not known: the
+    # identification does not depend on the input's bias).
+    out = [StartState('virgin', (p,)) for p in grid_levels]
+    levels = [p for p in grid_levels if abs(p - u0) > gap]
+    out.extend(StartState('reversal', (p,)) for p in levels)
     above = [p for p in levels if p > u0]
     below = [p for p in levels if p < u0]
     for newer in above:                       # came down from `newer` to u0 ...
