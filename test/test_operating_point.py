@@ -138,12 +138,17 @@ def test_invariant_to_zero_bias_sign_and_scale(offset, bias, sign, log_x_scale, 
 @given(cut=st.floats(0.05, 0.3))
 def test_record_starting_mid_history(cut):
     # Cut the start off: the record starts somewhere in the actuator's history (the later
-    # sweeps still cover the whole range, so the data content stays comparable).
+    # sweeps still cover the whole range, so the data content stays comparable).  Its start
+    # state is estimated (issue 17) and the model validates no worse than the whole
+    # record's (which now fits the actuator's own initial loading curve from rest too, a
+    # curve the PI model does not follow exactly: the cut record may do better).
     (x, y), (xv, yv) = _small_records()
     start = int(cut * x.size)
     ref = validation_error(identify(x, y, n=8, l=4).model, xv, yv)
-    new = validation_error(identify(x[start:], y[start:], n=8, l=4).model, xv, yv)
-    assert abs(new - ref) <= 0.03 * ref
+    cut_fit = identify(x[start:], y[start:], n=8, l=4)
+    new = validation_error(cut_fit.model, xv, yv)
+    assert new <= 1.03 * ref
+    assert cut_fit.burn_in == 0 and cut_fit.whole_record_rms_error < NOISE + 0.005
 
 
 @pytest.mark.parametrize('plant', range(len(PLANTS)))

@@ -334,18 +334,25 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     if lowered:
         notes.append(lowered)
     _check_excitation(x, y, n if not auto else 0, l if not auto else 0, anchor=anchor)
-    held = held_out_rows(x.size, holdout, keep)
-    reference = (min(n, 8), min(l, 4)) if not auto else (min(8, n), min(4, l))
     choose = not periodic
-    base = fit_record(record, *reference, held=held, choose=choose)
+    # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
+    # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
+    reference = (8, 4) if x.size >= 10 * 15 else (min(n, 8), min(l, 4))
     estimate = DynamicsEstimate()
     if t is not None and dynamics == 'auto' and record.analysis.unit == 's':
-        estimate = estimate_dynamics(record, *reference, held, base.segments,
+        # On a window of a long record: trials cost the window, not the record.
+        trial = record.window(_DYNAMICS_WINDOW)
+        held = held_out_rows(trial.current.size, holdout, trial.keep)
+        base = fit_record(trial, *reference, held=held, choose=choose)
+        estimate = estimate_dynamics(trial, *reference, held, base.segments,
                                      burn_in=base.burn_in)
     found = estimate.modelled
     table: list[dict[str, Any]] = []
     if auto:
-        (n, l), table = select_record_order(record, held, found, base.segments,
+        trial = record.window(_ORDER_WINDOW)
+        held = held_out_rows(trial.current.size, holdout, trial.keep)
+        base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose)
+        (n, l), table = select_record_order(trial, held, found, base.segments,
                                             burn_in=base.burn_in)
     _check_excitation(x, y, n, l, anchor=anchor)
     fit = fit_record(record, n, l, dynamics=found, choose=choose)
@@ -405,8 +412,14 @@ def _check_levels(x: FloatArray, y: FloatArray) -> None:
     _check_excitation(x, y, 0, 0)
 
 
-#: Fewer samples than this are too few to lower the order for: the order stays and the
-#: excitation check refuses the record if it is below two samples per weight.
+#: Samples of the window the dynamics grid runs on (a long record's busiest part).
+_DYNAMICS_WINDOW = 20000
+
+#: Samples of the window the order selection runs on.
+_ORDER_WINDOW = 100000
+
+#: Fewer samples than this (or than two per weight of the requested order) are too few to
+#: lower the order for: the order stays and the excitation check refuses the record.
 _SHORT_RECORD = 60
 
 
@@ -415,8 +428,9 @@ def _supported_order(size: int, n: int, l: int,  # noqa: E741
     # At least ten samples per weight (a short record, such as one quasi-static loop of a
     # few hundred samples, gets a lower order and a note, not a refusal).
     weights = n + 1 + 2 * l + 1
-    if auto or size >= 10 * weights or size < _SHORT_RECORD:
-        return n, l, ''          # below _SHORT_RECORD samples the excitation check refuses
+    if auto or size >= 10 * weights or size < max(_SHORT_RECORD, 2 * weights):
+        # Below two samples per weight an explicit order is refused (excitation check).
+        return n, l, ''
     scale = (size / 10.0 - 2.0) / (n + 2 * l) if n + 2 * l > 0 else 0.0
     n2 = max(int(n * scale), 0)
     l2 = max(int(l * scale), 0)  # noqa: E741

@@ -241,8 +241,9 @@ def output_sign(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple[in
     x = np.asarray(current, dtype=np.float64)
     y = np.asarray(displacement, dtype=np.float64)
     xc, yc = x - np.mean(x), y - np.mean(y)
-    denominator = math.sqrt(float(np.dot(xc, xc)) * float(np.dot(yc, yc)))
-    correlation = float(np.dot(xc, yc)) / denominator if denominator > 0.0 else 0.0
+    # Sums of products, not np.dot: BLAS threads stall on a loaded machine (5 ms a dot).
+    denominator = math.sqrt(float(np.sum(xc * xc)) * float(np.sum(yc * yc)))
+    correlation = float(np.sum(xc * yc)) / denominator if denominator > 0.0 else 0.0
     return (1 if correlation >= 0.0 else -1), correlation
 
 

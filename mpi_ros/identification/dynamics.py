@@ -57,6 +57,9 @@ _STEP_FRACTION = 0.1
 #: time the input takes for the middle 80 % of its large sweeps.
 _EXPLAIN_FRACTION = 0.25
 
+#: An output jump this close to the record's first sample began before the record.
+_START_SAMPLES = 10
+
 #: Ringing: successive alternating extrema of the output at most this far apart [s] (200 Hz
 #: and faster), or, without a time base, this many samples.
 _RING_SPACING_S = 5e-3
@@ -379,7 +382,9 @@ def _ringing(t: FloatArray, v: FloatArray, steps: tuple[list[int], list[int]],
             continue
         spacing = float(np.median(np.diff(t[chain])))
         end = min(int(np.searchsorted(t, t[chain[-1]] + spacing)) + 1, stop)
-        windows.append((int(k), end))
+        # A jump within the first samples: the step of the input came just before the
+        # record, and the samples before the jump still show the unrecorded input.
+        windows.append((0 if k <= _START_SAMPLES else int(k), end))
         periods.append(2.0 * spacing)
         covered = end
     frequency = (1.0 / float(np.median(periods)) if periods and timed else math.nan)

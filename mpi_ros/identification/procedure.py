@@ -15,8 +15,8 @@ Steps (documented in docs/design.md, "Identification on real records"):
    first sample reproduces the record.  A burn-in is kept only where no candidate explains
    the start (reported).
 4. **Dynamics** (with a time base): a grid over the dead time and the time constant of a
-   first-order lag of the input, one QP each, scored on held-out blocks by the generalised
-   error; kept when it beats the static model on them clearly.
+   first-order lag of the input, one QP each, scored on held-out blocks by the output's
+   RMS error; kept when it beats the static model on them clearly.
 5. **Order** (``order='auto'``): raised until the held-out error saturates (:mod:`.selection`).
 6. **Judgement**: the model, simulated over the whole record from its start state, against
    the best straight line on the same samples; never a model worse than the line.
@@ -32,8 +32,8 @@ import numpy.typing as npt
 from .design import FloatArray, scaled_design, ScaledDesign
 from .dynamics import analyse_dynamics, DynamicsAnalysis
 from .qp import fit_generalized_error, GramParts, regressor_gram
-from .start_state import determined_from, end_state, start_candidates, StartState, \
-    turning_point_candidates
+from .start_state import determined_from, end_state, refine_memory, start_candidates, \
+    StartState, turning_point_candidates
 from ..deadzone import dead_zone_operator
 from ..errors import DataError, IdentificationError
 from ..model import MPIModel
@@ -55,9 +55,8 @@ _DYNAMICS_GAIN = 0.1
 #: A dead time and a lag whose held-out errors are within this fraction tie.
 _TIE = 0.03
 
-#: The weights are fitted on the samples after the plays are determined when those are at
-#: least this share of the training samples (else on all, with the start state jointly).
-_DETERMINED_SHARE = 0.5
+#: Rounds of the joint estimate of the plays' start states (refine, refit).
+_MEMORY_ROUNDS = 3
 
 #: A start state explains the record's start when the generalised RMS error before the
 #: plays are determined is at most this many times the error after, or below
@@ -231,6 +230,42 @@ class PreparedRecord:
     sign: int
     anchor: str = 'operating_point'
     epsilon: float = 1e-6
+
+    def window(self, size: int) -> 'PreparedRecord':
+        """
+        Return the part of the record with the most input travel, at most ``size`` samples.
+
+        Trial fits on a long record (dynamics grid, order selection) run on such a window:
+        its content (the most sweeps, the fastest rates) decides them, and it keeps their
+        cost independent of the record's length.  The window is a record of its own: its
+        start state is chosen afresh.
+
+        Parameters
+        ----------
+        size : int
+            Largest number of samples.
+
+        Returns
+        -------
+        PreparedRecord
+            This record when it is short enough, else the window.
+
+        """
+        n = self.current.size
+        if n <= size:
+            return self
+        travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(self.current)))])
+        start = int(np.argmax(travel[size - 1:] - travel[:n - size + 1]))
+        stop = start + size
+        segments = [replace(s, start=max(s.start, start) - start,
+                            stop=min(s.stop, stop) - start,
+                            start_state=None if s.start > start else s.start_state)
+                    for s in self.segments if s.stop > start and s.start < stop]
+        segments[0] = replace(segments[0], start_state=None, reason='start')
+        time = None if self.time is None else self.time[start:stop]
+        return replace(self, time=time, current=self.current[start:stop],
+                       displacement=self.displacement[start:stop],
+                       keep=self.keep[start:stop], segments=segments)
 
 
 @dataclass(frozen=True)
@@ -440,27 +475,6 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         segments = [replace(s, start_state=StartState('virgin', (0.0,))) for s in segments]
         choose = False
     notes: list[str] = []
-    prefix = fitter.prefix_rows(segments)
-    train_rows = int(np.count_nonzero(classes == 0))
-    determined = int(np.count_nonzero((classes == 0) & ~prefix))
-    if record.anchor != 'origin' and determined >= _DETERMINED_SHARE * train_rows:
-        # Enough samples after the plays are determined: they alone fit the weights (an
-        # actuator's own initial loading curve is not the PI model's), and the start state
-        # is the history that explains the samples before best with those weights.
-        scored = classes == 0
-        classes[prefix] = -1
-        fitter = _Fitter(xs, ys, design, classes, record.epsilon, scored)
-        weights = fitter.solve(fitter.parts(_placeholder(segments)), tolerance)
-        if choose or any(s.start_state is None and s.start == 0 for s in segments):
-            segments = fitter.choose_by_prefix(segments, weights)
-        parts = fitter.parts(segments)
-        model_fit = _finish(record, design, fitter, parts, weights, segments, x, held, 0,
-                            notes)
-        if np.any(prefix):
-            notes.append(f'the weights are fitted on the {determined} samples after the'
-                         ' plays are determined; the samples before (the start) choose the'
-                         ' start state')
-        return model_fit
     if choose or any(s.start_state is None and s.start == 0 for s in segments):
         segments = fitter.choose_starts(segments)
     if burn_in:
@@ -502,7 +516,8 @@ def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
 
 
 def _placeholder(segments: list[Segment]) -> list[Segment]:
-    # Any start state: the rows it affects are left out.
+    # A start state for every segment that has none: the first segment's periodic one,
+    # the others continue.
     return [replace(seg, start_state=seg.start_state or (
         StartState('periodic') if i == 0 else None)) for i, seg in enumerate(segments)]
 
@@ -511,12 +526,9 @@ class _Fitter:
     """Gram matrices per segment and start state, and the QP on their sum."""
 
     def __init__(self, xs: FloatArray, ys: FloatArray, design: ScaledDesign,
-                 classes: npt.NDArray[np.int8], epsilon: float,
-                 scored: npt.NDArray[np.bool_] | None = None) -> None:
+                 classes: npt.NDArray[np.int8], epsilon: float) -> None:
         self.xs, self.ys, self.design = xs, ys, design
         self.classes = classes
-        # Rows that score a start state (training rows, also those left out of the QP).
-        self.scored = classes == 0 if scored is None else scored
         self.epsilon = epsilon
         self.r_h = design.hysteresis_thresholds
         self.r_s = design.inverse_superposition_thresholds
@@ -600,33 +612,6 @@ class _Fitter:
         """Return the first sample of a segment whose plays no longer depend on its start."""
         return seg.start + determined_from(self.xs[seg.start:seg.stop], float(self.r_h[-1]))
 
-    def prefix_rows(self, segments: list[Segment]) -> npt.NDArray[np.bool_]:
-        """Return the samples before each segment's plays are determined."""
-        mask = np.zeros(self.xs.size, dtype=bool)
-        for seg in segments:
-            mask[seg.start:self.split(seg)] = True
-        return mask
-
-    def choose_by_prefix(self, segments: list[Segment],
-                         weights: tuple[FloatArray, FloatArray, float, Any]) -> list[Segment]:
-        """Choose each segment's start state with fixed weights by the error before."""
-        chosen = _placeholder(segments)
-        for i, seg in enumerate(segments):
-            u = self.xs[seg.start:seg.stop]
-            candidates: list[StartState | None] = [*start_candidates(u),
-                                                   *turning_point_candidates(u)]
-            if i > 0:
-                candidates.insert(0, None)
-            previous = self._previous_state(chosen, i)
-            best: tuple[float, StartState | None] | None = None
-            for cand in candidates:
-                error = self._prefix_error(seg, cand, weights, previous)
-                if best is None or error < best[0] * (1.0 - 1e-6):
-                    best = (error, cand)
-            if best is not None:
-                chosen[i] = replace(seg, start_state=best[1])
-        return chosen
-
     def choose_starts(self, segments: list[Segment]) -> list[Segment]:
         """
         Choose each segment's start state (see :mod:`.start_state`).
@@ -636,8 +621,7 @@ class _Fitter:
         weights on the rows before the plays are determined, and the best of those is
         refitted; the smallest generalised error wins.
         """
-        chosen = [replace(seg, start_state=seg.start_state or (
-            StartState('periodic') if i == 0 else None)) for i, seg in enumerate(segments)]
+        chosen = _placeholder(segments)
         for i, seg in enumerate(segments):
             u = self.xs[seg.start:seg.stop]
             candidates: list[StartState | None] = list(start_candidates(u))
@@ -653,18 +637,46 @@ class _Fitter:
             chosen[i] = replace(seg, start_state=best[1])
             # Histories with turning points, scored without a QP, then the best refitted.
             previous = self._previous_state(chosen, i)
-            scored = [(self._prefix_error(seg, cand, best[2], previous), cand)
-                      for cand in turning_point_candidates(u)]
+            scored: list[tuple[float, StartState | None]] = [
+                (self._prefix_error(seg, cand, best[2], previous), cand)
+                for cand in turning_point_candidates(u)]
             scored.append((self._prefix_error(seg, best[1], best[2], previous), best[1]))
             top = scored[-1]
             for item in scored:
                 if item[0] < top[0] * (1.0 - 1e-6):
                     top = item
             if top[1] is not best[1]:
-                error, _ = self._trial(chosen, i, top[1])
+                error, weights = self._trial(chosen, i, top[1])
                 if error < best[0] * (1.0 - 1e-6):
                     chosen[i] = replace(seg, start_state=top[1])
+                    best = (error, top[1], weights)
+            chosen[i] = self._refine_memory(chosen, i, best, previous)
         return chosen
+
+    def _refine_memory(self, chosen: list[Segment], i: int,
+                       best: tuple[float, StartState | None, Any],
+                       previous: FloatArray | None) -> Segment:
+        # A joint estimate of every play's start state (a history with more turning points
+        # than the grid), kept when its refit beats the best history.
+        seg = chosen[i]
+        if self.split(seg) <= seg.start + 1 or best[2] is None:
+            return seg
+        u = self.xs[seg.start:seg.stop]
+        error, _, weights = best
+        z = self._state(seg, previous)
+        for _ in range(_MEMORY_ROUNDS):       # refine with the weights, refit, again
+            refined, _ = refine_memory(u, self.r_h, z,
+                                       lambda s: self._prefix_error_of(seg, s, weights))
+            if np.allclose(refined, z):
+                break
+            memory = StartState('memory', memory=tuple(
+                (float(r), float(v - u[0])) for r, v in zip(self.r_h, refined)))
+            trial_error, trial_weights = self._trial(chosen, i, memory)
+            if not trial_error < error * (1.0 - 1e-6):
+                break
+            seg, error, weights, z = (replace(seg, start_state=memory), trial_error,
+                                      trial_weights, refined)
+        return seg
 
     def _trial(self, chosen: list[Segment], i: int,
                cand: StartState | None) -> tuple[float, Any]:
@@ -687,12 +699,15 @@ class _Fitter:
         # determined, with fixed weights: what a start state changes.
         if weights is None:
             return math.inf
-        split = self.split(seg)
-        rows_ = slice(seg.start, split)
-        train = self.scored[rows_]
+        return self._prefix_error_of(seg, self._state(replace(seg, start_state=cand), previous),
+                                     weights)
+
+    def _prefix_error_of(self, seg: Segment, z0: FloatArray, weights: Any) -> float:
+        # The same for given start states of the plays.
+        rows_ = slice(seg.start, self.split(seg))
+        train = self.classes[rows_] == 0
         if not np.any(train):
             return 0.0
-        z0 = self._state(replace(seg, start_state=cand), previous)
         plays, _ = play_operator(self.xs[rows_], self.r_h, z0)
         w_h, w_s, constant, _ = weights
         s_part = dead_zone_operator(self.ys[rows_], self.r_s) @ w_s
@@ -852,8 +867,10 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
     time; the best of each kind is refined between its grid neighbours; each trial is
     scored by the RMS error of the model's output on the held-out blocks.  The better kind
     is modelled when it cuts the static model's held-out error by :data:`_DYNAMICS_GAIN` or
-    more; when the two kinds are within :data:`_TIE` of each other the record cannot tell
-    them apart (one rate), and the lag is modelled (its inverse is causal).
+    more, also at the highest order the record supports (up to (14, 7); a delay that only
+    stands in for hysteresis a low order misses loses its gain there); when the two kinds
+    are within :data:`_TIE` of each other the record cannot tell them apart (one rate), and
+    the lag is modelled (its inverse is causal).
 
     Parameters
     ----------
@@ -896,8 +913,8 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
                        'held_error': error})
         return error
 
-    delays = np.unique(np.round(np.geomspace(1.0, max(limit / dt, 1.0), 10))) * dt
-    lags = np.geomspace(0.5 * dt, max(limit, dt), 10)
+    delays = np.unique(np.round(np.geomspace(1.0, max(limit / dt, 1.0), 8))) * dt
+    lags = np.geomspace(0.5 * dt, max(limit, dt), 8)
     static_error = score(InputDynamics())
     if not (math.isfinite(static_error) and static_error > 0.0):
         return DynamicsEstimate(static_error=static_error, trials=trials)
@@ -916,9 +933,33 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
     chosen = best[kind]
     modelled = (InputDynamics(**{kind: chosen[1]})
                 if chosen[0] <= (1.0 - _DYNAMICS_GAIN) * static_error else InputDynamics())
+    if modelled.present and not _persists(record, modelled, held):
+        modelled = InputDynamics()
     return DynamicsEstimate(modelled, dead_time=dead[1], lag_time_constant=lag[1],
                             static_error=static_error, dead_time_error=dead[0],
                             lag_error=lag[0], tie=tie, trials=trials)
+
+
+def _persists(record: PreparedRecord, dynamics: InputDynamics,
+              held: npt.NDArray[np.bool_]) -> bool:
+    # The gain must persist at the highest order the record supports (up to (14, 7)): a
+    # delay or lag that only stands in for hysteresis a lower order misses (one excitation
+    # rate cannot tell them apart) loses its gain there; real dynamics keep it.
+    size = int(np.count_nonzero(record.keep & ~held))
+    orders = [order for order in ((14, 7), (12, 6), (10, 5))
+              if size >= 10 * (order[0] + 2 * order[1] + 2)]
+    if not orders:
+        return True
+    n, l = orders[0]  # noqa: E741
+    try:
+        static = fit_record(record, n, l, held=held)
+        dynamic = fit_record(record, n, l, dynamics=dynamics, held=held,
+                             starts=static.segments, choose=False, burn_in=static.burn_in)
+    except (IdentificationError, DataError):
+        return False
+    before = _held_output_error(static, record.displacement, held)
+    after = _held_output_error(dynamic, record.displacement, held)
+    return bool(after <= (1.0 - _DYNAMICS_GAIN) * before)
 
 
 def _held_output_error(fit: RecordFit, displacement: FloatArray,
@@ -946,7 +987,7 @@ def _refine(score: Any, best: tuple[float, InputDynamics],
 
     res = minimize_scalar(lambda lv: score(make(math.exp(lv))),
                           bounds=(math.log(value / 1.6), math.log(value * 1.6)),
-                          method='bounded', options={'maxiter': 10, 'xatol': 0.02})
+                          method='bounded', options={'maxiter': 8, 'xatol': 0.02})
     if float(res.fun) < error:
         error, dyn = float(res.fun), make(math.exp(float(res.x)))
     return error, dyn

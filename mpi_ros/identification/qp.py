@@ -8,16 +8,17 @@ The generalised error's Gram matrix (with the constant term eliminated), OSQP, t
 from dataclasses import dataclass
 from typing import Any, Callable
 
+import numba
 import numpy as np
 import numpy.typing as npt
 import osqp
 import scipy.sparse as sp
 
 from .design import _IDLE_PLAY, FloatArray, scaled_design, ScaledDesign
-from ..deadzone import dead_zone_operator
+from ..deadzone import _dead_zone, dead_zone_operator
 from ..errors import IdentificationError
 from ..model import MPIModel
-from ..play import play_operator
+from ..play import play_clamp, play_operator
 
 __all__ = ['SLOPE_FLOOR', 'GramParts', 'fit_generalized_error', 'fit_model',
            'generalized_error_gram', 'identify_weights', 'regressor_gram']
@@ -232,10 +233,13 @@ def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: Flo
                    extra: FloatArray | None = None, start: int = 0, stop: int | None = None,
                    chunk: int = 32768) -> GramParts:
     """
-    Accumulate the Gram matrices of (34) per class of rows, chunk by chunk.
+    Accumulate the Gram matrices of (34) per class of rows.
 
     The plays run over every sample from ``start`` (from ``state``); rows of class -1
-    only advance them.  The full N x nv regressor matrix is never formed.
+    only advance them.  The regressor matrix is never formed: one compiled pass computes
+    each row's plays and dead zones and adds its outer product (single-threaded, so a
+    loaded machine's BLAS threads do not stall it); with extra regressors, chunks of rows
+    go through numpy.
 
     Parameters
     ----------
@@ -254,7 +258,7 @@ def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: Flo
     start, stop : int
         The rows to run.
     chunk : int
-        Rows per chunk.
+        Rows per chunk (with extra regressors).
 
     Returns
     -------
@@ -263,11 +267,23 @@ def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: Flo
 
     """
     stop = xs.size if stop is None else stop
-    nv = r_h.size + r_s_inv.size + (0 if extra is None else extra.shape[1])
+    z = np.array(state, dtype=np.float64)
+    if extra is None:
+        nv = r_h.size + r_s_inv.size
+        grams = np.zeros((n_classes, nv, nv))
+        sums = np.zeros((n_classes, nv))
+        counts = np.zeros(n_classes, dtype=np.int64)
+        _gram_rows(np.ascontiguousarray(xs), np.ascontiguousarray(ys),
+                   np.ascontiguousarray(r_h), np.ascontiguousarray(r_s_inv), z,
+                   np.ascontiguousarray(classes), int(start), int(stop), grams, sums, counts)
+        upper = np.triu_indices(nv, 1)
+        for c in range(n_classes):
+            grams[c][upper[1], upper[0]] = grams[c][upper]
+        return GramParts(grams, sums, counts, z)
+    nv = r_h.size + r_s_inv.size + extra.shape[1]
     grams = np.zeros((n_classes, nv, nv))
     sums = np.zeros((n_classes, nv))
     counts = np.zeros(n_classes, dtype=np.int64)
-    z = np.array(state, dtype=np.float64)
     for a in range(start, stop, chunk):
         part = slice(a, min(a + chunk, stop))
         plays, z = play_operator(xs[part], r_h, z)
@@ -275,18 +291,46 @@ def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: Flo
         used = labels >= 0
         if not np.any(used):
             continue
-        blocks = [plays[used], -dead_zone_operator(ys[part][used], r_s_inv)]
-        if extra is not None:
-            blocks.append(extra[part][used])
-        phi = np.hstack(blocks)
+        phi = np.hstack([plays[used], -dead_zone_operator(ys[part][used], r_s_inv),
+                         extra[part][used]])
         labels = labels[used]
         for c in range(n_classes):
-            rows = phi if n_classes == 1 else phi[labels == c]
+            rows = phi[labels == c]
             if rows.shape[0]:
                 grams[c] += rows.T @ rows
                 sums[c] += rows.sum(axis=0)
                 counts[c] += rows.shape[0]
     return GramParts(grams, sums, counts, z)
+
+
+@numba.njit(cache=True, nogil=True)
+def _gram_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
+               z: FloatArray, classes: npt.NDArray[np.int8], start: int, stop: int,
+               grams: FloatArray, sums: FloatArray,
+               counts: npt.NDArray[np.int64]) -> None:  # pragma: no cover - compiled
+    # Upper triangles of the per-class Gram matrices of [plays, -dead zones] (4), (17).
+    nh = r_h.shape[0]
+    ns = r_s.shape[0]
+    nv = nh + ns
+    phi = np.empty(nv)
+    for k in range(start, stop):
+        x = xs[k]
+        for i in range(nh):
+            z[i] = play_clamp(x, r_h[i], z[i])
+        c = classes[k]
+        if c < 0:
+            continue
+        for i in range(nh):
+            phi[i] = z[i]
+        y = ys[k]
+        for j in range(ns):
+            phi[nh + j] = -_dead_zone(y, r_s[j])
+        counts[c] += 1
+        for a in range(nv):
+            pa = phi[a]
+            sums[c, a] += pa
+            for b in range(a, nv):
+                grams[c, a, b] += pa * phi[b]
 
 
 def _mpi_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: FloatArray, *,

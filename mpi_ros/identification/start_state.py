@@ -19,7 +19,13 @@ threshold ``r`` (both in the input unit, relative to the operating point):
 - ``reversals`` at ``p1, p2``: the two last turning points (mid-history: a record cut
   from a longer run), on either side of ``u0``;
 - ``periodic``: the record is one period of an excitation the actuator had been following:
-  the state at its end, moved to ``u0``.
+  the state at its end, moved to ``u0``;
+- ``memory``: a joint estimate of every play's state, when the record starts after a
+  history with more turning points than the grid holds: starting from the best history
+  above, each play's state is moved on a grid within what a valid memory allows
+  (``|z_i - u0| <= r_i`` and ``|z_i - z_j| <= |r_i - r_j|``, the states of some history)
+  to the value that explains the samples before the plays are determined best, with the
+  weights of the best history; the result is refitted.
 
 The simple kinds (descent, ascent, virgin, periodic) are one convex QP (34)-(36) each on the
 whole record; rows after the input has covered twice the largest threshold do not depend on
@@ -41,10 +47,12 @@ import numpy as np
 from .design import burn_in, FloatArray
 from ..play import play_operator
 
-__all__ = ['StartState', 'start_candidates', 'turning_point_candidates', 'START_KINDS']
+__all__ = ['StartState', 'refine_memory', 'start_candidates', 'turning_point_candidates',
+           'START_KINDS']
 
 #: The kinds of history a start state is chosen from.
-START_KINDS = ('descent', 'ascent', 'virgin', 'reversal', 'reversals', 'periodic')
+START_KINDS = ('descent', 'ascent', 'virgin', 'reversal', 'reversals', 'periodic',
+               'memory')
 
 
 @dataclass(frozen=True)
@@ -59,11 +67,15 @@ class StartState:
     levels : tuple of float
         ``virgin``: the demagnetised input; ``reversal`` / ``reversals``: the inputs of the
         last turning points, oldest first (scaled input units, like the thresholds).
+    memory : tuple of (float, float)
+        ``memory``: pairs (threshold, play state minus the first input), scaled; states of
+        other thresholds are interpolated (a valid memory is 1-Lipschitz in the threshold).
 
     """
 
     kind: str
     levels: tuple[float, ...] = ()
+    memory: tuple[tuple[float, float], ...] = ()
 
     def states(self, u0: float, thresholds: FloatArray,
                end_state: FloatArray | None = None) -> FloatArray:
@@ -87,11 +99,16 @@ class StartState:
         """
         r = np.asarray(thresholds, dtype=np.float64)
         lo, hi = u0 - r, u0 + r
+        z: FloatArray
         if self.kind == 'virgin':
-            return np.clip(np.full(r.size, self.levels[0] if self.levels else 0.0), lo, hi)
+            z = np.full(r.size, self.levels[0] if self.levels else 0.0)
+            return np.asarray(np.clip(z, lo, hi), dtype=np.float64)
         if self.kind == 'periodic':
             z = np.zeros(r.size) if end_state is None else np.asarray(end_state, float)
-            return np.clip(z, lo, hi)
+            return np.asarray(np.clip(z, lo, hi), dtype=np.float64)
+        if self.kind == 'memory':
+            known = np.array(self.memory, dtype=np.float64).reshape(-1, 2)
+            return np.clip(u0 + np.interp(r, known[:, 0], known[:, 1]), lo, hi)
         if self.kind not in ('descent', 'ascent', 'reversal', 'reversals'):
             msg = f'unknown start state {self.kind!r}; one of {", ".join(START_KINDS)}'
             raise ValueError(msg)
@@ -130,6 +147,9 @@ class StartState:
             return 'at rest after an ascent to the first value'
         if self.kind == 'periodic':
             return 'in the state the record ends in (one period of a repeated excitation)'
+        if self.kind == 'memory':
+            return ("after a history with several turning points (every play's state"
+                    ' estimated from the start of the record)')
         levels = ' and '.join(f'{to_input(v):.4g} {unit}' for v in self.levels)
         if self.kind == 'virgin':
             return f'demagnetised (virgin) at {levels}, then loaded to the first value'
@@ -138,6 +158,56 @@ class StartState:
     def to_json(self, to_input: Callable[[float], float]) -> dict[str, Any]:
         """Return ``{'kind', 'levels'}`` with the levels in the input's unit."""
         return {'kind': self.kind, 'levels': [to_input(float(v)) for v in self.levels]}
+
+
+def refine_memory(u: FloatArray, thresholds: FloatArray, start: FloatArray,
+                  error: Callable[[FloatArray], float], steps: int = 9,
+                  sweeps: int = 2) -> tuple[FloatArray, float]:
+    """
+    Refine the plays' start states one at a time within a valid memory.
+
+    Parameters
+    ----------
+    u : ndarray of float, shape (N,)
+        Scaled input of the segment.
+    thresholds : ndarray of float, shape (n+1,)
+        Play thresholds (scaled), ascending from 0.
+    start : ndarray of float, shape (n+1,)
+        The states to start from (the best history's).
+    error : callable
+        ``error(states)`` -> the error to minimise.
+    steps : int
+        Grid values tried per play and sweep.
+    sweeps : int
+        Passes over the plays (largest threshold first).
+
+    Returns
+    -------
+    states, value : ndarray of float, float
+        The refined states and their error.
+
+    """
+    r = np.asarray(thresholds, dtype=np.float64)
+    z = np.array(start, dtype=np.float64)
+    u0 = float(u[0])
+    best = error(z)
+    for _ in range(sweeps):
+        for i in range(r.size - 1, 0, -1):
+            lo, hi = u0 - r[i], u0 + r[i]
+            lo = max(lo, z[i - 1] - (r[i] - r[i - 1]))
+            hi = min(hi, z[i - 1] + (r[i] - r[i - 1]))
+            if i + 1 < r.size:
+                lo = max(lo, z[i + 1] - (r[i + 1] - r[i]))
+                hi = min(hi, z[i + 1] + (r[i + 1] - r[i]))
+            if hi <= lo:
+                continue
+            for value in np.linspace(lo, hi, steps).tolist():
+                trial = z.copy()
+                trial[i] = value
+                e = error(trial)
+                if e < best * (1.0 - 1e-9):
+                    best, z = e, trial
+    return z, best
 
 
 def start_candidates(u: FloatArray) -> list[StartState]:
