@@ -115,7 +115,7 @@ def test_rig_csv_with_a_falling_sensor_and_its_own_zero(tmp_path, capsys):
 
 
 def _late_sweep_validation(path, tail, cfg, rate=1000.0, idle=4000):
-    """A 1 kHz validation that idles `idle` samples, sweeps the range, then `tail` samples."""
+    """Write a 1 kHz validation: `idle` samples at rest, a sweep over the range, `tail` more."""
     n = idle + 300 + tail
     t = np.arange(n) / rate
     k = np.arange(n - idle)
@@ -137,7 +137,7 @@ def test_validation_shorter_than_the_lag_window_is_diagnosed(tmp_path, capsys):
     """
     cfg = ActuatorConfig(noise_std_m=1e-9)
     t, x = identification_excitation(3.0, sample_rate=400.0, seed=1, holds=False,
-                                      bursts=False, ramp_duration=0.05)
+                                     bursts=False, ramp_duration=0.05)
     _write(tmp_path / 'train.csv', t, x, cfg, 3)
     _late_sweep_validation(tmp_path / 'val.csv', 50, cfg)
     argv = ['diagnose', str(tmp_path / 'train.csv'), '--validate', str(tmp_path / 'val.csv'),

@@ -121,7 +121,8 @@ DATA_OPTIONS = (
     DataOption('output_scale', 'float',
                'multiply the output by this to get m (1e-9 for nm)', '', 'any', 1.0),
     DataOption('drop_nonfinite', 'bool',
-               'drop NaN/Inf samples (with a note) instead of refusing the data', '', 'any',
+               'drop NaN/Inf samples (and empty CSV fields) with a note instead of refusing '
+               'the data', '', 'any',
                False),
 )
 
@@ -174,7 +175,8 @@ class DataOptions:
     input_scale, output_scale : float
         Factors from the recorded values to A and m.
     drop_nonfinite : bool
-        Drop NaN/Inf samples (with a note) instead of refusing the data.
+        Drop NaN/Inf samples (and CSV rows with an empty field), with a note,
+        instead of refusing the data.
     spelling : {'keyword', 'cli', 'parameter'}
         How error messages name the options (see :data:`SPELLINGS`).
 
