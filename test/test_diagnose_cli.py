@@ -151,3 +151,32 @@ def test_validation_shorter_than_the_lag_window_is_diagnosed(tmp_path, capsys):
     assert abs(report['residual']['lag_of_best_correlation']) <= (scored // 2) * 1e-3 + 1e-12
     assert (tmp_path / 'report' / 'summary.md').exists()
     assert (tmp_path / 'report' / 'signature_dead_time.png').exists()
+
+
+def test_time_in_ms_read_as_s_is_warned_about(tmp_path, capsys):
+    """A 19 ms dead time in a time column in ms: '19 s' gets a warning, --time-scale fixes it."""
+    cfg = ActuatorConfig(noise_std_m=2e-8, dead_time_s=0.0206)
+    t, x = identification_excitation(10.0, sample_rate=1000.0, seed=1)
+    y = MagnetostrictiveActuator(cfg, seed=1).simulate(t, x)
+    write_csv_columns(tmp_path / 'ms.csv', {'time_ms': 1e3 * t, 'current': x, 'displacement': y})
+    argv = ['diagnose', str(tmp_path / 'ms.csv'), '--time-column', 'time_ms', '--order', '6',
+            '3', '--json', str(tmp_path / 'r.json'), '--report', str(tmp_path / 'report')]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    report = json.loads((tmp_path / 'r.json').read_text())
+    dead_time = next(c for c in report['candidates'] if c['cause'] == 'dead_time')
+    assert dead_time['parameters']['model.dead_time'] > 10.0           # "seconds"
+    [warning] = report['warnings']
+    assert f'warning: {warning}' in err.splitlines()
+    assert (f'model.dead_time of the dead_time candidate '
+            f'{dead_time["parameters"]["model.dead_time"]:.3g} s') in warning
+    assert 'the record has a sample period of 1 s and lasts 1e+04 s (10001 samples)' in warning
+    assert 'pass --time-scale 1e-3' in warning
+    assert warning in (tmp_path / 'report' / 'summary.md').read_text()
+
+    assert main([*argv, '--time-scale', '1e-3']) == 0
+    assert 'warning:' not in capsys.readouterr().err
+    report = json.loads((tmp_path / 'r.json').read_text())
+    assert report['warnings'] == []
+    dead_time = next(c for c in report['candidates'] if c['cause'] == 'dead_time')
+    assert 0.015 < dead_time['parameters']['model.dead_time'] < 0.025

@@ -65,6 +65,7 @@ import numpy.typing as npt
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .signatures import burst_signature, hold_segments, hold_signature
+from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError
 from ..extensions import EFFECTS
 from ..extensions._common import rate_cross_correlation
@@ -115,6 +116,9 @@ class DiagnosisReport:
     data : dict
         Sources, sample counts, split, ``output_sign``, burn-ins,
         ``output_offset_reestimated``.
+    warnings : list of str
+        What looks wrong without stopping the diagnosis, one sentence each: time constants
+        the record's time base makes implausible (:mod:`mpi_ros.diagnosis.time_base`).
     model : object
         The extended model (or the baseline MPIModel); not serialised.
     series : dict
@@ -131,6 +135,7 @@ class DiagnosisReport:
     residual: dict[str, Any] = field(default_factory=dict)
     decision: dict[str, Any] = field(default_factory=dict)
     data: dict[str, Any] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
     model: Any = None
     series: dict[str, Any] = field(default_factory=dict, repr=False)
 
@@ -140,7 +145,7 @@ class DiagnosisReport:
             'cause': self.cause, 'gain': self.gain, 'evidence': self.evidence,
             'baseline': self.baseline, 'extended': self.extended,
             'candidates': self.candidates, 'residual': self.residual,
-            'decision': self.decision, 'data': self.data})
+            'decision': self.decision, 'data': self.data, 'warnings': self.warnings})
         return form
 
     def parameters(self) -> dict[str, Any]:
@@ -208,7 +213,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     noise_factor : float
         The baseline validation RMS residual must exceed this times the noise floor.
     progress : callable, optional
-        Called with one line per step (the CLI prints them to stderr).
+        Called with one line per step (the CLI prints them to stderr); each of the
+        report's ``warnings`` as ``warning: ...``.
 
     Returns
     -------
@@ -374,11 +380,18 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                     'parameters': chosen['parameters']}
     extended.setdefault('parameters', {})
     evidence = _evidence(cause, baseline, candidates, residual, sigma, yv[val], data)
+    records = ([('record', t)] if validation is None
+               else [('training record', t), ('validation record', tv)])
+    warning = time_base_warning(implausible_time_constants(candidates, residual), records)
+    warnings = [] if warning is None else [warning]
+    for text in warnings:
+        say(f'warning: {text}')
     say(f'verdict: {cause} (gain {gain:.3f})')
     public = [{k: v for k, v in c.items() if k != 'model'} for c in candidates]
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
-                           decision=decision, data=data, model=model, series=series)
+                           decision=decision, data=data, warnings=warnings, model=model,
+                           series=series)
 
 
 def _arrays(rec: Any, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:

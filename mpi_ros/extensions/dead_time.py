@@ -22,7 +22,7 @@ import numpy.typing as npt
 from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
     fit_gamma, lag_search_limits, rate_cross_correlation, scalar_parameter, search_fit
 from ._signals import delay
-from .effect import Effect, EffectParameter
+from .effect import Effect, EffectParameter, FAST_TIME_LIMIT
 from ..model import MPIModel
 
 __all__ = ['DeadTimeModel', 'fit_dead_time', 'DEAD_TIME']
@@ -145,7 +145,7 @@ EFFECT = Effect(
         EffectParameter(DEAD_TIME, 'double', 0.0,
                         'Dead-time extension: delay L between command and displacement (not'
                         ' invertible: the compensator inverts Gamma only and warns); 0: no'
-                        ' delay', 's', (0.0, 1.0e3)),),
+                        ' delay', 's', (0.0, 1.0e3), plausible_max=FAST_TIME_LIMIT),),
     model_class=DeadTimeModel, fit=fit_dead_time, parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'delay'),
     evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot)
