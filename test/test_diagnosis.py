@@ -224,3 +224,14 @@ def test_time_base_warning_names_only_the_implausible_values():
     plausible = [{'cause': 'dead_time', 'parameters': {'model.dead_time': 0.0206}}]
     assert implausible_time_constants(plausible, {'lag_of_best_correlation': 0.02}) == []
     assert time_base_warning([], [('record', np.arange(10.0))]) is None
+
+
+def test_validation_below_the_arithmetic_is_refused_not_divided_by_zero():
+    """A subnormal validation record: its squared residuals were 0, the gain 0/0 (a crash)."""
+    t, x = identification_excitation(1.5, sample_rate=400.0, seed=1, holds=False,
+                                     bursts=False, ramp_duration=0.05)
+    y = MagnetostrictiveActuator().simulate(t, x)
+    with pytest.raises(DataError, match=r'validation: the current spans only 1.8e-310 A, too '
+                                        r'small to compute with'):
+        diagnose(Recording(t, x, y), validation=Recording(t, 1e-310 * x, 1e-310 * y),
+                 order=(4, 2))

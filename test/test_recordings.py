@@ -12,6 +12,7 @@ from mpi_ros.recordings import (
     atomic_write, BagRecorder, read_bag_signals, read_csv_signals, read_csv_table,
     read_signals, Recording, write_bag_signals, write_csv_columns)
 from mpi_ros.recordings.bag_reader import _sort_dedupe
+from mpi_ros.recordings.recording import check_magnitudes
 import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
@@ -543,6 +544,23 @@ def test_csv_error_names_the_first_bad_line(tmp_path, edits, drop, match):
     path = _write_csv(tmp_path / 'bad.csv', '\n'.join(lines))
     with pytest.raises(DataError, match=match):
         read_csv_signals(path, drop_nonfinite=drop)
+
+
+@pytest.mark.parametrize(('scales', 'match'), [
+    ({'output_scale': 1e-300},
+     r'the displacement spans only [0-9.e-]+ m, too small to compute with .* rescale it to m '
+     r'with output_scale=<factor> \(now 1e-300\)'),
+    ({'input_scale': 1e120}, r'the current reaches [0-9.e+]+ A, too large to compute with'),
+    ({'time_scale': 1e-200}, r'the time spans only [0-9.e-]+ s, too small'),
+])
+def test_csv_magnitudes_outside_the_arithmetic_are_refused(tmp_path, scales, match):
+    path = _write_csv(tmp_path / 'm.csv', _csv_text(15)[0])
+    with pytest.raises(DataError, match=match):
+        read_csv_signals(path, **scales)
+    rec = read_csv_signals(path, output_scale=1e-12, input_scale=1e12, time_scale=1e-12)
+    assert len(rec) == 15                      # 1e-12 .. 1e12 is far inside
+    with pytest.raises(DataError, match=r'x: the displacement reaches inf m, too large'):
+        check_magnitudes(Recording([0.0, 1.0], [0.0, 1.0], [0.0, np.inf], source='x'))
 
 
 def test_measured_csv_reads():

@@ -73,6 +73,7 @@ from ..extensions._signals import first_order_lag
 from ..identification import identify, output_sign, scaled_design
 from ..metrics import range_error, rms_range_error
 from ..params import OPERATING_POINT_KEYS
+from ..recordings.recording import check_magnitudes, Recording
 
 __all__ = ['DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
 
@@ -345,7 +346,9 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         sims[cause] = sim
         rc = yv[val] - sim[val]
         errs = _errors(sim[val], yv[val])
-        gain = 1.0 - errs['rms_error'] / baseline['rms_error']
+        # A baseline without error leaves nothing to gain (and no ratio to form).
+        gain = (1.0 - errs['rms_error'] / baseline['rms_error']
+                if baseline['rms_error'] > 0.0 else 0.0)
         z, lags = _dm_statistic(r0, rc, bandwidth)
         params = {k: v for k, v in model.to_params().items()
                   if not k.startswith(('model.hysteresis', 'model.superposition'))
@@ -411,6 +414,7 @@ def _arrays(rec: Any, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:
     if np.any(np.diff(t) <= 0.0):
         msg = f'{name}: time must be strictly increasing'
         raise DataError(msg)
+    check_magnitudes(Recording(t, x, y, source=getattr(rec, 'source', '') or name))
     return t, x, y
 
 

@@ -25,7 +25,7 @@ from .messages import (
     Float64MultiArrayReader, MESSAGE_READERS, MessageReader, Selection, SelectionError,
     supported_types, typestore)
 from .options import DataOptions
-from .recording import FloatArray, MIN_SAMPLES, PathLike, Recording
+from .recording import check_magnitudes, FloatArray, MIN_SAMPLES, PathLike, Recording
 from ..errors import DataError
 
 __all__ = ['read_bag_signals', 'read_bag', 'BAG_SUFFIXES', 'TIME_SOURCES']
@@ -146,7 +146,9 @@ def read_bag_signals(
         message lists what the messages hold); a chunked message's layout does
         not fit its data, or its index is not an axis; a topic of chunks has a
         single message and no `sample_period`; a topic holds NaN/Inf (without
-        `drop_nonfinite`); or fewer than :data:`MIN_SAMPLES` samples pair up.
+        `drop_nonfinite`); fewer than :data:`MIN_SAMPLES` samples pair up; or a
+        signal is too large or spans too little to compute with
+        (:func:`~mpi_ros.recordings.recording.check_magnitudes`).
 
     Notes
     -----
@@ -225,8 +227,9 @@ def read_bag(path: PathLike, options: DataOptions, *, time_source: str = 'receiv
         raise DataError(msg)
     t_out, s_out, x_held = t_out[paired], s_out[paired], x_in[held[paired]]
     time = (t_out - t_out[0]).astype(np.float64) * (1e-9 * options.time_scale)
-    return Recording(time, x_held * options.input_scale, s_out * options.output_scale,
-                     source=str(bag), notes=tuple(notes))
+    return check_magnitudes(Recording(time, x_held * options.input_scale,
+                                      s_out * options.output_scale, source=str(bag),
+                                      notes=tuple(notes)), options)
 
 
 def _selections(options: DataOptions) -> tuple[Selection, Selection]:

@@ -20,7 +20,7 @@ import numpy.typing as npt
 
 from .files import _equal_length_arrays, atomic_write
 from .options import DataOptions
-from .recording import FloatArray, MIN_SAMPLES, PathLike, Recording
+from .recording import check_magnitudes, FloatArray, MIN_SAMPLES, PathLike, Recording
 from ..errors import DataError
 
 __all__ = ['read_csv_signals', 'read_csv', 'read_csv_table', 'write_csv_columns']
@@ -89,8 +89,9 @@ def read_csv_signals(
         column is missing (the message lists those present); a used field is
         not a number (the message gives line and column); rows are ragged;
         fewer than :data:`MIN_SAMPLES` rows remain; or a used field is NaN/Inf
-        or empty (without `drop_nonfinite`). The message names the first bad
-        field in file order.
+        or empty (without `drop_nonfinite`); or a signal is too large or spans
+        too little to compute with (:func:`~mpi_ros.recordings.recording.check_magnitudes`).
+        The message names the first bad field in file order.
 
     Examples
     --------
@@ -184,9 +185,9 @@ def read_csv(path: PathLike, options: DataOptions, *, comment: str | None = '#')
             line = int(np.asarray(table.line_numbers)[keep][first])
             notes.append(f'time column {time_column!r} is not strictly increasing (first at '
                          f'line {line}); samples are kept in file order')
-    return Recording(time, values['input'] * options.input_scale,
-                     values['output'] * options.output_scale, source=str(source),
-                     notes=tuple(notes))
+    return check_magnitudes(Recording(time, values['input'] * options.input_scale,
+                                      values['output'] * options.output_scale,
+                                      source=str(source), notes=tuple(notes)), options)
 
 
 def read_csv_table(
@@ -432,25 +433,24 @@ def _numeric_columns(
     other field that is not a number is refused. Without `drop_nonfinite` the message names
     the first bad field in file order (row by row, left to right), whichever kind it is.
     """
-    values = {index: np.empty(len(table.rows), dtype=np.float64) for index in indices}
+    n = len(table.rows)
     order = sorted(indices)
+    values: dict[int, FloatArray] = {}
+    bad = np.zeros(n, dtype=bool)                     # rows with NaN, Inf or an empty field
     text: tuple[int, int, str] | None = None          # first field that is not a number
-    bad = np.zeros(len(table.rows), dtype=bool)       # rows with NaN, Inf or an empty field
-    for row, fields in enumerate(table.rows):
-        for index in order:
-            field = fields[index]
-            if not field:
-                values[index][row] = np.nan
-                bad[row] = True
-            elif _NUMBER.fullmatch(field):
-                value = float(field)
-                values[index][row] = value
-                bad[row] |= not math.isfinite(value)
-            else:
-                values[index][row] = np.nan
-                if text is None:
-                    text = (row, index, field)
-    first = int(np.flatnonzero(bad)[0]) if bad.any() else len(table.rows)
+    for index in order:
+        fields = [row[index] for row in table.rows]
+        empty = np.array([not field for field in fields], dtype=bool)
+        number = np.array([_NUMBER.fullmatch(field) is not None for field in fields],
+                          dtype=bool)
+        column = np.full(n, np.nan)
+        column[number] = np.array([f for f, ok in zip(fields, number) if ok], dtype=np.float64)
+        values[index] = column
+        bad |= empty | (number & ~np.isfinite(column))
+        wrong = np.flatnonzero(~empty & ~number)
+        if wrong.size and (text is None or wrong[0] < text[0]):   # left to right: ties keep
+            text = (int(wrong[0]), index, fields[int(wrong[0])])  # the leftmost column
+    first = int(np.flatnonzero(bad)[0]) if bad.any() else n
     if text is not None and (drop_nonfinite or text[0] <= first):
         row, index, field = text
         msg = (f'CSV file {table.path} line {table.line_numbers[row]}, column '
@@ -459,8 +459,7 @@ def _numeric_columns(
         raise DataError(msg)
     n_bad = int(np.count_nonzero(bad))
     if n_bad and not drop_nonfinite:
-        index = next(i for i in order if not table.rows[first][i]
-                     or not math.isfinite(values[i][first]))
+        index = next(i for i in order if not math.isfinite(values[i][first]))
         field = table.rows[first][index]
         found = 'an empty field' if not field else repr(field[:40])
         msg = (f'CSV file {table.path} has {n_bad} row(s) with non-finite values (NaN, Inf '
