@@ -64,6 +64,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     options = data_options(args)             # refuse bad options before reading
     order = order_option(args)
     recording = read_recording(args.data, options)
+    for note in recording.notes:
+        _progress(f'note: {note}')
     _progress(f'identifying from {len(recording.time)} samples of {args.data} '
               f'(order {format_order(order)}) ...')
     result = fit_recording(recording, order=order, anchor=args.anchor,

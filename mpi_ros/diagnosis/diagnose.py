@@ -65,12 +65,15 @@ import numpy.typing as npt
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .signatures import burst_signature, hold_segments, hold_signature
+from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError
 from ..extensions import EFFECTS
+from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
 from ..identification import identify, output_sign, scaled_design
 from ..metrics import range_error, rms_range_error
 from ..params import OPERATING_POINT_KEYS
+from ..recordings.recording import check_magnitudes, Recording
 
 __all__ = ['DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
 
@@ -114,6 +117,9 @@ class DiagnosisReport:
     data : dict
         Sources, sample counts, split, ``output_sign``, burn-ins,
         ``output_offset_reestimated``.
+    warnings : list of str
+        What looks wrong without stopping the diagnosis, one sentence each: time constants
+        the record's time base makes implausible (:mod:`mpi_ros.diagnosis.time_base`).
     model : object
         The extended model (or the baseline MPIModel); not serialised.
     series : dict
@@ -130,6 +136,7 @@ class DiagnosisReport:
     residual: dict[str, Any] = field(default_factory=dict)
     decision: dict[str, Any] = field(default_factory=dict)
     data: dict[str, Any] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
     model: Any = None
     series: dict[str, Any] = field(default_factory=dict, repr=False)
 
@@ -139,7 +146,7 @@ class DiagnosisReport:
             'cause': self.cause, 'gain': self.gain, 'evidence': self.evidence,
             'baseline': self.baseline, 'extended': self.extended,
             'candidates': self.candidates, 'residual': self.residual,
-            'decision': self.decision, 'data': self.data})
+            'decision': self.decision, 'data': self.data, 'warnings': self.warnings})
         return form
 
     def parameters(self) -> dict[str, Any]:
@@ -207,7 +214,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     noise_factor : float
         The baseline validation RMS residual must exceed this times the noise floor.
     progress : callable, optional
-        Called with one line per step (the CLI prints them to stderr).
+        Called with one line per step (the CLI prints them to stderr); each of the
+        report's ``warnings`` as ``warning: ...``.
 
     Returns
     -------
@@ -338,7 +346,9 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         sims[cause] = sim
         rc = yv[val] - sim[val]
         errs = _errors(sim[val], yv[val])
-        gain = 1.0 - errs['rms_error'] / baseline['rms_error']
+        # A baseline without error leaves nothing to gain (and no ratio to form).
+        gain = (1.0 - errs['rms_error'] / baseline['rms_error']
+                if baseline['rms_error'] > 0.0 else 0.0)
         z, lags = _dm_statistic(r0, rc, bandwidth)
         params = {k: v for k, v in model.to_params().items()
                   if not k.startswith(('model.hysteresis', 'model.superposition'))
@@ -373,11 +383,18 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                     'parameters': chosen['parameters']}
     extended.setdefault('parameters', {})
     evidence = _evidence(cause, baseline, candidates, residual, sigma, yv[val], data)
+    records = ([('record', t)] if validation is None
+               else [('training record', t), ('validation record', tv)])
+    warning = time_base_warning(implausible_time_constants(candidates, residual), records)
+    warnings = [] if warning is None else [warning]
+    for text in warnings:
+        say(f'warning: {text}')
     say(f'verdict: {cause} (gain {gain:.3f})')
     public = [{k: v for k, v in c.items() if k != 'model'} for c in candidates]
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
-                           decision=decision, data=data, model=model, series=series)
+                           decision=decision, data=data, warnings=warnings, model=model,
+                           series=series)
 
 
 def _arrays(rec: Any, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -397,6 +414,7 @@ def _arrays(rec: Any, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:
     if np.any(np.diff(t) <= 0.0):
         msg = f'{name}: time must be strictly increasing'
         raise DataError(msg)
+    check_magnitudes(Recording(t, x, y, source=getattr(rec, 'source', '') or name))
     return t, x, y
 
 
@@ -497,14 +515,10 @@ def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatA
     duration = float(t[-1] - t[0])
     power = first_order_lag(t, x * x, duration / 3.0)[val]
     out['power_correlation'] = _corr(r, power - power.mean())
-    dy = np.gradient(y[val], tv)
-    ds = np.gradient(sim[val], tv)
-    dt = float(np.median(np.diff(tv)))
-    max_lag = max(int(min(0.2, 0.05 * duration) / dt), 1)
-    lags = np.arange(-max_lag, max_lag + 1)
-    xc = [_corr(dy[max(0, k):dy.size + min(0, k)], ds[max(0, -k):ds.size - max(0, k)])
-          for k in range(-max_lag, max_lag + 1)]
-    out['lag_of_best_correlation'] = float(lags[int(np.nanargmax(xc))] * dt)
+    # The lag window (0.2 s, or 5 % of the record) shrinks to half the scored samples when
+    # those are fewer (a validation record scored only after a long burn-in).
+    lags, xc = rate_cross_correlation(tv, y[val], sim[val], min(0.2, 0.05 * duration))
+    out['lag_of_best_correlation'] = float(lags[int(np.argmax(xc))])
     return out
 
 

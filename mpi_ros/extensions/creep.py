@@ -33,7 +33,7 @@ import numpy.typing as npt
 
 from ._common import check_series, hold_evidence, residual_axes, vector_parameter
 from ._signals import lag_bank, lag_coefficients
-from .effect import Effect, EffectParameter
+from .effect import Effect, EffectParameter, SLOW_TIME_LIMIT
 from ..errors import ModelError
 from ..identification import identify_weights
 from ..model import MPIModel
@@ -290,7 +290,7 @@ EFFECT = Effect(
     parameters=(
         EffectParameter(CREEP_TIME_CONSTANTS, 'double_array', (),
                         'Creep extension: time constants tau_j of the creep lags, ascending,'
-                        ' > 0; empty: no creep', 's'),
+                        ' > 0; empty: no creep', 's', plausible_max=SLOW_TIME_LIMIT),
         EffectParameter(CREEP_WEIGHTS, 'double_array', (),
                         'Creep extension: weights w_Cj >= 0 of the creep lags (H output per'
                         ' input unit, like w_H), one per time constant; empty: no creep')),

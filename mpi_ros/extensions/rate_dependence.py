@@ -22,7 +22,7 @@ import numpy.typing as npt
 from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
     fit_gamma, lag_search_limits, residual_axes, scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter
+from .effect import Effect, EffectParameter, FAST_TIME_LIMIT
 from ..model import MPIModel
 
 __all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',
@@ -204,7 +204,8 @@ EFFECT = Effect(
     parameters=(
         EffectParameter(RATE_TIME_CONSTANT, 'double', 0.0,
                         'Rate-dependence extension: time constant tau_e of the input'
-                        ' (eddy-current) lag; 0: no lag', 's', (0.0, 1.0e3)),),
+                        ' (eddy-current) lag; 0: no lag', 's', (0.0, 1.0e3),
+                        plausible_max=FAST_TIME_LIMIT),),
     model_class=RateDependentModel, fit=fit_rate_dependence,
     parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'lag'),
