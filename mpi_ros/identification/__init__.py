@@ -339,7 +339,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
     reference = (8, 4) if x.size >= 10 * 15 else (min(n, 8), min(l, 4))
     estimate = DynamicsEstimate()
-    if t is not None and dynamics == 'auto' and record.analysis.unit == 's':
+    if t is not None and dynamics == 'auto' and bool(np.all(np.diff(t) > 0.0)):
         # On a window of a long record: trials cost the window, not the record.
         trial = record.window(_DYNAMICS_WINDOW)
         held = held_out_rows(trial.current.size, holdout, trial.keep)

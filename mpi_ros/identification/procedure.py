@@ -408,15 +408,28 @@ def prepare_record(current: FloatArray, displacement: FloatArray, *,
     y = np.asarray(displacement, dtype=np.float64)
     if sign is None:
         sign, _ = output_sign(x, y)
-    monotone_time = time
-    if time is not None and np.any(np.diff(time) <= 0.0):
-        monotone_time = None           # a stitched clock: analyse by sample
-    analysis = analyse_dynamics(monotone_time, x, y, sign=sign)
-    if time is not None and monotone_time is None:
-        analysis = replace(analysis, unit='samples')
+    analysis = analyse_dynamics(_joined_time(time), x, y, sign=sign)
     keep = analysis.mask(x.size)
     segments = find_segments(time, analysis, x.size, jumps=[a for a, _ in analysis.ringing])
     return PreparedRecord(time, x, y, keep, segments, analysis, int(sign), anchor, epsilon)
+
+
+def _joined_time(time: FloatArray | None) -> FloatArray | None:
+    # The clock of a stitched record with its joins closed: a time gap or a restart of the
+    # clock becomes one typical interval, so each experiment's dynamics (ringing after its
+    # start, lag) are measured in its own time.
+    if time is None or time.size < 3:
+        return time
+    steps = np.diff(time)
+    positive = steps[steps > 0.0]
+    if not positive.size:
+        return None
+    typical = float(np.median(positive))
+    joins = (steps <= 0.0) | (steps > _GAP_FACTOR * typical)
+    if not np.any(joins):
+        return time
+    steps = np.where(joins, typical, steps)
+    return np.concatenate([[float(time[0])], float(time[0]) + np.cumsum(steps)])
 
 
 def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
