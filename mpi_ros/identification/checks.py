@@ -97,8 +97,11 @@ def _errors(sim: FloatArray, y: FloatArray,
 
 
 def _linear_fit(x: FloatArray, y: FloatArray) -> FloatArray:
-    slope, intercept = np.polyfit(x, y, 1)
-    line: FloatArray = slope * x + intercept
+    # The least-squares line in closed form (np.polyfit's lstsq costs 0.4 s on 1e6 samples).
+    xc = x - float(np.mean(x))
+    denominator = float(np.sum(xc * xc))
+    slope = float(np.sum(xc * (y - float(np.mean(y))))) / denominator if denominator else 0.0
+    line: FloatArray = float(np.mean(y)) + slope * xc
     return line
 
 

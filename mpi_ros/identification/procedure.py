@@ -546,6 +546,9 @@ class _Fitter:
         self.r_h = design.hysteresis_thresholds
         self.r_s = design.inverse_superposition_thresholds
         self._suffix: dict[int, tuple[int, GramParts]] = {}
+        self._prefixes: dict[tuple[int, bytes], GramParts] = {}
+        self._dead_zones: dict[int, FloatArray] = {}
+        self._splits: dict[tuple[int, int], int] = {}
 
     def _state(self, seg: Segment, previous: FloatArray | None) -> FloatArray:
         u = self.xs[seg.start:seg.stop]
@@ -561,9 +564,13 @@ class _Fitter:
         # Rows of the segment once its plays are determined do not depend on its start
         # state: accumulated once and reused.
         split = self.split(seg)
-        prefix = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
-                                classes=self.classes, n_classes=2, start=seg.start,
-                                stop=split)
+        key = (seg.start, z0.tobytes())
+        prefix = self._prefixes.get(key)
+        if prefix is None:
+            prefix = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
+                                    classes=self.classes, n_classes=2, start=seg.start,
+                                    stop=split)
+            self._prefixes[key] = prefix
         if split >= seg.stop:
             return prefix
         cached = self._suffix.get(seg.start)
@@ -623,7 +630,11 @@ class _Fitter:
 
     def split(self, seg: Segment) -> int:
         """Return the first sample of a segment whose plays no longer depend on its start."""
-        return seg.start + determined_from(self.xs[seg.start:seg.stop], float(self.r_h[-1]))
+        key = (seg.start, seg.stop)
+        if key not in self._splits:
+            self._splits[key] = seg.start + determined_from(self.xs[seg.start:seg.stop],
+                                                            float(self.r_h[-1]))
+        return self._splits[key]
 
     def choose_starts(self, segments: list[Segment]) -> list[Segment]:
         """
@@ -677,9 +688,12 @@ class _Fitter:
         u = self.xs[seg.start:seg.stop]
         error, _, weights = best
         z = self._state(seg, previous)
+        rows = slice(seg.start, self.split(seg))
         for _ in range(_MEMORY_ROUNDS):       # refine with the weights, refit, again
-            refined, _ = refine_memory(u, self.r_h, z,
-                                       lambda s: self._prefix_error_of(seg, s, weights))
+            w_h, w_s, constant, _ = weights
+            target = self.prefix_dead_zones(seg) @ w_s - constant
+            refined, _ = refine_memory(self.xs[rows], self.r_h, z, w_h, target,
+                                       self.classes[rows] == 0)
             if np.allclose(refined, z):
                 break
             memory = StartState('memory', memory=tuple(
@@ -723,22 +737,27 @@ class _Fitter:
             return 0.0
         plays, _ = play_operator(self.xs[rows_], self.r_h, z0)
         w_h, w_s, constant, _ = weights
-        s_part = dead_zone_operator(self.ys[rows_], self.r_s) @ w_s
-        e = (plays @ w_h - s_part + constant)[train]
+        e = (plays @ w_h - self.prefix_dead_zones(seg) @ w_s + constant)[train]
         return float(np.sqrt(np.mean(e * e)))
+
+    def prefix_dead_zones(self, seg: Segment) -> FloatArray:
+        """Return S' regressors of the samples before the segment's plays are determined."""
+        cached = self._dead_zones.get(seg.start)
+        if cached is None:
+            cached = dead_zone_operator(self.ys[seg.start:self.split(seg)], self.r_s)
+            self._dead_zones[seg.start] = cached
+        return cached
 
     def undetermined_start(self, segments: list[Segment],
                            weights: tuple[FloatArray, FloatArray, float, Any]) -> int:
         """Return a burn-in when the first segment's start is explained by no candidate."""
         seg = segments[0]
-        split = seg.start + determined_from(self.xs[seg.start:seg.stop], float(self.r_h[-1]))
+        split = self.split(seg)
         if split >= seg.stop or split < 10:
             return 0
         z0 = self._state(seg, None)
-        prefix = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
-                                classes=self.classes, n_classes=2, start=seg.start,
-                                stop=split)
         rest = self._segment_parts(seg, z0)
+        prefix = self._prefixes[(seg.start, z0.tobytes())]
         before = self.error(prefix, weights, 0)
         total = self.error(rest, weights, 0)
         if not (math.isfinite(before) and math.isfinite(total)):

@@ -43,6 +43,7 @@ import math
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .design import burn_in, FloatArray
 from ..play import play_operator
@@ -161,53 +162,67 @@ class StartState:
 
 
 def refine_memory(u: FloatArray, thresholds: FloatArray, start: FloatArray,
-                  error: Callable[[FloatArray], float], steps: int = 9,
-                  sweeps: int = 2) -> tuple[FloatArray, float]:
+                  weights: FloatArray, target: FloatArray, rows: npt.NDArray[np.bool_],
+                  steps: int = 9, sweeps: int = 2) -> tuple[FloatArray, float]:
     """
     Refine the plays' start states one at a time within a valid memory.
 
+    Minimises ``sum over rows of (H[u; z] - target)^2`` over the start states ``z`` of the
+    plays (``H = P w``), one play at a time on a grid within what a valid memory allows
+    (``|z_i - u0| <= r_i``, ``|z_i - z_j| <= |r_i - r_j|``), largest threshold first.
+
     Parameters
     ----------
-    u : ndarray of float, shape (N,)
-        Scaled input of the segment.
+    u : ndarray of float, shape (K,)
+        Scaled input of the samples before the plays are determined.
     thresholds : ndarray of float, shape (n+1,)
         Play thresholds (scaled), ascending from 0.
     start : ndarray of float, shape (n+1,)
         The states to start from (the best history's).
-    error : callable
-        ``error(states)`` -> the error to minimise.
+    weights : ndarray of float, shape (n+1,)
+        Weights of H.
+    target : ndarray of float, shape (K,)
+        What H should equal there (``S'[y] - c`` of the current fit).
+    rows : ndarray of bool, shape (K,)
+        The samples that count (training samples).
     steps : int
         Grid values tried per play and sweep.
     sweeps : int
-        Passes over the plays (largest threshold first).
+        Passes over the plays.
 
     Returns
     -------
-    states, value : ndarray of float, float
-        The refined states and their error.
+    states, rms : ndarray of float, float
+        The refined states and the RMS residual over the rows.
 
     """
     r = np.asarray(thresholds, dtype=np.float64)
     z = np.array(start, dtype=np.float64)
     u0 = float(u[0])
-    best = error(z)
+    plays, _ = play_operator(u, r, z)
+    residual = plays @ weights - target
+    count = max(int(np.count_nonzero(rows)), 1)
+    best = float(np.sum(residual[rows] ** 2))
     for _ in range(sweeps):
         for i in range(r.size - 1, 0, -1):
-            lo, hi = u0 - r[i], u0 + r[i]
-            lo = max(lo, z[i - 1] - (r[i] - r[i - 1]))
-            hi = min(hi, z[i - 1] + (r[i] - r[i - 1]))
+            lo = max(u0 - r[i], z[i - 1] - (r[i] - r[i - 1]))
+            hi = min(u0 + r[i], z[i - 1] + (r[i] - r[i - 1]))
             if i + 1 < r.size:
                 lo = max(lo, z[i + 1] - (r[i + 1] - r[i]))
                 hi = min(hi, z[i + 1] + (r[i + 1] - r[i]))
-            if hi <= lo:
+            if not hi > lo or weights[i] == 0.0:
                 continue
-            for value in np.linspace(lo, hi, steps).tolist():
-                trial = z.copy()
-                trial[i] = value
-                e = error(trial)
-                if e < best * (1.0 - 1e-9):
-                    best, z = e, trial
-    return z, best
+            values = np.linspace(lo, hi, steps)
+            trial, _ = play_operator(u, np.full(steps, r[i]), values)
+            moved = residual[:, None] + weights[i] * (trial - plays[:, [i]])
+            sse = np.sum(moved[rows] ** 2, axis=0)
+            k = int(np.argmin(sse))
+            if sse[k] < best * (1.0 - 1e-9):
+                best = float(sse[k])
+                z[i] = values[k]
+                residual = moved[:, k]
+                plays[:, i] = trial[:, k]
+    return z, float(np.sqrt(best / count))
 
 
 def start_candidates(u: FloatArray) -> list[StartState]:
