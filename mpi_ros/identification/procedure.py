@@ -49,6 +49,11 @@ _TRIAL_TOLERANCE = 1e-9
 #: A time gap: a sample interval this many times the median one.
 _GAP_FACTOR = 5.0
 
+#: A record is cut into at most this many experiments, each of at least _MIN_SEGMENT
+#: samples; a time column that runs back or jumps more often is not used for joins.
+_MAX_SEGMENTS = 20
+_MIN_SEGMENT = 50
+
 #: Dynamics are kept when they cut the held-out RMS output error by this fraction.
 _DYNAMICS_GAIN = 0.1
 
@@ -340,7 +345,10 @@ def find_segments(time: FloatArray | None, analysis: DynamicsAnalysis, size: int
 
     A join is a time gap (an interval over five times the median one), time running back
     (each experiment's clock restarting), or an output jump the input does not explain
-    (the unrecorded input between two experiments) after the record's first samples.
+    (the unrecorded input between two experiments) after the record's first samples.  At
+    most :data:`_MAX_SEGMENTS` experiments of at least :data:`_MIN_SEGMENT` samples each; a
+    time column that runs back or jumps more often is not a clock of stitched experiments
+    (duplicated, constant or scrambled time) and gives no joins.
 
     Parameters
     ----------
@@ -364,15 +372,24 @@ def find_segments(time: FloatArray | None, analysis: DynamicsAnalysis, size: int
         steps = np.diff(time)
         positive = steps[steps > 0.0]
         typical = float(np.median(positive)) if positive.size else 0.0
-        for k in np.flatnonzero(steps <= 0.0).tolist():
-            cuts[k + 1] = 'time runs back'
-        if typical > 0.0:
-            for k in np.flatnonzero(steps > _GAP_FACTOR * typical).tolist():
+        back = np.flatnonzero(steps <= 0.0)
+        gaps = (np.flatnonzero(steps > _GAP_FACTOR * typical) if typical > 0.0
+                else np.zeros(0, dtype=np.int64))
+        # A clock that runs back or jumps at many samples is no clock of a few stitched
+        # experiments (a duplicated, constant or scrambled time column): no joins from it.
+        if back.size + gaps.size <= _MAX_SEGMENTS:
+            for k in back.tolist():
+                cuts[k + 1] = 'time runs back'
+            for k in gaps.tolist():
                 cuts.setdefault(k + 1, f'time gap of {steps[k]:.4g} s')
     for k in jumps or []:
-        if 10 < k < size - 10 and all(abs(k - c) > 10 for c in cuts):
+        if all(abs(k - c) > _MIN_SEGMENT for c in cuts):
             cuts[k] = 'output jump the input does not explain'
-    bounds = sorted(c for c in cuts if 10 <= c <= size - 10)
+    bounds: list[int] = []
+    for c in sorted(cuts):               # experiments of at least _MIN_SEGMENT samples
+        if c - (bounds[-1] if bounds else 0) >= _MIN_SEGMENT and size - c >= _MIN_SEGMENT:
+            bounds.append(c)
+    bounds = bounds[:_MAX_SEGMENTS - 1]
     starts = [0] + bounds
     stops = bounds + [size]
     return [Segment(a, b, 'start' if a == 0 else cuts[a]) for a, b in zip(starts, stops)]
