@@ -17,8 +17,7 @@ are refused, naming the butterfly.
 from pathlib import Path
 
 from mpi_ros import IdentificationError, identify
-from mpi_ros.identification import fit_generalized_error, scaled_design
-from mpi_ros.identification.qp import regressor_gram
+from mpi_ros.identification import fit_plain
 from mpi_ros.recordings import read_csv_signals
 import numpy as np
 import pytest
@@ -60,28 +59,9 @@ def _tum(name):
     return rec.time, rec.current, rec.displacement
 
 
-def plain_qp(x, y, n=14, l=7):  # noqa: E741
-    """
-    Return the plain (14, 7) QP with one constant term on the whole record, simulated.
-
-    The paper's QP (34)-(36) with its small bound 1e-6 on the slopes of S' (19), the input
-    and output centred on their ranges, the plays from the centre (z = 0) at the first
-    sample, every sample fitted, simulated from the first sample: what a careful engineer
-    fits by hand, the reference of issue 17.
-    """
-    d = scaled_design(x, y, n, l)
-    xs, ys = d.scaled_input(x), d.scaled_output(y)
-    parts = regressor_gram(xs, ys, d.hysteresis_thresholds,
-                           d.inverse_superposition_thresholds, state=np.zeros(n + 1),
-                           classes=np.zeros(x.size, dtype=np.int8), n_classes=1)
-    gram, mean, _ = parts.normalised((0,))
-    w_h, w_s, _, _ = fit_generalized_error(
-        gram - np.outer(mean, mean), 1.0 - d.hysteresis_thresholds, n_hysteresis=n + 1,
-        n_superposition=d.inverse_superposition_thresholds.size,
-        superposition_center=d.center, slope_floor=1e-6)
-    constant = -float(mean @ np.concatenate([w_h, w_s]))
-    model = d.model(w_h, w_s, constant, initial_states=np.zeros(n + 1))
-    return model.simulate(x)
+def plain_qp(x, y):
+    """Return the plain (14, 7) QP's simulation of the record from its first sample."""
+    return fit_plain(x, y, 14, 7).simulate(x)
 
 
 def _rms(sim, y):

@@ -79,7 +79,8 @@ from .design import (ANCHORS, burn_in, hysteresis_thresholds,
 from .design import FloatArray
 from .procedure import (DynamicsEstimate, estimate_dynamics, fit_record, held_out_rows,
                         InputDynamics, prepare_record, refuse_if_unmodellable, Segment)
-from .qp import fit_generalized_error, fit_model, generalized_error_gram, identify_weights
+from .qp import fit_generalized_error, fit_model, fit_plain, generalized_error_gram, \
+    identify_weights
 from .selection import DEFAULT_ORDERS, select_order, select_record_order
 from .start_state import StartState
 from ..errors import DataError, IdentificationError
@@ -90,7 +91,7 @@ __all__ = [
     'inverse_superposition_thresholds', 'fit_generalized_error', 'generalized_error_gram',
     'DEFAULT_ORDERS', 'ScaledDesign', 'scaled_design', 'identify_weights', 'fit_model',
     'output_sign', 'burn_in', 'ANCHORS', 'InputDynamics', 'StartState',
-    'model_with_dynamics', 'select_record_order',
+    'model_with_dynamics', 'select_record_order', 'fit_plain',
 ]
 
 
@@ -357,10 +358,13 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     _check_excitation(x, y, n, l, anchor=anchor)
     fit = fit_record(record, n, l, dynamics=found, choose=choose)
     notes.extend(fit.notes)
-    sim = fit.simulate()
+    sim = fit.simulate()                 # each segment from its start state
     fitted = fit.fitted if fit.fitted is not None else keep
     rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
-    whole = float(np.sqrt(np.mean((sim - y) ** 2)) / np.ptp(y))
+    # What `mpi-ros simulate` gives: the model from its initial states, straight through.
+    straight = (model_with_dynamics(fit.model, found).simulate(t, x) if found.present
+                else fit.model.simulate(x))
+    whole = float(np.sqrt(np.mean((straight - y) ** 2)) / np.ptp(y))
     design = fit.design
     first = fit.segments[0].start_state
 

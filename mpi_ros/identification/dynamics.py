@@ -140,6 +140,9 @@ class DynamicsAnalysis:
         Longest delay or lag [s, or samples] allowed as an explanation.
     unit : str
         ``'s'`` or ``'samples'``.
+    jumps : list of int
+        Where the output jumps without an input step and rings (an unrecorded input: the
+        start of a record, or a join of stitched experiments).
 
     """
 
@@ -159,6 +162,7 @@ class DynamicsAnalysis:
     band_sweeps: tuple[int, int] = (0, 0)
     explain_limit: float = 0.0
     unit: str = 's'
+    jumps: list[int] = field(default_factory=list)
 
     @property
     def excluded(self) -> int:
@@ -234,7 +238,7 @@ def analyse_dynamics(time: npt.ArrayLike | None, current: npt.ArrayLike,
     everything = np.ones(n, dtype=np.bool_)
     raw, _, _ = _counter_move(x, v, turns, everything)
     steps = _steps(x, v, span_x, span_y, margin)
-    ringing, frequency = _ringing(t, v, steps, margin, span_y, time is not None)
+    ringing, frequency, jumps = _ringing(t, v, steps, margin, span_y, time is not None)
     keep = np.ones(n, dtype=np.bool_)
     for a, b in ringing:
         keep[a:b] = False
@@ -250,7 +254,7 @@ def analyse_dynamics(time: npt.ArrayLike | None, current: npt.ArrayLike,
         'counter_move': max(counter, 0.0), 'static_counter_move': max(static_excess, 0.0),
         'turning_delay': turning[0], 'turning_delays': turning[1], 'steps': len(steps[1]),
         'ringing': ringing, 'ringing_frequency': frequency, 'explain_limit': limit,
-        'unit': unit}
+        'unit': unit, 'jumps': jumps}
     if static_excess <= MAX_COUNTER_MOVE:
         verdict = 'ringing' if counter > MAX_COUNTER_MOVE else 'static'
         return DynamicsAnalysis(verdict, explained_counter_move=max(static_excess, 0.0),
@@ -361,7 +365,8 @@ def _first_of_runs(events: IntArray) -> list[int]:
 
 
 def _ringing(t: FloatArray, v: FloatArray, steps: tuple[list[int], list[int]],
-             margin: float, span_y: float, timed: bool) -> tuple[list[tuple[int, int]], float]:
+             margin: float, span_y: float,
+             timed: bool) -> tuple[list[tuple[int, int]], float, list[int]]:
     # After each event: a chain of alternating extrema of the output, each at least
     # `tolerance` from the last and at most the ringing spacing apart; the window lasts
     # until the last extremum of the chain plus one spacing.  An event inside the window
@@ -371,6 +376,7 @@ def _ringing(t: FloatArray, v: FloatArray, steps: tuple[list[int], list[int]],
     windows: list[tuple[int, int]] = []
     periods: list[float] = []
     input_steps, events = steps
+    jumps: list[int] = []
     covered = -1
     for k in events:
         if k < covered:
@@ -387,8 +393,10 @@ def _ringing(t: FloatArray, v: FloatArray, steps: tuple[list[int], list[int]],
         windows.append((0 if k <= _START_SAMPLES else int(k), end))
         periods.append(2.0 * spacing)
         covered = end
+        if k not in input_steps:
+            jumps.append(int(k))
     frequency = (1.0 / float(np.median(periods)) if periods and timed else math.nan)
-    return windows, frequency
+    return windows, frequency, jumps
 
 
 def _extrema_chain(t: FloatArray, v: FloatArray, start: int, stop: int, tolerance: float,

@@ -427,7 +427,7 @@ def prepare_record(current: FloatArray, displacement: FloatArray, *,
         sign, _ = output_sign(x, y)
     analysis = analyse_dynamics(_joined_time(time), x, y, sign=sign)
     keep = analysis.mask(x.size)
-    segments = find_segments(time, analysis, x.size, jumps=[a for a, _ in analysis.ringing])
+    segments = find_segments(time, analysis, x.size, jumps=analysis.jumps)
     return PreparedRecord(time, x, y, keep, segments, analysis, int(sign), anchor, epsilon)
 
 

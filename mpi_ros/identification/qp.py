@@ -20,7 +20,7 @@ from ..errors import IdentificationError
 from ..model import MPIModel
 from ..play import play_clamp, play_operator
 
-__all__ = ['SLOPE_FLOOR', 'GramParts', 'fit_generalized_error', 'fit_model',
+__all__ = ['SLOPE_FLOOR', 'GramParts', 'fit_generalized_error', 'fit_model', 'fit_plain',
            'generalized_error_gram', 'identify_weights', 'regressor_gram']
 
 
@@ -491,3 +491,45 @@ def fit_model(current: npt.ArrayLike, displacement: npt.ArrayLike, n: int,
     design, w_h, w_s_inv, _, constant, info = identify_weights(
         x, y, n, l, epsilon=epsilon, anchor=anchor, rows=rows)
     return design.model(w_h, w_s_inv, constant), design, info
+
+
+def fit_plain(current: npt.ArrayLike, displacement: npt.ArrayLike, n: int = 14,
+              l: int = 7, *, epsilon: float = 1e-6) -> MPIModel:  # noqa: E741
+    """
+    Fit the plain QP with one constant term on a whole record: the reference fit.
+
+    The paper's QP (34)-(36) with its small bound ``epsilon`` on (8) and (19), the input
+    and output centred on their ranges, the plays from the centre (``z = 0``) at the first
+    sample, every sample fitted: what a careful engineer fits by hand.  No start state, no
+    dynamics, no ringing left out, no refusal.  :func:`~mpi_ros.identification.identify` is
+    judged against it (issue 17: within 1.1x or 0.5 points, simulated from sample 0).
+
+    Parameters
+    ----------
+    current, displacement : array_like of float, shape (N,)
+        Input [A] and output [m].
+    n, l : int
+        Model orders.
+    epsilon : float
+        The bound of (8) and (19), scaled units.
+
+    Returns
+    -------
+    MPIModel
+        Gamma, its initial states the centre: ``model.simulate(current)`` from sample 0.
+
+    """
+    x = np.asarray(current, dtype=np.float64).reshape(-1)
+    y = np.asarray(displacement, dtype=np.float64).reshape(-1)
+    design = scaled_design(x, y, n, l)
+    xs, ys = design.scaled_input(x), design.scaled_output(y)
+    parts = regressor_gram(xs, ys, design.hysteresis_thresholds,
+                           design.inverse_superposition_thresholds, state=np.zeros(n + 1),
+                           classes=np.zeros(x.size, dtype=np.int8), n_classes=1)
+    gram, mean, _ = parts.normalised((0,))
+    w_h, w_s, _, _ = fit_generalized_error(
+        gram - np.outer(mean, mean), 1.0 - design.hysteresis_thresholds,
+        n_hysteresis=n + 1, n_superposition=design.inverse_superposition_thresholds.size,
+        superposition_center=design.center, epsilon=epsilon, slope_floor=epsilon)
+    constant = -float(mean @ np.concatenate([w_h, w_s]))
+    return design.model(w_h, w_s, constant, initial_states=np.zeros(n + 1))
