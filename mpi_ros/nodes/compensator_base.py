@@ -54,6 +54,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -220,6 +221,34 @@ class CompensatorNodeBase(LifecycleNode):
         self.add_pre_set_parameters_callback(self._complete_request)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
+        self._guard_change_state()
+
+    def _guard_change_state(self) -> None:
+        """
+        Answer a transition the current state does not have with ``success: false``.
+
+        rclpy 7.1.6's ``change_state`` service raises ``RCLError`` out of the executor for
+        a transition *id* that the current state does not offer (e.g. activate while
+        unconfigured; a label is answered false), which would end the node.
+        """
+        service = getattr(self, '_service_change_state', None)   # rclpy 7.1.6: private
+        if service is None:
+            return
+        callback = service.callback
+
+        def guarded(request: Any, response: Any) -> Any:
+            try:
+                return callback(request, response)
+            except _rclpy.RCLError as err:
+                transition = request.transition
+                self.get_logger().warning(
+                    f'lifecycle: transition {transition.id} {transition.label!r} refused in '
+                    f'state {self.lifecycle_state}: {err}; ros2 lifecycle list '
+                    f'{self.get_fully_qualified_name()} lists the available ones')
+                response.success = False
+                return response
+
+        service.callback = guarded
 
     def _declared(self) -> None:
         """Close the declaration phase: serve set_parameters in groups from now on."""
