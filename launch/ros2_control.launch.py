@@ -21,9 +21,9 @@ the command interface the hardware exposes for the current (e.g. ``effort``)::
         joints: [wrist, elbow, shoulder]
         interface_name: effort
 
-The controller subscribes with the system-default QoS (reliable, keep-last 1 with Fast DDS):
-keep the compensator's ``qos_reliability`` reliable (a best-effort publisher does not reach
-it) and send one sample per message (of a chunk, the controller keeps the newest).
+The controller subscribes with the system-default QoS (with Fast DDS a best-effort reader
+that keeps the newest message; either ``qos_reliability`` of the compensator reaches it):
+send one sample per message (of a chunk's messages, the controller keeps the newest).
 
 Launch arguments
     ``joints``: joint names, comma- or space-separated, in the controller's order (required).

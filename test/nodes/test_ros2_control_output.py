@@ -3,8 +3,8 @@
 The multi-axis compensator wired to ros2_control's forward_command_controller.
 
 The controller's contract (ros2_controllers, ``forward_command_controller``): it subscribes
-``~/commands`` (``std_msgs/Float64MultiArray``, system-default QoS: reliable, keep-last
-10) and uses a message only when ``data`` holds exactly one value per joint of its
+``~/commands`` (``std_msgs/Float64MultiArray``, system-default QoS: with Fast DDS a
+best-effort reader that keeps the newest message) and uses a message only when ``data`` holds exactly one value per joint of its
 ``joints`` parameter, in that order; the layout is not read.  The node's
 ``output_layout: flat`` must publish exactly that: ``len(data) == len(joints)``, empty
 ``layout.dim``, ``layout.data_offset`` 0, ``data[k]`` the command of ``joints[k]``.  The
@@ -113,7 +113,7 @@ def test_joint_states_in_any_order_give_commands_in_joints_order(make_rig):
         order = rng.permutation(len(names))              # another order in every message
         rig.publisher.publish(JointState(name=[names[i] for i in order],
                                          position=[float(values[i]) for i in order]))
-        # In lock step: the controller's keep-last 10 queue keeps only the newest.
+        # In lock step: the controller's queue keeps only the newest.
         assert rig.spin_until(lambda: len(rig.received) >= count)
     assert len(rig.received) == len(desired)
     for msg in rig.received:
@@ -170,8 +170,8 @@ def test_array_chunks_give_one_message_per_sample_and_the_controller_the_newest(
                                atol=TOLERANCE)
 
     def newest_arrived():
-        # The controller's queue (system default: keep-last 1 with Fast DDS) keeps the
-        # newest of a burst: the last sample of each chunk reaches it.
+        # The controller's queue (system default: Fast DDS keeps the newest) drops the
+        # older messages of a burst: the last sample of each chunk reaches it.
         return bool(rig.received) and np.allclose(rig.received[-1].data, expected[-1],
                                                   rtol=0, atol=TOLERANCE)
 
