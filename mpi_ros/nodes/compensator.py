@@ -12,11 +12,21 @@ Topics (relative names, std_msgs/msg/Float64, SI units)
     ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
     ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray) every ``diagnostics_period``.
 
+Managed node (lifecycle)
+    A :class:`rclpy.lifecycle.LifecycleNode` (the states and transitions are in
+    :mod:`mpi_ros.nodes.compensator_base`): configure loads and validates the model of the
+    parameters and builds the core, its turning-point memory at the model's start state
+    (``model.hysteresis.initial_states``); activate publishes; deactivate publishes nothing
+    (inputs taken and dropped, the memory held, so re-activation continues bumplessly);
+    cleanup and shutdown drop the core.  ``autostart`` (default true) configures and
+    activates at start-up; ``/diagnostics`` reports ``lifecycle_state``.
+
 Model life cycle
-    The node starts *unconfigured* unless the five ``model.*`` keys of Gamma are given
-    (e.g. ``--params-file params.yaml`` written by ``mpi-ros identify``). While
-    unconfigured it publishes nothing: without a model there is no safe command, and
-    the current source keeps its last value. Its diagnostics say so (WARN).
+    The node has no model (its log and diagnostics call it *unconfigured*, apart from the
+    lifecycle state) unless the five ``model.*`` keys of Gamma are given (e.g.
+    ``--params-file params.yaml`` written by ``mpi-ros identify``). Without a model it
+    publishes nothing: there is no safe command, and the current source keeps its last
+    value. Its diagnostics say so (WARN).
     The model is every ``model.*`` key: Gamma's five arrays, the operating point
     (``model.input_offset`` [A], ``model.output_offset`` [m], ``model.output_sign``
     +1/-1, defaults 0, 0, +1: ``y = y0 + sign * S[H[x - x0]]``) and the extension keys.
@@ -77,7 +87,7 @@ Extended models (:mod:`mpi_ros.extensions`)
 
 A ``--params-file`` with an invalid model, or with output limits that are not
 ordered, makes the node refuse to start (exit status 1) rather than run a model
-nobody asked for.
+nobody asked for (with ``autostart: false`` it starts, and configure fails instead).
 """
 
 import struct

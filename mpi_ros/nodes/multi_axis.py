@@ -19,6 +19,15 @@ Topics (relative names, ``std_msgs/msg/Float64MultiArray``, SI units)
     compiled loop over every axis and sample of a message).  ``/diagnostics`` as the
     single-axis node.
 
+ros2_control (``joints``, ``output_layout``, ``input_message``, read-only)
+    ``output_layout: flat`` publishes what ``forward_command_controller`` takes on
+    ``~/commands``: one message per sample, ``data[k]`` the command of axis k (the joint
+    ``joints[k]``), empty ``layout.dim``, ``data_offset`` 0.  ``input_message: joint_state``
+    subscribes ``desired_joint_states`` (``sensor_msgs/JointState``): each joint's
+    ``position`` [m] mapped by name to the ``joints`` order; joints not in ``joints`` are
+    ignored; a message missing one is refused (``missing_joints``, WARN), one whose
+    positions do not match its names is ``malformed``.
+
 Node parameters
     ``axes`` (read-only); per axis k = 0..N-1 every model key of the single-axis node under
     ``axis<k>.``: ``axis<k>.model.hysteresis.thresholds``, ``.weights``,

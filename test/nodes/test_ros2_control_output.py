@@ -4,8 +4,9 @@ The multi-axis compensator wired to ros2_control's forward_command_controller.
 
 The controller's contract (ros2_controllers, ``forward_command_controller``): it subscribes
 ``~/commands`` (``std_msgs/Float64MultiArray``, system-default QoS: with Fast DDS a
-best-effort reader that keeps the newest message) and uses a message only when ``data`` holds exactly one value per joint of its
-``joints`` parameter, in that order; the layout is not read.  The node's
+best-effort reader that keeps the newest message) and uses a message only when ``data``
+holds exactly one value per joint of its ``joints`` parameter, in that order; the layout is
+not read.  The node's
 ``output_layout: flat`` must publish exactly that: ``len(data) == len(joints)``, empty
 ``layout.dim``, ``layout.data_offset`` 0, ``data[k]`` the command of ``joints[k]``.  The
 output is remapped to ``/<controller>/commands`` as the launch example does, and received
