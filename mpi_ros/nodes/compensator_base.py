@@ -250,6 +250,13 @@ class CompensatorNodeBase(LifecycleNode):
 
         service.callback = guarded
 
+    def destroy_node(self) -> None:
+        """Destroy the node, and its lifecycle state machine now rather than when collected."""
+        super().destroy_node()
+        # rclpy 7.1.6 leaves the state machine to the garbage collector, which may run its
+        # rcl finaliser anywhere later, e.g. in a child process forked by a test.
+        self._state_machine.destroy_when_not_in_use()
+
     def _declared(self) -> None:
         """Close the declaration phase: serve set_parameters in groups from now on."""
         harden_parameter_services(self, groups=self._groups, specs=self._specs)
@@ -361,7 +368,9 @@ class CompensatorNodeBase(LifecycleNode):
 
     def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Release everything after a transition raised; the node goes to unconfigured."""
-        return self._transition('error processing', self._release)
+        self._release()           # keeps _transition_error: what raised (for autostart)
+        self.get_logger().info('lifecycle: error processing done, state unconfigured')
+        return TransitionCallbackReturn.SUCCESS
 
     def _transition(self, name: str, action: Callable[[], None]) -> TransitionCallbackReturn:
         """Run one transition's work: a refusal fails it, anything else is an error."""

@@ -285,3 +285,20 @@ def test_mpi_ros_compensator_process_is_driven_by_lifecycle_and_exits_on_shutdow
     assert status == 0, process.output
     assert 'lifecycle: shutdown done, state finalized' in process.output
     assert 'Traceback' not in process.output
+
+
+def test_an_unexpected_error_in_a_transition_is_logged_and_leaves_unconfigured(make_rig):
+    rig = make_rig(limits() + as_parameters(MODEL_A) + [Parameter('autostart', value=False)])
+
+    def broken():
+        raise RuntimeError('disk on fire')
+
+    rig.node._load = broken                                # shadows the method
+    assert not rig.change_state('configure')               # ERROR -> error processing
+    assert rig.state() == 'unconfigured'
+    assert isinstance(rig.node._transition_error, RuntimeError)
+    assert rig.node.compensator is None
+    assert rig.node.count_subscribers('desired_displacement') == 0
+    del rig.node._load
+    assert rig.change_state('configure') and rig.change_state('activate')
+    assert rig.node.compensator is not None
