@@ -301,8 +301,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
             left_out = ('the ringing after a step just before the record' if start
                         else 'nothing')
         if tv.size - start < 100:
-            msg = (f'the validation record leaves only {tv.size - start} samples to score'
-                   f' (from sample {start}: {left_out}); record a longer validation'
+            msg = ('too little to score: the validation record leaves only'
+                   f' {tv.size - start} samples (from sample {start}: {left_out}); record a longer validation'
                    ' (e.g. mpi-ros diagnose --excitation)')
             raise DataError(msg)
         series['start'] = start

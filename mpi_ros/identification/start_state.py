@@ -390,8 +390,12 @@ def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArr
     best: tuple[float, StartState, Any] | None = None
     for cand in [*start_candidates(u), *turning_point_candidates(u)]:
         trial = with_initial_states(model, cand.states(float(u[0]), r, ends))
-        sim = (trial.simulate(current[part]) if isinstance(trial, MPIModel)
-               else trial.simulate(time[part], current[part]))
+        if isinstance(trial, MPIModel):
+            sim = trial.simulate(current[part])
+        elif time is None:
+            raise ValueError('an extended model is simulated with its time base')
+        else:
+            sim = trial.simulate(time[part], current[part])
         residual = (sim - y[part])[counted]
         if offset_free and residual.size:
             residual = residual - float(np.mean(residual))
