@@ -10,11 +10,15 @@ Evaluate the identification on a rig's operating point and on measured records (
     (``identify``'s default), the paper's as printed (``anchor='origin'``) and the paper's
     with one constant term in the generalised error.  Variants: as recorded, sensor zero
     -20 um, +0.5 A bias, both, falling sensor.
-(b) Every record in ``../shared/data/measured`` (PNZT tables and loops, SMA reversal
-    curves): order auto and (14, 7), training and validation RMS, the straight line's,
-    the operating point, or the refusal.
+(b) Every record in ``../shared/data/measured`` (TUM piezo captures, PNZT tables and loops,
+    SMA reversal curves), identified whole with order auto and its time base: the model
+    simulated from sample 0 against the plain (14, 7) QP with one constant term (issue 17),
+    the start state, the dynamics, or the refusal and its cause.
+(c) Cross-rate: a TUM model identified on one rate, simulated on the others.
+(d) Issue 17's synthetic plants (lag, dead time, ringing, starts, rising sines, a 300-sample
+    loop), three seeds: refusals, the dynamics estimated against the truth, the errors.
 
-Usage: ``python benchmarks/evaluate_identification.py [--measured DIR] [--plot PNG]``
+Usage: ``python benchmarks/evaluate_identification.py [--measured DIR] [--parts abcd]``
 """
 
 import argparse
@@ -24,8 +28,9 @@ import time
 from mpi_ros import IdentificationError, identify
 from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.excitation import identification_excitation
-from mpi_ros.identification import burn_in, identify_weights
+from mpi_ros.identification import burn_in, fit_plain, identify_weights
 from mpi_ros.recordings import read_csv_signals
+from mpi_ros.synthetic import SYNTHETIC_KINDS, synthetic_record
 import numpy as np
 
 NOISE = 0.002                     # sensor noise, fraction of the output range
@@ -115,10 +120,11 @@ def evaluate_actuator():
         autos = []
         for (x, y), (xv, yv) in records:
             result = identify(x + bias, offset + sign * y, order='auto')
-            table = {(r['n'], r['l']): r['nonlinearity_error'] for r in result.order_table}
+            table = {(r['n'], r['l']): r['rms_error'] for r in result.order_table}
             valid = validation_error(result.model, xv + bias, offset + sign * yv)
             above = table[result.order] / min(table.values()) - 1
-            autos.append(f'{result.order} {_pct(valid).strip()} (held-out +{100 * above:.0f} %)')
+            autos.append(f'{result.order} {_pct(valid).strip()}'
+                         f' (held-out RMS +{100 * above:.0f} %)')
         print(f'  {variant:26s} ' + '; '.join(row))
         print(f'  {"":26s} auto: ' + '; '.join(autos))
 
@@ -127,7 +133,7 @@ def _pnzt_table(directory, name):
     rec = read_csv_signals(directory / 'pnzt-aixacct-tue' / 'csv' / f'{name}.csv',
                            time_column='Time_s', input_column='Vplus_V',
                            output_column='D1_nm', output_scale=1e-9)
-    return rec.current, rec.displacement
+    return rec.time, rec.current, rec.displacement
 
 
 def _pnzt_columns(directory, name):
@@ -135,19 +141,32 @@ def _pnzt_columns(directory, name):
     lines = [line for line in path.read_text().splitlines() if not line.startswith('#')]
     header = lines[0].split(',')
     data = np.loadtxt(lines[1:], delimiter=',')
-    return {header[k]: (data[:, k], data[:, k + 1] * 1e-9) for k in range(1, len(header), 2)}
+    return {header[k]: (None, data[:, k], data[:, k + 1] * 1e-9)
+            for k in range(1, len(header), 2)}
 
 
 def _sma(directory, name):
     rec = read_csv_signals(directory / 'sma-morphing-wing-basaeri'
                            / f'{name}_assembled_sequence.csv',
                            time_column=None, input_column='v', output_column='y')
-    return rec.current, rec.displacement
+    return None, rec.current, rec.displacement
+
+
+def _tum(directory, name):
+    rec = read_csv_signals(directory / 'tum_piezo' / f'{name}.csv', time_column='time',
+                           input_column='input', output_column='output')
+    return rec.time, rec.current, rec.displacement
+
+
+TUM = ('id_20hz_nolp_20140609', 'rs_20hz_nolp_20140608', 'rs_40hz_nolp_20140608',
+       'rs_100hz_nolp_20140608', 'rs_100hz_nolp_20140612', 'rs_100hz_lp_20140608')
 
 
 def measured_records(directory):
-    """Return ``{name: (current, displacement, validation name or None)}``."""
+    """Return ``{name: (time or None, current, displacement)}``."""
     records = {}
+    for name in TUM:
+        records[f'TUM {name}'] = _tum(directory, name)
     slow = sorted((directory / 'pnzt-aixacct-tue' / 'csv').glob('SLOW_*.csv'))
     creep = sorted((directory / 'pnzt-aixacct-tue' / 'csv').glob('CREEP_*.csv'))
     for path in slow + creep:
@@ -161,95 +180,108 @@ def measured_records(directory):
     return records
 
 
-#: Validation partner: another table of the same amplitude and state (each has its own
-#: zero: only the offset is re-estimated), or, for the SMA, the other data set of the rig.
-PARTNERS = {
-    'SLOW_table09_TEST_800V': 'SLOW_table10_TEST_800V',
-    'SLOW_table10_TEST_800V': 'SLOW_table09_TEST_800V',
-    'SMA DataT': 'SMA DataE',
-    'SMA DataE': 'SMA DataT',
-}
+def _rms(sim, y):
+    return float(np.sqrt(np.mean((sim - y) ** 2)) / np.ptp(y))
 
 
 def evaluate_measured(directory):
-    """Print the table of part (b); return the records."""
-    print(f'\n(b) measured records in {directory}: RMS % of the output range'
-          ' (training after the burn-in; validation on the partner record, its zero'
-          ' re-estimated)')
+    """Print the table of part (b): every record whole, against the plain (14, 7) QP."""
+    print(f'\n(b) measured records in {directory}, identify order auto on the whole record'
+          ' (with its time base): RMS % of the output range, the model simulated from sample'
+          ' 0 (mpi-ros simulate), against the plain (14, 7) QP with one constant term and the'
+          ' straight line')
     records = measured_records(directory)
-    print(f'{"record":34s} {"N":>5s} {"burn":>5s} {"line":>6s}  {"auto":>8s} {"train":>6s}'
-          f' {"valid":>6s}  {"(14,7)":>6s} {"valid":>6s}  operating point / refusal')
-    for name, (x, y) in records.items():
-        head = f'{name:34s} {x.size:5d}'
-        partner = records.get(PARTNERS.get(name, ''))
+    print(f'{"record":38s} {"N":>6s} {"order":>8s} {"model":>7s} {"QP":>9s} {"line":>6s}'
+          '  start / dynamics / refusal')
+    for name, (t, x, y) in records.items():
+        started = time.perf_counter()
+        reference = _rms(fit_plain(x, y).simulate(x), y)
+        line = _rms(np.polyval(np.polyfit(x, y, 1), x), y)
+        head = f'{name:38s} {x.size:6d}'
         try:
-            auto = identify(x, y, order='auto')
-            fixed = identify(x, y, n=14, l=7)
+            result = identify(x, y, order='auto', time=t)
         except IdentificationError as err:
-            print(f'{head} REFUSED: {str(err)[:150]}')
+            print(f'{head} {"refused":>8s} {"":>7s} {_pct(reference):>9s} {_pct(line)}  '
+                  f'{str(err)[:110]}')
             continue
-        valid = [validation_error(r.model, *partner, reestimate_offset=True)
-                 if partner is not None else float('nan') for r in (auto, fixed)]
-        m = fixed.model
-        print(f'{head} {fixed.burn_in:5d} {_pct(fixed.linear_rms_error)}  {str(auto.order):>8s}'
-              f' {_pct(auto.rms_error)} {_pct(valid[0])}  {_pct(fixed.rms_error)}'
-              f' {_pct(valid[1])}  x0 {m.input_offset:.4g}, y0 {m.output_offset:.4g},'
-              f' sign {m.output_sign:+d}')
+        dyn = result.dynamics.describe()
+        print(f'{head} {str(result.order):>8s} {_pct(result.whole_record_rms_error)}'
+              f' {_pct(reference):>9s} {_pct(line)}  {result.start_state["kind"]}; {dyn};'
+              f' ringing {result.excluded} samples ({time.perf_counter() - started:.1f} s)')
     return records
 
 
-def plot(records, path):
-    """Plot SMA reversal curves with the (14, 7) model, and why a PNZT single cycle is refused."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    from mpi_ros.identification import fit_model
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
-    for ax, name in zip(axes[:2], ('SMA DataT', 'SMA DataE')):
-        x, y = records[name]
-        result = identify(x, y, n=14, l=7)
-        sim = result.model.simulate(x)
-        k = result.burn_in
-        ax.plot(x, y, color='0.6', lw=1, label='measured')
-        ax.plot(x[k:], sim[k:], 'r-', lw=1,
-                label=f'MPI (14, 7), RMS {100 * result.rms_error:.1f} %')
-        ax.set_title(f'{name}: reversal curves (line {100 * result.linear_rms_error:.1f} %)',
-                     fontsize=9)
-        ax.set_xlabel('input (units not stated)')
-        ax.set_ylabel('output (units not stated)')
-        ax.legend(fontsize=7)
-    ax = axes[2]
-    x, y = records['loop Vplus_08kv_V']
-    model, design, _ = fit_model(x, y, 14, 7)        # no checks: what identify refuses
-    sim = model.simulate(x)
-    k = design.burn_in
-    ax.plot(x * 1e-3, y * 1e9, color='0.6', lw=1, label='measured (one cycle)')
-    ax.plot(x[k:] * 1e-3, sim[k:] * 1e9, 'r-', lw=1.5, label='fit on the part after the burn-in')
-    ax.plot(x[:k] * 1e-3, np.clip(sim[:k] * 1e9, -400, 800), 'r:', lw=1,
-            label='the same model before it (clipped)')
-    ax.set_title('PNZT 0.8 kV single loop: refused (loops not determined)', fontsize=9)
-    ax.set_xlabel('kV')
-    ax.set_ylabel('nm')
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    print(f'\nplot: {path}')
+def evaluate_cross_rate(directory):
+    """Print part (c): a TUM model of one rate simulated on the other rates."""
+    print('\n(c) cross-rate (TUM, 2014-06-08, same sensor zero): identified on the rate of'
+          ' the row (order auto), simulated on the record of each column from its first'
+          ' sample; RMS % of the output range after 0.1 s (the ringing of the start left'
+          ' out); the straight line of the row in brackets')
+    names = {'20 Hz': 'rs_20hz_nolp_20140608', '40 Hz': 'rs_40hz_nolp_20140608',
+             '100 Hz': 'rs_100hz_nolp_20140608'}
+    data = {rate: _tum(directory, name) for rate, name in names.items()}
+    print(f'{"identified on":14s} ' + ' '.join(f'{rate:>16s}' for rate in names))
+    for rate, (t, x, y) in data.items():
+        result = identify(x, y, order='auto', time=t)
+        line = np.polyfit(x, y, 1)
+        cells = []
+        for tv, xv, yv in data.values():
+            model = result.full_model
+            sim = model.simulate(tv, xv) if result.dynamics.present else model.simulate(xv)
+            keep = tv >= 0.1
+            cells.append(f'{_pct(_rms(sim[keep], yv[keep])).strip()}'
+                         f' ({_pct(_rms(np.polyval(line, xv[keep]), yv[keep])).strip()})')
+        print(f'{rate + " " + str(result.order):14s} ' + ' '.join(f'{c:>16s}' for c in cells))
+
+
+def evaluate_synthetic(seeds=(1, 2, 3)):
+    """Print part (d): issue 17's synthetic plants, identified whole."""
+    print('\n(d) synthetic plants (mpi_ros.synthetic; built-in actuator, 0.2 % noise, own zero'
+          ' and sign), order auto with the time base: refusals, dynamics estimated (dead time'
+          ' / lag, ms; the modelled one starred), the model from sample 0 (RMS %), the fitted'
+          ' samples (ringing left out), the plain (14, 7) QP')
+    print(f'{"plant":32s} {"seed":>4s} {"order":>8s} {"dead time":>10s} {"lag":>10s}'
+          f' {"truth":>12s} {"model":>6s} {"fitted":>6s} {"QP":>6s}')
+    for kind in SYNTHETIC_KINDS:
+        for seed in seeds:
+            record = synthetic_record(kind, seed)
+            t, x, y, truth = record.time, record.current, record.displacement, record.truth
+            reference = _rms(fit_plain(x, y).simulate(x), y)
+            try:
+                result = identify(x, y, order='auto', time=t)
+            except IdentificationError as err:
+                print(f'{kind:32s} {seed:4d} REFUSED {str(err)[:100]}')
+                continue
+            e = result.dynamics_estimate
+            star_d = '*' if result.dynamics.dead_time else ' '
+            star_l = '*' if result.dynamics.lag_time_constant else ' '
+            true = (f'L {1e3 * truth["dead_time"]:.3g}' if truth['dead_time'] else
+                    f'tau {1e3 * truth["lag_time_constant"]:.3g}'
+                    if truth['lag_time_constant'] else '-')
+            print(f'{kind:32s} {seed:4d} {str(result.order):>8s} {1e3 * e.dead_time:9.3g}'
+                  f'{star_d} {1e3 * e.lag_time_constant:9.3g}{star_l} {true:>12s}'
+                  f' {_pct(result.whole_record_rms_error)} {_pct(result.rms_error)}'
+                  f' {_pct(reference)}')
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     default = Path(__file__).resolve().parents[1].parent / 'shared' / 'data' / 'measured'
     parser.add_argument('--measured', type=Path, default=default)
-    parser.add_argument('--plot', type=Path, default=None)
+    parser.add_argument('--parts', default='abcd', help='which parts to run (default abcd)')
     args = parser.parse_args()
     started = time.perf_counter()
-    evaluate_actuator()
+    if 'a' in args.parts:
+        evaluate_actuator()
     if args.measured.is_dir():
-        records = evaluate_measured(args.measured)
-        if args.plot is not None:
-            plot(records, args.plot)
+        if 'b' in args.parts:
+            evaluate_measured(args.measured)
+        if 'c' in args.parts:
+            evaluate_cross_rate(args.measured)
     else:
-        print(f'\n(b) skipped: no measured data at {args.measured}')
+        print(f'\n(b), (c) skipped: no measured data at {args.measured}')
+    if 'd' in args.parts:
+        evaluate_synthetic()
     print(f'\n{time.perf_counter() - started:.0f} s')
 
 

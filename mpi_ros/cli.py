@@ -64,29 +64,41 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     options = data_options(args)             # refuse bad options before reading
     order = order_option(args)
     recording = read_recording(args.data, options)
+    for note in recording.notes:
+        _progress(f'note: {note}')
     _progress(f'identifying from {len(recording.time)} samples of {args.data} '
               f'(order {format_order(order)}) ...')
     result = fit_recording(recording, order=order, anchor=args.anchor,
-                           periodic=args.periodic).result
+                           periodic=args.periodic, dynamics=args.dynamics).result
     for row in result.order_table:
-        _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out nonlinearity error "
+        if row.get('unstable'):
+            _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out error unstable (not"
+                      ' considered)')
+            continue
+        _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out RMS error "
+                  f"{100 * row['rms_error']:6.3f} %, nonlinearity error (37) "
                   f"{100 * row['nonlinearity_error']:6.2f} % of the output range")
     n, l = result.order  # noqa: E741
     model = result.model
     _progress(f'order n={n}, l={l}: nonlinearity error (37) '
               f'{100 * result.nonlinearity_error:.2f} % of the output range, RMS error '
               f'{100 * result.rms_error:.3f} % (straight line: '
-              f'{100 * result.linear_rms_error:.3f} %) ({result.solve_time:.2f} s)')
+              f'{100 * result.linear_rms_error:.3f} %); the whole record simulated from its '
+              f'first sample: {100 * result.whole_record_rms_error:.3f} % '
+              f'({result.solve_time:.2f} s)')
     _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
-              f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; first '
-              f'{result.burn_in} samples not fitted (start state unknown until the input '
-              'covered its range)')
+              f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; start state: '
+              f"{result.start_state.get('description', 'n/a')}")
+    if result.findings:
+        _progress(f'found: {result.findings}')
+    for note in result.notes:
+        _progress(f'note: {note}')
     summary = dict(result.summary(), source=str(args.data))
     # Both files appear only when both are complete: each is written to a temporary
     # file and renamed; a YAML this run created is removed again if the JSON fails.
     created = not Path(args.output).exists()
     try:
-        write_params_yaml(args.output, result.model.to_params(), node_name=args.node_name,
+        write_params_yaml(args.output, result.full_model.to_params(), node_name=args.node_name,
                           header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
                                   f'order n={n}, l={l}; nonlinearity error (37) '
                                   f'{100 * result.nonlinearity_error:.2f} %'))
@@ -156,9 +168,10 @@ def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool)
 
 
 def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
+    from .extensions import extended_model_from_params
     from .model import MPIModel
     from .recordings import read_csv_table, write_csv_columns
-    model = MPIModel.from_params(_model_parameters(args.params, args.node_name))
+    described = extended_model_from_params(_model_parameters(args.params, args.node_name))
     header, table = read_csv_table(args.input,
                                    nonfinite_hint='remove those rows or fill in the values')
     time_column, input_column = _input_column(header, args, inverse=inverse)
@@ -169,8 +182,13 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
                'name; pass --column-name with another name')
         raise MPIError(msg)
     column = header.index(input_column)
-    operator = model.inverse() if inverse else model
-    result = operator.simulate(table[:, column])
+    values = table[:, column]
+    if isinstance(described, MPIModel):
+        operator = described.inverse() if inverse else described
+        result = operator.simulate(values)
+    else:
+        result = _apply_extended(described, table, header, time_column, values, args,
+                                 inverse=inverse)
     columns = {}
     if time_column is not None:
         columns[time_column] = table[:, header.index(time_column)]
@@ -180,6 +198,31 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     _progress(f'wrote {len(result)} samples to {args.output} ({input_column} -> '
               f'{result_column})')
     return 0
+
+
+def _apply_extended(model: Any, table: Any, header: list[str], time_column: str | None,
+                    values: Any, args: argparse.Namespace, *, inverse: bool) -> Any:
+    # A model with an effect (dead time, lag, creep, ...) depends on time: the input needs
+    # its time column.  The forward model is simulated; the inverse is the compensator's
+    # streaming inverse (with a dead time: Gamma only, as the node does).
+    import numpy as np
+    if time_column is None:
+        msg = (f'{args.params} holds a model with {model.cause} (it depends on time):'
+               f' --input {args.input} needs a time column [s]; pass --time-column with its'
+               ' name')
+        raise MPIError(msg)
+    time = table[:, header.index(time_column)]
+    if not np.all(np.diff(time) > 0.0):
+        msg = (f'--input {args.input}: the time column {time_column!r} must increase strictly'
+               f' for a model with {model.cause}; sort or repair it')
+        raise MPIError(msg)
+    if not inverse:
+        return model.simulate(time, values)
+    from .compensation import Compensator
+    wide = 1e12 * (1.0 + float(np.max(np.abs(values))))
+    compensator = Compensator(model, output_min=-wide, output_max=wide,
+                              sample_period=float(np.median(np.diff(time))))
+    return compensator.command_batch(values, time)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -227,8 +270,14 @@ def _parser() -> argparse.ArgumentParser:
                         'at zero input and zero output')
     p.add_argument('--periodic', action='store_true',
                    help='the record is one period the actuator had been following (e.g. a '
-                        'single measured loop that ends where it starts): fit all of it, '
-                        'its start state taken as its end state (needs an explicit --order)')
+                        'single measured loop that ends where it starts): its start state is '
+                        'its end state instead of the one estimated (needs an explicit '
+                        '--order)')
+    p.add_argument('--dynamics', choices=('auto', 'off'), default='auto',
+                   help="auto (default): with a time base, estimate the input's dead time "
+                        'and lag and model them when they cut the held-out error clearly '
+                        '(written as model.dead_time / model.rate_dependence.*); off: the '
+                        'static model only')
     add_data_options(p)
     p.set_defaults(func=_cmd_identify)
     for name, func, what, column in (

@@ -56,7 +56,7 @@ def fit_recording(source: 'str | os.PathLike[str] | Recording',
         See :func:`mpi_ros.identification.identify`.
     **identify_options
         Further keywords of :func:`~mpi_ros.identification.identify` (``epsilon``,
-        ``holdout``).
+        ``holdout``, ``dynamics``, ``periodic``; ``time`` defaults to the recording's).
 
     Returns
     -------
@@ -75,6 +75,9 @@ def fit_recording(source: 'str | os.PathLike[str] | Recording',
         recording = source
     else:
         recording = read_recording(source, options if options is not None else DataOptions())
+    # The record's time base lets the identification measure and model lag and dead time
+    # (a CSV without a time column has none: its time is the sample index).
+    identify_options.setdefault('time', recording.time if recording.timed else None)
     result = identify(recording.current, recording.displacement, order=order, anchor=anchor,
                       **identify_options)
     return RecordingFit(recording, result)

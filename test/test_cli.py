@@ -169,6 +169,27 @@ def test_identify_nonfinite_hint_and_drop_option(recording, capsys):
     assert rc == 0 and out.exists()
 
 
+def test_identify_drops_empty_csv_fields_with_the_option(recording, capsys):
+    """Empty fields (how pandas writes NaN): --drop-nonfinite drops the rows, with a note."""
+    tmp, t, current, displacement = recording
+    lines = (tmp / 'rec.csv').read_text().splitlines()        # line k + 2: sample k
+    for k, column in ((700, 1), (1500, 2), (2500, 0)):
+        fields = lines[k + 1].split(',')
+        fields[column] = ''
+        lines[k + 1] = ','.join(fields)
+    (tmp / 'pandas.csv').write_text('\n'.join(lines) + '\n')
+    rc, out = _fit(tmp, tmp / 'pandas.csv', '--order', '4,2')
+    assert rc == 1 and not out.exists()
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last.startswith('error: CSV file ') and "the first at line 702, column 'current' " \
+        '(an empty field); fix the data or pass --drop-nonfinite to drop those rows' in last
+    rc, out = _fit(tmp, tmp / 'pandas.csv', '--order', '4,2', '--drop-nonfinite')
+    assert rc == 0 and out.exists()
+    err = capsys.readouterr().err
+    assert 'note: dropped 3 row(s) with non-finite values (NaN, Inf or empty fields)' in err
+    assert f'identifying from {t.size - 3} samples' in err
+
+
 @pytest.mark.parametrize('argv, needle', [
     (['identify', '{tmp}/rec.csv'], 'error: mpi-ros identify: the following arguments are '
                                     'required: -o/--output'),

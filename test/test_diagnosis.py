@@ -200,3 +200,38 @@ def test_real_butterfly_data_is_outside_the_class():
                            output_scale=1e-9)
     report = diagnose(Recording(rec.time * 0.005, rec.current, rec.displacement), split=0.5)
     assert report.cause == 'outside_invertible_class'
+
+
+def test_time_base_warning_names_only_the_implausible_values():
+    from mpi_ros.diagnosis.time_base import implausible_time_constants, time_base_warning
+    candidates = [
+        {'cause': 'creep', 'parameters': {'model.creep.time_constants': [0.01, 2e4],
+                                          'model.creep.weights': [0.0, 0.1]}},
+        {'cause': 'rate_dependence', 'parameters': {'model.rate_dependence.time_constant': 0.004}},
+        {'cause': 'thermal_drift', 'parameters': {'model.thermal_drift.time_constant': 900.0,
+                                                  'model.thermal_drift.weight': 1.0}},
+        {'cause': 'dead_time', 'parameters': {'model.dead_time': 20.6}}]
+    residual = {'lag_of_best_correlation': -3.0,
+                'burst_signature': {'delay': 0.01, 'lag_time_constant': 0.002}}
+    found = implausible_time_constants(candidates, residual)
+    assert found == [('model.creep.time_constants (largest) of the creep candidate', 2e4, 1e4),
+                     ('model.dead_time of the dead_time candidate', 20.6, 1.0),
+                     ('lag of the best rate correlation', 3.0, 1.0)]
+    text = time_base_warning(found, [('record', np.arange(60001.0))])
+    assert 'model.dead_time of the dead_time candidate 20.6 s (plausible: up to 1 s)' in text
+    assert 'the record has a sample period of 1 s and lasts 6e+04 s (60001 samples)' in text
+    assert 'pass --time-scale 1e-3' in text and '\n' not in text
+    plausible = [{'cause': 'dead_time', 'parameters': {'model.dead_time': 0.0206}}]
+    assert implausible_time_constants(plausible, {'lag_of_best_correlation': 0.02}) == []
+    assert time_base_warning([], [('record', np.arange(10.0))]) is None
+
+
+def test_validation_below_the_arithmetic_is_refused_not_divided_by_zero():
+    """A subnormal validation record: its squared residuals were 0, the gain 0/0 (a crash)."""
+    t, x = identification_excitation(1.5, sample_rate=400.0, seed=1, holds=False,
+                                     bursts=False, ramp_duration=0.05)
+    y = MagnetostrictiveActuator().simulate(t, x)
+    with pytest.raises(DataError, match=r'validation: the current spans only 1.8e-310 A, too '
+                                        r'small to compute with'):
+        diagnose(Recording(t, x, y), validation=Recording(t, 1e-310 * x, 1e-310 * y),
+                 order=(4, 2))

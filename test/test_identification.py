@@ -139,9 +139,12 @@ def test_auto_order_returns_table_and_stops():
     assert [(r['n'], r['l']) for r in table][:3] == [(0, 0), (2, 1), (4, 2)]
     assert len(table) < 11                               # saturation stopped the search
     assert result.order in [(r['n'], r['l']) for r in table]
-    best = min(r['nonlinearity_error'] for r in table)
+    # The smallest order within 2 % of the best held-out RMS error (issue 17's rule).
+    best = min(r['rms_error'] for r in table)
     chosen = next(r for r in table if (r['n'], r['l']) == result.order)
-    assert chosen['nonlinearity_error'] <= 1.05 * best
+    assert chosen['rms_error'] <= 1.02 * best
+    assert all(r['rms_error'] > 1.02 * best for r in table
+               if (r['n'], r['l']) < result.order)
     order, table2 = select_order(x, y, anchor='origin')
     assert order == result.order and table2 == table
 
@@ -197,19 +200,27 @@ def test_too_little_excitation_for_the_order(x, match):
         assert result.rms_error <= result.linear_rms_error
 
 
-def test_periodic_fits_a_single_loop_that_plain_refuses():
+def test_single_loop_start_state_from_the_data_or_periodic():
     # One period of a loop the actuator had been following: its start state is its end
-    # state.  Without periodic the start state is unknown and the record is refused.
+    # state.  Issue 17: without periodic the start state is estimated from the data (the
+    # whole record is fitted from its first sample); periodic=True imposes the end state.
     t = np.linspace(0.0, 1.0, 801)
     x = np.sin(2 * np.pi * t)                           # 0 -> +1 -> -1 -> 0
     h = PIHysteresisOperator([0.0, 0.2, 0.5], [1.0, 0.5, 0.3])
     _, state = h.apply(np.tile(x, 3))                   # steady periodic state
     y = 5.0 - 2e-5 * (h.apply(x, state)[0] + 0.2 * h.apply(x, state)[0] ** 3)
-    with pytest.raises(IdentificationError, match='periodic=True'):
-        identify(x, y, n=6, l=3)
+    estimated = identify(x, y, n=6, l=3)
+    assert estimated.burn_in == 0
+    assert estimated.whole_record_rms_error < 0.1 * estimated.linear_rms_error
     result = identify(x, y, n=6, l=3, periodic=True)
+    assert result.start_state['kind'] == 'periodic'
     assert result.rms_error < 0.1 * result.linear_rms_error
     assert result.model.output_sign == -1
+    # The model simulated from the record's first sample (its initial states) reproduces it.
+    for fit in (estimated, result):
+        error = fit.model.simulate(x) - y
+        assert np.sqrt(np.mean(error ** 2)) / np.ptp(y) == pytest.approx(
+            fit.whole_record_rms_error, rel=1e-9)
     with pytest.raises(DataError, match='end where it starts'):
         identify(x[:600], y[:600], n=6, l=3, periodic=True)
     with pytest.raises(DataError, match="order 'auto'"):

@@ -138,20 +138,26 @@ def test_invariant_to_zero_bias_sign_and_scale(offset, bias, sign, log_x_scale, 
 @given(cut=st.floats(0.05, 0.3))
 def test_record_starting_mid_history(cut):
     # Cut the start off: the record starts somewhere in the actuator's history (the later
-    # sweeps still cover the whole range, so the data content stays comparable).
+    # sweeps still cover the whole range, so the data content stays comparable).  Its start
+    # state is estimated (issue 17) and the model validates no worse than the whole
+    # record's (which now fits the actuator's own initial loading curve from rest too, a
+    # curve the PI model does not follow exactly: the cut record may do better).
     (x, y), (xv, yv) = _small_records()
     start = int(cut * x.size)
     ref = validation_error(identify(x, y, n=8, l=4).model, xv, yv)
-    new = validation_error(identify(x[start:], y[start:], n=8, l=4).model, xv, yv)
-    assert abs(new - ref) <= 0.03 * ref
+    cut_fit = identify(x[start:], y[start:], n=8, l=4)
+    new = validation_error(cut_fit.model, xv, yv)
+    assert new <= 1.03 * ref
+    assert cut_fit.burn_in == 0 and cut_fit.whole_record_rms_error < NOISE + 0.005
 
 
 @pytest.mark.parametrize('plant', range(len(PLANTS)))
 @pytest.mark.parametrize('variant', ['zeroed', 'zero -20 um, bias +0.5 A'])
 def test_builtin_actuator_acceptance(plant, variant):
     # Issue 9 acceptance: (14, 7) on one excitation, validated on another, is no worse
-    # than the plain QP with one constant term; order 'auto' chooses >= (8, 4) with a
-    # (held-out) error within 10 % of the best order's.
+    # than the plain QP with one constant term; order 'auto' chooses >= (8, 4), the
+    # smallest order whose held-out RMS error is within 2 % of the best order's (issue 17:
+    # RMS on 30 short held-out blocks; the peak error (37) of a held-out block is noisy).
     (x, y), (xv, yv) = _acceptance_records(plant)
     if variant != 'zeroed':
         x, y, xv, yv = x + 0.5, y - 2e-5, xv + 0.5, yv - 2e-5
@@ -161,8 +167,10 @@ def test_builtin_actuator_acceptance(plant, variant):
     assert centred < 2.0 * NOISE            # the noise is NOISE: the model error is below it
     auto = identify(x, y, order='auto')
     assert auto.order >= (8, 4)
-    held_out = {(row['n'], row['l']): row['nonlinearity_error'] for row in auto.order_table}
-    assert held_out[auto.order] <= 1.1 * min(held_out.values())
+    held_out = {(row['n'], row['l']): row['rms_error'] for row in auto.order_table}
+    best = min(held_out.values())
+    assert held_out[auto.order] <= 1.02 * best
+    assert all(error > 1.02 * best for order, error in held_out.items() if order < auto.order)
     assert validation_error(auto.model, xv, yv) <= baseline
 
 

@@ -127,6 +127,29 @@ def test_sample_period_option(tmp_path):
     assert DataOptions(sample_period=0.0).sample_period is None
 
 
+def test_time_scale_of_a_bag(tmp_path):
+    """A bag logged at a tenth of the speed: time_scale 0.1 gives the actuator's time."""
+    stamps, currents, displacements = _data(40)
+    slow = stamps[0] + 10 * (stamps - stamps[0])                  # 10 ms between samples
+    bag = _chunked_bag(tmp_path / 'slow', slow, currents, displacements, 10, 10)
+    reference = _chunked_bag(tmp_path / 'live', stamps, currents, displacements, 10, 10)
+    options = {**TOPICS, 'input_index': 1, 'output_index': 1}
+    rec = read_bag_signals(bag, **options, time_scale=0.1)
+    ref = read_bag_signals(reference, **options)
+    np.testing.assert_allclose(rec.time, ref.time, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.diff(rec.time), 1e-3, rtol=0, atol=1e-12)
+    assert any('(first message: 0.001 s, the median)' in note for note in rec.notes)
+    # --sample-period is in s of the actuator (after the scale), as its unit says.
+    rec = read_bag_signals(bag, **options, time_scale=0.1, sample_period=2e-4)
+    within = np.diff(rec.time.reshape(4, 10), axis=1)
+    np.testing.assert_allclose(within, 2e-4, rtol=0, atol=1e-12)
+    rec = read_recording(bag, DataOptions(**options, time_scale=0.1))
+    np.testing.assert_allclose(rec.time, ref.time, rtol=0, atol=1e-12)
+    with pytest.raises(DataError, match=r'--time-scale must be > 0 \(the factor from the '
+                                        r'recorded time to s, e.g. 1e-3 for ms\); found -0.1'):
+        DataOptions(time_scale=-0.1, spelling='cli')
+
+
 def test_a_single_chunk_needs_the_sample_period(tmp_path):
     stamps, currents, displacements = _data(30)
     bag = write_bag(tmp_path / 'one', {

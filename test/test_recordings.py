@@ -12,6 +12,7 @@ from mpi_ros.recordings import (
     atomic_write, BagRecorder, read_bag_signals, read_csv_signals, read_csv_table,
     read_signals, Recording, write_bag_signals, write_csv_columns)
 from mpi_ros.recordings.bag_reader import _sort_dedupe
+from mpi_ros.recordings.recording import check_magnitudes
 import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
@@ -432,7 +433,8 @@ def test_csv_time_not_increasing_is_noted(tmp_path):
     ('time,a,b\n' + '0,1,2\n' * 9 + '0,1,x2\n',
      r"line 11, column 'b' \(column 3\): expected a number, found 'x2'"),
     ('time,a,b\n' + '0,1,2\n' * 9 + '0,,2\n',
-     r"line 11, column 'a' \(column 2\): expected a number, found an empty field"),
+     r'1 row\(s\) with non-finite values \(NaN, Inf or empty fields\), the first at line 11, '
+     r"column 'a' \(an empty field\); fix the data or pass drop_nonfinite=True"),
     ('time,a,b\n' + '0,1,2\n' * 9 + '0,1_0,2\n', r"found '1_0'"),
     ('time,a,b\n' + '0,1,"2\n' * 10, r'line 3 is not valid CSV'),
 ])
@@ -478,16 +480,87 @@ def test_csv_nonfinite_rejected_or_dropped(tmp_path):
     lines[5] = lines[5].rsplit(',', 1)[0] + ',nan'
     lines[9] = lines[9].split(',', 1)[0] + ',inf,' + lines[9].rsplit(',', 1)[1]
     path = _write_csv(tmp_path / 'nan.csv', '\n'.join(lines))
-    with pytest.raises(DataError, match=r'has 2 row\(s\) with non-finite values \(NaN/Inf\), '
-                                        r"the first at line 6, column 'displacement'"):
+    with pytest.raises(DataError, match=r'has 2 row\(s\) with non-finite values \(NaN, Inf or '
+                                        r'empty fields\), the first at line 6, column '
+                                        r"'displacement' \('nan'\)"):
         read_csv_signals(path)
     rec = read_csv_signals(path, drop_nonfinite=True)
     assert len(rec) == 13
     np.testing.assert_array_equal(rec.time, np.delete(time, [3, 7]))
-    assert rec.notes == ('dropped 2 row(s) with non-finite values (NaN/Inf)',)
+    assert rec.notes == ('dropped 2 row(s) with non-finite values (NaN, Inf or empty fields)',)
     short = _write_csv(tmp_path / 'short.csv', '\n'.join(lines[:13]))
     with pytest.raises(DataError, match=r'only 9 data row\(s\) after dropping non-finite rows'):
         read_csv_signals(short, drop_nonfinite=True)
+
+
+def test_csv_empty_fields_are_missing_values(tmp_path):
+    """Empty fields (pandas' NaN) are dropped by drop_nonfinite like NaN/Inf, else refused."""
+    text, (time, current, displacement) = _csv_text(15)
+    lines = text.splitlines()                  # lines[k] is file line k + 1: sample k - 2
+    lines[4] = lines[4].split(',', 1)[0] + ',,' + lines[4].rsplit(',', 1)[1]   # current
+    lines[8] = lines[8].rsplit(',', 1)[0] + ','                                 # displacement
+    lines[11] = ',' + lines[11].split(',', 1)[1]                                 # time
+    path = _write_csv(tmp_path / 'pandas.csv', '\n'.join(lines))
+    with pytest.raises(DataError, match=r'has 3 row\(s\) with non-finite values \(NaN, Inf or '
+                                        r"empty fields\), the first at line 5, column 'current' "
+                                        r'\(an empty field\); fix the data or pass '
+                                        r'drop_nonfinite=True'):
+        read_csv_signals(path)
+    rec = read_csv_signals(path, drop_nonfinite=True)
+    assert len(rec) == 12
+    np.testing.assert_array_equal(rec.time, np.delete(time, [2, 6, 9]))
+    np.testing.assert_array_equal(rec.current, np.delete(current, [2, 6, 9]))
+    assert rec.notes == ('dropped 3 row(s) with non-finite values (NaN, Inf or empty fields)',)
+    header, table = read_csv_table(path, drop_nonfinite=True)
+    assert table.shape == (12, 3)
+    with pytest.raises(DataError, match=r'the first at line 5, column .current. \(an empty'):
+        read_csv_table(path)
+
+
+@pytest.mark.parametrize(('edits', 'drop', 'match'), [
+    # A text field after an empty one: the empty one (line 4) is named, not the later text.
+    ([(4, 'current', ''), (12, 'time', 'abc')], False,
+     r"the first at line 4, column 'current' \(an empty field\)"),
+    # The columns are read time, current, displacement; the first bad line still wins.
+    ([(9, 'time', 'x'), (3, 'displacement', 'y')], False,
+     r"line 3, column 'displacement' \(column 3\): expected a number, found 'y'"),
+    ([(9, 'time', ''), (3, 'displacement', 'nan'), (6, 'current', 'inf')], False,
+     r"3 row\(s\) .* the first at line 3, column 'displacement' \('nan'\)"),
+    # Dropping cannot mend text: with drop_nonfinite the text field is named.
+    ([(4, 'current', ''), (12, 'time', 'abc')], True,
+     r"line 12, column 'time' \(column 1\): expected a number, found 'abc'"),
+    # Within one line the leftmost bad field is named.
+    ([(7, 'displacement', ''), (7, 'time', 'nan')], False,
+     r"the first at line 7, column 'time' \('nan'\)"),
+])
+def test_csv_error_names_the_first_bad_line(tmp_path, edits, drop, match):
+    text, _ = _csv_text(15)
+    lines = text.splitlines()                  # lines[k] is file line k + 1
+    names = lines[1].split(',')
+    for line, column, value in edits:
+        fields = lines[line - 1].split(',')
+        fields[names.index(column)] = value
+        lines[line - 1] = ','.join(fields)
+    path = _write_csv(tmp_path / 'bad.csv', '\n'.join(lines))
+    with pytest.raises(DataError, match=match):
+        read_csv_signals(path, drop_nonfinite=drop)
+
+
+@pytest.mark.parametrize(('scales', 'match'), [
+    ({'output_scale': 1e-300},
+     r'the displacement spans only [0-9.e-]+ m, too small to compute with .* rescale it to m '
+     r'with output_scale=<factor> \(now 1e-300\)'),
+    ({'input_scale': 1e120}, r'the current reaches [0-9.e+]+ A, too large to compute with'),
+    ({'time_scale': 1e-200}, r'the time spans only [0-9.e-]+ s, too small'),
+])
+def test_csv_magnitudes_outside_the_arithmetic_are_refused(tmp_path, scales, match):
+    path = _write_csv(tmp_path / 'm.csv', _csv_text(15)[0])
+    with pytest.raises(DataError, match=match):
+        read_csv_signals(path, **scales)
+    rec = read_csv_signals(path, output_scale=1e-12, input_scale=1e12, time_scale=1e-12)
+    assert len(rec) == 15                      # 1e-12 .. 1e12 is far inside
+    with pytest.raises(DataError, match=r'x: the displacement reaches inf m, too large'):
+        check_magnitudes(Recording([0.0, 1.0], [0.0, 1.0], [0.0, np.inf], source='x'))
 
 
 def test_measured_csv_reads():
@@ -532,7 +605,7 @@ def test_csv_table_errors(tmp_path):
         read_csv_table(_write_csv(tmp_path / 'd.csv', 'time,current\n0,nan\n1,2\n'))
     header, table = read_csv_table(tmp_path / 'd.csv', drop_nonfinite=True)
     np.testing.assert_array_equal(table, [[1.0, 2.0]])
-    with pytest.raises(DataError, match=r'every row holds NaN/Inf'):
+    with pytest.raises(DataError, match=r'every row holds NaN/Inf or an empty field'):
         read_csv_table(_write_csv(tmp_path / 'e.csv', 'current\nnan\n'), drop_nonfinite=True)
 
 

@@ -18,7 +18,7 @@ The data options (``--input-topic``, ``--input-joint``, ``--input-index``,
 
 import argparse
 import sys
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 from .diagnose import diagnose
 from .report import write_extended_params, write_json, write_report
@@ -82,8 +82,12 @@ def _write_excitation(args: argparse.Namespace) -> None:
                       comment='diagnostic validation excitation of mpi-ros diagnose')
 
 
-def _read(path: str, args: argparse.Namespace) -> Any:
-    return read_recording(path, data_options(args))
+def _read(path: str, args: argparse.Namespace, say: Callable[[str], None]) -> Any:
+    say(f'reading {path}')
+    recording = read_recording(path, data_options(args))
+    for note in recording.notes:
+        say(f'note: {note}')
+    return recording
 
 
 def diagnose_main(argv: Sequence[str] | None = None) -> int:
@@ -119,15 +123,13 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
             say(f'wrote {args.excitation}')
             if args.data is None:
                 return 0
-        say(f'reading {args.data}')
-        data = _read(args.data, args)
+        data = _read(args.data, args, say)
         if args.window is not None:
             data = _window(data, args.window)
             say(f'window: {len(data)} samples')
         validation = None
         if args.validate:
-            say(f'reading {args.validate}')
-            validation = _read(args.validate, args)
+            validation = _read(args.validate, args, say)
         report = diagnose(data, validation=validation, split=args.split, order=order,
                           progress=say)
         write_json(report, args.json)

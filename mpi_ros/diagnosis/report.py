@@ -132,6 +132,7 @@ def _markdown(report: DiagnosisReport, images: list[str]) -> str:
     j = report.to_json()
     lines = ['# mpi_ros diagnosis', '', f'**Verdict: `{report.cause}`**', '',
              report.evidence, '']
+    lines += [f'**Warning:** {warning}\n' for warning in report.warnings]
     if report.baseline:
         b, e = report.baseline, report.extended
         lines += ['| model | validation RMS error | (37) nonlinearity error | gain |',

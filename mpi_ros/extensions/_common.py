@@ -22,7 +22,7 @@ from ..metrics import rms_range_error
 from ..model import MPIModel
 
 __all__ = ['check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
-           'Order', 'resolve_order',
+           'Order', 'rate_cross_correlation', 'resolve_order',
            'scalar_parameter', 'search_fit', 'vector_parameter']
 
 FloatArray = npt.NDArray[np.float64]
@@ -291,6 +291,44 @@ def lag_search_limits(time: FloatArray) -> tuple[float, float]:
     return dt, max(min(200.0 * dt, 0.05 * float(time[-1] - time[0])), 2.0 * dt)
 
 
+def rate_cross_correlation(time: FloatArray, measured: FloatArray, simulated: FloatArray,
+                           longest: float) -> tuple[FloatArray, FloatArray]:
+    """
+    Correlate the measured and the simulated output rate, the measured one shifted by lags.
+
+    The lags run over whole median sample intervals up to ``longest`` seconds, but never
+    beyond half the record: every correlation then uses at least half of the samples, and
+    a short record (a validation record scored only after a long burn-in) gets a shorter
+    window instead of slices of different lengths.
+
+    Parameters
+    ----------
+    time : ndarray of float, shape (N,)
+        Sample times [s], strictly increasing, N >= 2.
+    measured, simulated : ndarray of float, shape (N,)
+        Measured and simulated output [m].
+    longest : float
+        Longest lag wanted [s], > 0.
+
+    Returns
+    -------
+    lags : ndarray of float, shape (2 m + 1,)
+        Shifts of the measured output [s] (``m >= 1``; ``m = 0`` below 2 samples).
+    correlations : ndarray of float, shape (2 m + 1,)
+        Correlation coefficient at each lag; 0 where either rate is constant (or does not
+        fit in a float) over the compared samples.
+
+    """
+    dt = float(np.median(np.diff(time)))
+    dy, ds = np.gradient(measured, time), np.gradient(simulated, time)
+    m = int(min(longest / dt, dy.size // 2))
+    m = max(m, min(1, dy.size // 2))
+    correlations = np.array([
+        _correlation(dy[max(0, k):dy.size + min(0, k)], ds[max(0, -k):ds.size - max(0, k)])
+        for k in range(-m, m + 1)])
+    return np.arange(-m, m + 1) * dt, correlations
+
+
 def hold_evidence(residual: Mapping[str, Any]) -> str | None:
     """
     Describe the residual during input holds (creep and thermal drift evidence).
@@ -362,3 +400,12 @@ def residual_axes(ax: Any, time: FloatArray, measured: FloatArray, baseline: Flo
     ax.plot(abscissa, (measured - baseline)[val], label='baseline residual', **style)
     ax.plot(abscissa, (measured - extended)[val], label=f'{label} residual', **style)
     ax.set_ylabel('residual [m]')
+
+
+def _correlation(a: FloatArray, b: FloatArray) -> float:
+    # Pearson's r, 0 when it is undefined (constant or overflowing values).
+    with np.errstate(all='ignore'):
+        if a.size < 3 or not (np.std(a) > 0.0 and np.std(b) > 0.0):
+            return 0.0
+        r = float(np.corrcoef(a, b)[0, 1])
+    return r if math.isfinite(r) else 0.0

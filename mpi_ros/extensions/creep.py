@@ -48,7 +48,7 @@ import numpy.typing as npt
 from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
     vector_parameter
 from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
-from .effect import Effect, EffectParameter
+from .effect import Effect, EffectParameter, SLOW_TIME_LIMIT
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
 from ..model import _superposition_value, MPIModel
@@ -379,7 +379,7 @@ EFFECT = Effect(
     parameters=(
         EffectParameter(CREEP_TIME_CONSTANTS, 'double_array', (),
                         'Creep extension: time constants tau_j of the creep lags, ascending,'
-                        ' > 0; empty: no creep', 's'),
+                        ' > 0; empty: no creep', 's', plausible_max=SLOW_TIME_LIMIT),
         EffectParameter(CREEP_WEIGHTS, 'double_array', (),
                         'Creep extension: weights w_Cj >= 0 of the creep lags (share of a'
                         ' displacement change that creeps in with tau_j), one per time'

@@ -20,9 +20,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
-    fit_gamma, lag_search_limits, Order, resolve_order, scalar_parameter, search_fit
+    fit_gamma, lag_search_limits, Order, rate_cross_correlation, resolve_order, \
+    scalar_parameter, search_fit
 from ._signals import delay
-from .effect import Effect, EffectParameter
+from .effect import Effect, EffectParameter, FAST_TIME_LIMIT
 from ..identification import select_order
 from ..model import MPIModel
 
@@ -140,14 +141,8 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
 
 def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
           baseline: FloatArray, extended: FloatArray, start: int) -> None:
-    tv = time[start:]
-    dt = float(np.median(np.diff(tv)))
-    dy, ds = np.gradient(measured[start:], tv), np.gradient(baseline[start:], tv)
-    m = max(int(0.1 / dt), 2)
-    lags = np.arange(-m, m + 1)
-    xc = [np.corrcoef(dy[max(0, k):dy.size + min(0, k)],
-                      ds[max(0, -k):ds.size - max(0, k)])[0, 1] for k in range(-m, m + 1)]
-    ax.plot(lags * dt * 1e3, xc, label='corr(measured rate, simulated rate)')
+    lags, xc = rate_cross_correlation(time[start:], measured[start:], baseline[start:], 0.1)
+    ax.plot(lags * 1e3, xc, label='corr(measured rate, simulated rate)')
     ax.axvline(0.0, color='0.6', lw=0.6)
     ax.set_xlabel('shift of the measured output [ms]')
     ax.set_ylabel('correlation')
@@ -162,7 +157,7 @@ EFFECT = Effect(
         EffectParameter(DEAD_TIME, 'double', 0.0,
                         'Dead-time extension: delay L between command and displacement (not'
                         ' invertible: the compensator inverts Gamma only and warns); 0: no'
-                        ' delay', 's', (0.0, 1.0e3)),),
+                        ' delay', 's', (0.0, 1.0e3), plausible_max=FAST_TIME_LIMIT),),
     model_class=DeadTimeModel, fit=fit_dead_time, parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'delay'),
     evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot)

@@ -32,7 +32,16 @@ from ..errors import ModelError
 from ..model import MPIModel
 
 __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'EFFECTS', 'register_effect',
-           'unregister_effect', 'effect_keys', 'effect_off_values', 'effects_present']
+           'unregister_effect', 'effect_keys', 'effect_off_values', 'effects_present',
+           'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT']
+
+#: Longest dead time or rate lag [s] plausible for a smart-material actuator: amplifier,
+#: sensor and eddy-current delays are microseconds to milliseconds.  A fitted value above it
+#: most often means a time column in ms (or us) read as s.
+FAST_TIME_LIMIT = 1.0
+#: Longest creep or thermal time constant [s] plausible for one actuator record (about
+#: 3 h); creep and coil heating settle within minutes to an hour.
+SLOW_TIME_LIMIT = 1.0e4
 
 
 class EffectModel(Protocol):
@@ -83,6 +92,10 @@ class EffectParameter:
         SI unit, empty when dimensionless.
     value_range : (float, float) or None
         Inclusive range of a double.
+    plausible_max : float or None
+        Largest value (of any element) plausible for a smart-material actuator, in
+        `unit`; the diagnosis warns about a fitted value above it (for a time constant,
+        a time base in ms or us read as s).  None: no such bound.
 
     """
 
@@ -92,6 +105,7 @@ class EffectParameter:
     description: str
     unit: str = ''
     value_range: tuple[float, float] | None = None
+    plausible_max: float | None = None
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from ._common import burst_evidence, burst_verdict, check_series, determined_sta
     fit_gamma, lag_search_limits, Order, residual_axes, resolve_order, scalar_parameter, \
     search_fit
 from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter
+from .effect import Effect, EffectParameter, FAST_TIME_LIMIT
 from ..identification import select_order
 from ..model import MPIModel
 
@@ -216,7 +216,8 @@ EFFECT = Effect(
     parameters=(
         EffectParameter(RATE_TIME_CONSTANT, 'double', 0.0,
                         'Rate-dependence extension: time constant tau_e of the input'
-                        ' (eddy-current) lag; 0: no lag', 's', (0.0, 1.0e3)),),
+                        ' (eddy-current) lag; 0: no lag', 's', (0.0, 1.0e3),
+                        plausible_max=FAST_TIME_LIMIT),),
     model_class=RateDependentModel, fit=fit_rate_dependence,
     parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'lag'),

@@ -29,7 +29,7 @@ import numpy.typing as npt
 from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
     scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter
+from .effect import Effect, EffectParameter, SLOW_TIME_LIMIT
 from ..identification import identify_weights
 from ..model import MPIModel
 
@@ -255,7 +255,7 @@ EFFECT = Effect(
         EffectParameter(THERMAL_TIME_CONSTANT, 'double', 0.0,
                         'Thermal-drift extension: time constant tau_T of the thermal state'
                         ' (I^2 lag), > 0; 0 together with a 0 weight: no drift', 's',
-                        (0.0, 1.0e6)),
+                        (0.0, 1.0e6), plausible_max=SLOW_TIME_LIMIT),
         EffectParameter(THERMAL_WEIGHT, 'double', 0.0,
                         'Thermal-drift extension: weight w_T of the thermal state (H output'
                         ' per A^2, any sign); 0: no drift', '1/A', (-1.0e6, 1.0e6))),

@@ -64,30 +64,34 @@ Real records (documented in docs/design.md, "Identification on real records"):
   non-invertible model.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
-import time
+import time as time_module
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from .checks import _check_excitation, _check_monotone, _check_signals, _quality_check
+from .checks import _check_excitation, _check_signals, _quality_check
 from .design import (ANCHORS, burn_in, hysteresis_thresholds,
                      inverse_superposition_thresholds, output_sign, scaled_design,
                      ScaledDesign)
-from .qp import fit_generalized_error, fit_model, generalized_error_gram, identify_weights
-from .selection import DEFAULT_ORDERS, select_order
-from ..errors import DataError
+from .design import FloatArray
+from .procedure import (DynamicsEstimate, estimate_dynamics, fit_record, held_out_rows,
+                        InputDynamics, prepare_record, refuse_if_unmodellable, Segment)
+from .qp import fit_generalized_error, fit_model, fit_plain, generalized_error_gram, \
+    identify_weights
+from .selection import DEFAULT_ORDERS, select_order, select_record_order
+from .start_state import StartState
+from ..errors import DataError, IdentificationError
 from ..model import MPIModel
 
 __all__ = [
     'IdentificationResult', 'identify', 'select_order', 'hysteresis_thresholds',
     'inverse_superposition_thresholds', 'fit_generalized_error', 'generalized_error_gram',
     'DEFAULT_ORDERS', 'ScaledDesign', 'scaled_design', 'identify_weights', 'fit_model',
-    'output_sign', 'burn_in', 'ANCHORS',
-
-
+    'output_sign', 'burn_in', 'ANCHORS', 'InputDynamics', 'StartState',
+    'model_with_dynamics', 'select_record_order', 'fit_plain',
 ]
 
 
@@ -99,15 +103,18 @@ class IdentificationResult:
     Attributes
     ----------
     model : MPIModel
-        The identified forward model Gamma (SI units).
+        The identified Gamma (SI units); its initial states are the record's start state.
+        With input dynamics (``dynamics``), Gamma of the delayed / lagged input: the whole
+        model is :attr:`full_model`.
     order : tuple of int
         ``(n, l)``.
     nonlinearity_error : float
-        (37) of the model's simulation on the identification data, with the output's
-        range in place of ``max|Gamma[x]|`` (the two agree when the output starts at 0,
-        as in the paper; the range does not depend on the sensor's zero) [fraction].
+        (37) of the model's simulation on the fitted samples (those the weights were
+        fitted on; :attr:`whole_record_rms_error` covers every sample), with the output's
+        range in place of ``max|Gamma[x]|`` (the two agree when the output starts at 0, as
+        in the paper; the range does not depend on the sensor's zero) [fraction].
     rms_error : float
-        RMS error of the simulation on the identification data over the output's range.
+        RMS error of the simulation on the fitted samples over the output's range.
     samples : int
         Number of samples in the record.
     solver_status : str
@@ -123,8 +130,27 @@ class IdentificationResult:
         RMS error of the best straight line ``y = a x + b`` on the same samples, over the
         output's range: the baseline every fit is checked against.
     burn_in : int
-        Samples at the start left out of the fit and the errors (the plays' states are
-        not determined by the data before; see the module notes).
+        Samples at the start left out of the fit because no start state explains them
+        (0 when the start state is determined; see :mod:`.start_state`).
+    whole_record_rms_error : float
+        RMS error of the model simulated over the whole record from its first sample
+        (ringing and burn-in included), over the output's range.
+    start_state : dict
+        How the record starts: ``kind``, ``levels`` (turning points, input unit),
+        ``description``.
+    segments : list of dict
+        The experiments of a stitched record: ``start``, ``stop``, ``reason``,
+        ``start_state``.
+    dynamics : InputDynamics
+        Dead time and lag of the input path modelled with Gamma (zeros: none).
+    dynamics_estimate : DynamicsEstimate
+        Both kinds as estimated (with a time base), their held-out errors, whether they tie.
+    findings : str
+        What moves the output against the input (ringing, lag, dead time), in words.
+    excluded : int
+        Samples of ringing left out of the fit.
+    notes : list of str
+        What the identification changed or noticed (lowered order, burn-in, ...).
 
     """
 
@@ -139,31 +165,81 @@ class IdentificationResult:
     order_table: list[dict[str, Any]] = field(default_factory=list)
     linear_rms_error: float = math.nan
     burn_in: int = 0
+    whole_record_rms_error: float = math.nan
+    start_state: dict[str, Any] = field(default_factory=dict)
+    segments: list[dict[str, Any]] = field(default_factory=list)
+    dynamics: InputDynamics = field(default_factory=InputDynamics)
+    dynamics_estimate: DynamicsEstimate = field(default_factory=DynamicsEstimate)
+    findings: str = ''
+    excluded: int = 0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def full_model(self) -> Any:
+        """Return the model with its input dynamics (Gamma itself when there are none)."""
+        return model_with_dynamics(self.model, self.dynamics)
 
     def summary(self) -> dict[str, Any]:
         """Return the result as a JSON-ready dict: ``order``, errors, ``samples``, table."""
         m = self.model
         return {'order': list(self.order), 'nonlinearity_error': self.nonlinearity_error,
                 'rms_error': self.rms_error, 'linear_rms_error': self.linear_rms_error,
+                'whole_record_rms_error': self.whole_record_rms_error,
                 'samples': self.samples, 'burn_in': self.burn_in,
+                'excluded_ringing_samples': self.excluded,
                 'operating_point': {'input_offset': m.input_offset,
                                     'output_offset': m.output_offset,
                                     'output_sign': m.output_sign},
+                'start_state': self.start_state, 'segments': self.segments,
+                'dynamics': {**self.dynamics_estimate.to_json(), 'findings': self.findings},
+                'notes': list(self.notes),
                 'solver_status': self.solver_status, 'iterations': self.iterations,
                 'solve_time': self.solve_time, 'order_table': self.order_table}
+
+
+def model_with_dynamics(model: MPIModel, dynamics: InputDynamics) -> Any:
+    """
+    Return Gamma with input dynamics as the extended model the compensator reads.
+
+    Parameters
+    ----------
+    model : MPIModel
+        Gamma (of the delayed / lagged input).
+    dynamics : InputDynamics
+        Dead time and lag.
+
+    Returns
+    -------
+    MPIModel or extended model
+        Gamma itself, a dead-time model or a rate-dependence (input lag) model.
+
+    """
+    if not dynamics.present:
+        return model
+    from ..extensions import DeadTimeModel, RateDependentModel
+    if dynamics.lag_time_constant > 0.0 and dynamics.dead_time > 0.0:
+        msg = 'a dead time and a lag together are not supported yet'
+        raise IdentificationError(msg)
+    if dynamics.lag_time_constant > 0.0:
+        return RateDependentModel(model, dynamics.lag_time_constant)
+    return DeadTimeModel(model, dynamics.dead_time)
 
 
 def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | None = None,
              l: int | None = None, order: str | tuple[int, int] | None = None,  # noqa: E741
              epsilon: float = 1e-6, holdout: float = 0.3,
-             anchor: str = 'operating_point', periodic: bool = False) -> IdentificationResult:
+             anchor: str = 'operating_point', periodic: bool = False,
+             time: npt.ArrayLike | None = None,
+             dynamics: str = 'auto') -> IdentificationResult:
     """
     Identify a modified Prandtl-Ishlinskii model from measured input/output data.
 
-    The record may have any sensor zero, input bias or output sign, and may start
-    mid-history (see the module notes).  The fit is refused, never returned, when it is
-    no better than a straight line on the same data or absurd, when the output is not
-    monotone in the input, or when the excitation is too small for the order.
+    The whole record is used from its first sample: the start state is estimated (see
+    :mod:`.start_state`), ringing after steps is left out, lag and dead time are measured
+    and, with a time base, modelled (see :mod:`.procedure`).  The record may have any
+    sensor zero, input bias or output sign.  The fit is refused, never returned, for a
+    butterfly loop or switching transients, an output unrelated to the input, a fit no
+    better than a straight line on the same data or absurd, or too little excitation.
 
     Parameters
     ----------
@@ -174,19 +250,25 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     n, l : int, optional
         Model orders (default 14 and 7, the paper's final order).
     order : 'auto' or (int, int), optional
-        ``'auto'`` runs :func:`select_order`; a tuple gives ``(n, l)``.
+        ``'auto'`` raises the order until the held-out error saturates; a tuple gives
+        ``(n, l)``.
     epsilon : float
         The small positive bound in (8) and (19), relative to the scaled data.
     holdout : float
-        Held-out fraction for ``order='auto'``.
+        Held-out fraction (order selection and dynamics).
     anchor : {'operating_point', 'origin'}
         Where thresholds and states are anchored, see :func:`scaled_design`.
     periodic : bool
         The record is one period of a periodic excitation the actuator had been following
-        (e.g. a single measured loop that ends where it starts): its start state is then
-        the state at its end, so the whole record is fitted (the record is run twice and
-        the second pass fitted).  Otherwise the start state is unknown and the samples
-        before the input has covered its range are left out.  Needs an explicit order.
+        (e.g. a single measured loop that ends where it starts): its start state is the
+        state at its end, instead of the one estimated.  Needs an explicit order.
+    time : array_like of float, shape (N,), optional
+        Sample times [s]: lag and dead time are then measured in seconds and modelled
+        (``dynamics``); a stitched record's clock may restart (a join).
+    dynamics : {'auto', 'off'}
+        ``'auto'``: with a time base, estimate the input's dead time and lag and model them
+        when they cut the held-out error clearly; ``'off'``: the static model only (the
+        diagnosis' baseline).
 
     Returns
     -------
@@ -196,10 +278,10 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     Raises
     ------
     DataError
-        For malformed data (lengths, non-finite values).
+        For malformed data (lengths, non-finite values) or options.
     IdentificationError
-        For too little excitation, an output not monotone in the input, a failed QP, or
-        a fit no better than a straight line.
+        For an output the MPI model cannot represent (the message names the cause), too
+        little excitation, a failed QP, or a fit no better than a straight line.
 
     Examples
     --------
@@ -216,18 +298,20 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     (True, -1)
 
     """
-    started = time.perf_counter()
+    started = time_module.perf_counter()
     x, y = _check_signals(current, displacement)
+    t = _check_time(time, x.size)
     if anchor not in ANCHORS:
         msg = f"anchor must be one of {', '.join(ANCHORS)}; found {anchor!r}"
         raise DataError(msg)
-    table: list[dict[str, Any]] = []
-    _check_monotone(x, y)
-    if periodic:
-        _check_one_period(x, order)
-    if order == 'auto':
-        (n, l), table = select_order(x, y, holdout=holdout, epsilon=epsilon, anchor=anchor)
-    elif order is not None:
+    if dynamics not in ('auto', 'off'):
+        msg = f"dynamics must be 'auto' or 'off'; found {dynamics!r}"
+        raise DataError(msg)
+    if not 0.0 < holdout < 1.0:
+        msg = f'holdout must be a fraction in (0, 1); found {holdout}'
+        raise DataError(msg)
+    auto = order == 'auto'
+    if order is not None and not auto:
         if isinstance(order, str) or len(order) != 2:
             msg = f"order must be 'auto' or a pair (n, l); found {order!r}"
             raise DataError(msg)
@@ -237,21 +321,126 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     if n < 0 or l < 0:
         msg = f'model orders must be >= 0; found n={n}, l={l}'
         raise DataError(msg)
-    # One period: run the record twice and fit the second pass, whose start state is the
-    # first pass's end state; otherwise the samples before the burn-in are left out.
-    xf, yf = (np.concatenate([x, x]), np.concatenate([y, y])) if periodic else (x, y)
-    rows = np.arange(xf.size) >= x.size if periodic else None
-    _check_excitation(xf, yf, n, l, anchor=anchor)
-    model, design, info = fit_model(xf, yf, n, l, epsilon=epsilon, anchor=anchor, rows=rows)
-    start = x.size if periodic else design.burn_in
-    sim = model.simulate(xf)
-    rms, peak, linear = _quality_check(xf, yf, sim, start, n, l, anchor,
-                                       chosen=order == 'auto')
+    if periodic:
+        _check_one_period(x, order)
+    _check_levels(x, y)
+    record = prepare_record(x, y, time=t, anchor=anchor, epsilon=epsilon)
+    keep = record.keep
+    _, correlation = output_sign(x[keep], y[keep])
+    refuse_if_unmodellable(record, correlation)
+    notes: list[str] = []
+    if periodic:
+        record = replace(record, segments=[Segment(0, x.size, 'start', StartState('periodic'))])
+    n, l, lowered = _supported_order(x.size, n, l, auto)  # noqa: E741
+    if lowered:
+        notes.append(lowered)
+    _check_excitation(x, y, n if not auto else 0, l if not auto else 0, anchor=anchor)
+    choose = not periodic
+    # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
+    # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
+    reference = (8, 4) if x.size >= 10 * 15 else (min(n, 8), min(l, 4))
+    estimate = DynamicsEstimate()
+    if t is not None and dynamics == 'auto' and bool(np.all(np.diff(t) > 0.0)):
+        # On a window of a long record: trials cost the window, not the record.
+        trial = record.window(_DYNAMICS_WINDOW)
+        held = held_out_rows(trial.current.size, holdout, trial.keep)
+        base = fit_record(trial, *reference, held=held, choose=choose)
+        estimate = estimate_dynamics(trial, *reference, held, base.segments,
+                                     burn_in=base.burn_in)
+    found = estimate.modelled
+    table: list[dict[str, Any]] = []
+    if auto:
+        trial = record.window(_ORDER_WINDOW)
+        held = held_out_rows(trial.current.size, holdout, trial.keep)
+        base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose)
+        (n, l), table = select_record_order(trial, held, found, base.segments,
+                                            burn_in=base.burn_in)
+    _check_excitation(x, y, n, l, anchor=anchor)
+    fit = fit_record(record, n, l, dynamics=found, choose=choose)
+    notes.extend(fit.notes)
+    sim = fit.simulate()                 # each segment from its start state
+    fitted = fit.fitted if fit.fitted is not None else keep
+    rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
+    # What `mpi-ros simulate` gives: the model from its initial states, straight through.
+    straight = (model_with_dynamics(fit.model, found).simulate(t, x) if found.present
+                else fit.model.simulate(x))
+    whole = float(np.sqrt(np.mean((straight - y) ** 2)) / np.ptp(y))
+    design = fit.design
+    first = fit.segments[0].start_state
+
+    def to_input(level: float) -> float:
+        return float(design.input_offset + level * design.x_scale)
+
+    start = ({**first.to_json(to_input), 'description': first.describe(to_input, 'A')}
+             if first is not None else {'kind': 'continue', 'levels': [],
+                                        'description': 'continues'})
+    segments = [{'start': s.start, 'stop': s.stop, 'reason': s.reason,
+                 'start_state': (s.start_state.to_json(to_input) if s.start_state is not None
+                                 else {'kind': 'continue', 'levels': []})}
+                for s in fit.segments]
+    if len(fit.segments) > 1:
+        notes.append(f'{len(fit.segments)} segments (joins at samples '
+                     f'{", ".join(str(s.start) for s in fit.segments[1:])}: '
+                     f'{"; ".join(s.reason for s in fit.segments[1:])}), each with its own'
+                     ' start state')
+    findings = '; '.join(part for part in (record.analysis.describe(), estimate.describe())
+                         if part)
+    info = fit.info
     return IdentificationResult(
-        model=model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
+        model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
         samples=int(x.size), solver_status=str(info.status), iterations=int(info.iter),
-        solve_time=time.perf_counter() - started, order_table=table,
-        linear_rms_error=linear, burn_in=0 if periodic else int(design.burn_in))
+        solve_time=time_module.perf_counter() - started, order_table=table,
+        linear_rms_error=linear, burn_in=int(fit.burn_in), whole_record_rms_error=whole,
+        start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
+        findings=findings,
+        excluded=int(np.count_nonzero(~keep)), notes=notes)
+
+
+def _check_time(time: npt.ArrayLike | None, size: int) -> FloatArray | None:
+    if time is None:
+        return None
+    t = np.asarray(time, dtype=np.float64).reshape(-1)
+    if t.size != size:
+        msg = f'time must have one value per sample ({size}); found {t.size}'
+        raise DataError(msg)
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        msg = (f'time contains {bad.size} non-finite value(s), the first at sample {bad[0]};'
+               ' remove or repair them')
+        raise DataError(msg)
+    return t
+
+
+def _check_levels(x: FloatArray, y: FloatArray) -> None:
+    # Too few samples, or an input or output that does not move: nothing to identify.
+    _check_excitation(x, y, 0, 0)
+
+
+#: Samples of the window the dynamics grid runs on (a long record's busiest part).
+_DYNAMICS_WINDOW = 20000
+
+#: Samples of the window the order selection runs on.
+_ORDER_WINDOW = 100000
+
+#: Fewer samples than this (or than two per weight of the requested order) are too few to
+#: lower the order for: the order stays and the excitation check refuses the record.
+_SHORT_RECORD = 60
+
+
+def _supported_order(size: int, n: int, l: int,  # noqa: E741
+                     auto: bool) -> tuple[int, int, str]:
+    # At least ten samples per weight (a short record, such as one quasi-static loop of a
+    # few hundred samples, gets a lower order and a note, not a refusal).
+    weights = n + 1 + 2 * l + 1
+    if auto or size >= 10 * weights or size < max(_SHORT_RECORD, 2 * weights):
+        # Below two samples per weight an explicit order is refused (excitation check).
+        return n, l, ''
+    scale = (size / 10.0 - 2.0) / (n + 2 * l) if n + 2 * l > 0 else 0.0
+    n2 = max(int(n * scale), 0)
+    l2 = max(int(l * scale), 0)  # noqa: E741
+    note = (f'order lowered from n={n}, l={l} to n={n2}, l={l2}: the record has only {size}'
+            ' samples (at least ten per weight are used)')
+    return n2, l2, note
 
 
 def _check_one_period(x: npt.NDArray[Any], order: Any) -> None:

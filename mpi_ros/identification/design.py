@@ -167,7 +167,8 @@ class ScaledDesign:
         return self.sign * (np.asarray(y, dtype=np.float64) - self.output_offset) / self.y_scale
 
     def model(self, w_h: FloatArray, w_s_inv: FloatArray, constant: float = 0.0, *,
-              shift_weight: float = 0.0) -> MPIModel:
+              shift_weight: float = 0.0,
+              initial_states: FloatArray | None = None) -> MPIModel:
         """
         Return the forward MPI model in SI units for QP weights found on the scaled data.
 
@@ -183,6 +184,10 @@ class ScaledDesign:
         shift_weight : float
             Sum of the weights of extra regressors that shift with the input like the
             plays (e.g. creep lags); 0 for none.
+        initial_states : ndarray of float, shape (n+1,), optional
+            The plays' states at the first sample, in the scaled input the QP saw (the
+            record's start state); by default at rest at the lowest input (``input_rest``)
+            or ``z_H0 = 0`` (32).
 
         Returns
         -------
@@ -197,7 +202,13 @@ class ScaledDesign:
                                         w_s_inv * (self.x_scale / self.y_scale))
         # H[u] + c = H[u + c / W] once the states are set by the data (wiping-out).
         x0 = self.input_offset - constant * self.x_scale / (float(np.sum(w_h)) + shift_weight)
-        if self.input_rest is not None:
+        if initial_states is not None:
+            # The QP's plays ran on (x - x0_design) / x_scale; the model's run on x - x0:
+            # the same trajectory scaled and shifted by the constant's input shift.
+            states = (np.asarray(initial_states, dtype=np.float64) * self.x_scale
+                      + (self.input_offset - x0))
+            hysteresis = PIHysteresisOperator(hysteresis.thresholds, w_h, states)
+        elif self.input_rest is not None:
             # Every play at rest at the lowest input: the actuator's state when it has been
             # off (the paper's z_H0 = 0 at x = 0 for data that start there).
             hysteresis = PIHysteresisOperator(hysteresis.thresholds, w_h,
@@ -230,8 +241,9 @@ def output_sign(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple[in
     x = np.asarray(current, dtype=np.float64)
     y = np.asarray(displacement, dtype=np.float64)
     xc, yc = x - np.mean(x), y - np.mean(y)
-    denominator = math.sqrt(float(np.dot(xc, xc)) * float(np.dot(yc, yc)))
-    correlation = float(np.dot(xc, yc)) / denominator if denominator > 0.0 else 0.0
+    # Sums of products, not np.dot: BLAS threads stall on a loaded machine (5 ms a dot).
+    denominator = math.sqrt(float(np.sum(xc * xc)) * float(np.sum(yc * yc)))
+    correlation = float(np.sum(xc * yc)) / denominator if denominator > 0.0 else 0.0
     return (1 if correlation >= 0.0 else -1), correlation
 
 

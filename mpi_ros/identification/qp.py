@@ -5,20 +5,35 @@ The convex QP (34)-(36).
 The generalised error's Gram matrix (with the constant term eliminated), OSQP, the weights.
 """
 
+from dataclasses import dataclass
 from typing import Any, Callable
 
+import numba
 import numpy as np
 import numpy.typing as npt
 import osqp
 import scipy.sparse as sp
 
 from .design import _IDLE_PLAY, FloatArray, scaled_design, ScaledDesign
-from ..deadzone import dead_zone_operator
+from ..deadzone import _dead_zone, dead_zone_operator
 from ..errors import IdentificationError
 from ..model import MPIModel
-from ..play import play_operator
+from ..play import play_clamp, play_operator
 
-__all__ = ['fit_generalized_error', 'fit_model', 'generalized_error_gram', 'identify_weights']
+__all__ = ['SLOPE_FLOOR', 'GramParts', 'fit_generalized_error', 'fit_model', 'fit_plain',
+           'generalized_error_gram', 'identify_weights', 'regressor_gram']
+
+
+#: Passes over at most this many rows run in one compiled loop; longer ones fill chunks of
+#: rows there and multiply them with BLAS (8x faster on 1e6 rows).
+_SMALL_PASS = 4096
+
+#: Lower bound of the slopes of S' (19) in the scaled units of the QP, where the mean slope
+#: is 1 (output and H span the same scaled range): S is at most 10 times steeper than on
+#: average.  The paper's bound is "a small positive number"; with 1e-6 a band of the output
+#: the fitted samples leave undetermined (a held-out block, a part of a single loop) gets an
+#: S' slope of 1e-6, an S that multiplies there by 1e6, and simulations 1e5 % off.
+SLOPE_FLOOR = 0.1
 
 
 def generalized_error_gram(*blocks: FloatArray) -> FloatArray:
@@ -45,7 +60,9 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
                           n_hysteresis: int, n_superposition: int,
                           superposition_center: int, epsilon: float = 1e-6,
                           extra_lower: FloatArray | None = None,
-                          fixed_zero: npt.ArrayLike | None = None) -> tuple[
+                          fixed_zero: npt.ArrayLike | None = None,
+                          tolerance: float = 1e-9,
+                          slope_floor: float | None = None) -> tuple[
                               FloatArray, FloatArray, FloatArray, Any]:
     """
     Solve the QP (34)-(36) for the weights ``w_H``, ``w'_S`` (and optional extras).
@@ -74,6 +91,12 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
         Lower bounds of the extra weights (default 0).
     fixed_zero : array_like of int, optional
         Indices of plays (other than the first) whose weight is fixed at 0.
+    tolerance : float
+        OSQP's absolute and relative tolerance (1e-9; looser for trial fits that are only
+        compared, which are not polished either).
+    slope_floor : float, optional
+        Lower bound of the slopes of S' in (19), scaled units (at least ``epsilon``);
+        :data:`SLOPE_FLOOR` by default.
 
     Returns
     -------
@@ -95,6 +118,7 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     ridge = 1e-9 * max(float(np.mean(np.diag(gram))), 1e-300)
     gram[np.diag_indices(nv)] += ridge
     hysteresis_center = 0
+    floor = max(epsilon, SLOPE_FLOOR if slope_floor is None else slope_floor)
     # Constraint rows: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
     rows = [np.concatenate([equality_row, np.zeros(m + k)])]
     lower = [1.0]
@@ -114,7 +138,7 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
         else:
             row[n1 + i:n1 + c + 1] = 1.0
         rows.append(row)
-        lower.append(epsilon)
+        lower.append(floor)
         upper.append(np.inf)
     x_lower = np.zeros(k) if extra_lower is None else np.asarray(extra_lower, dtype=float)
     for i in range(k):
@@ -128,8 +152,8 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     hi = np.array(upper)
     solver = osqp.OSQP()
     solver.setup(P=sp.csc_matrix(np.triu(gram)), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
-                 verbose=False, eps_abs=1e-9, eps_rel=1e-9, max_iter=200000,
-                 polishing=True, polish_refine_iter=10)
+                 verbose=False, eps_abs=tolerance, eps_rel=tolerance, max_iter=200000,
+                 polishing=tolerance <= 1e-9, polish_refine_iter=10)
     res = solver.solve(raise_error=False)
     # 'solved inaccurate' and 'maximum iterations reached' (tolerances of 1e-9 not met,
     # typical when the data determine some weights only weakly, e.g. no hysteresis) are
@@ -162,13 +186,175 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     w_h[sorted(zero)] = 0.0
     w_s = v[n1:n1 + m].copy()
     slopes = np.empty(m)
-    slopes[c:] = np.maximum(np.cumsum(w_s[c:]), epsilon)
-    slopes[:c + 1] = np.maximum(np.cumsum(w_s[:c + 1][::-1])[::-1], epsilon)
+    slopes[c:] = np.maximum(np.cumsum(w_s[c:]), floor)
+    slopes[:c + 1] = np.maximum(np.cumsum(w_s[:c + 1][::-1])[::-1], floor)
     w_s[c] = slopes[c]
     w_s[c + 1:] = np.diff(slopes[c:])
     w_s[:c] = -np.diff(slopes[:c + 1])
     w_x = np.maximum(v[n1 + m:], x_lower) if k else v[n1 + m:]
     return w_h, w_s, w_x, res.info
+
+
+@dataclass(frozen=True)
+class GramParts:
+    """
+    Gram matrices of the regressors ``[H_rH[x], -S_r'S[y], extra]`` per class of rows.
+
+    Attributes
+    ----------
+    grams : ndarray of float, shape (C, nv, nv)
+        ``Phi_c^T Phi_c`` (sums, not means) over the rows of class ``c``.
+    sums : ndarray of float, shape (C, nv)
+        Column sums over the rows of each class.
+    counts : ndarray of int, shape (C,)
+        Rows of each class.
+    end_state : ndarray of float, shape (n+1,)
+        Play outputs after the last row run.
+
+    """
+
+    grams: FloatArray
+    sums: FloatArray
+    counts: npt.NDArray[np.int64]
+    end_state: FloatArray
+
+    def __add__(self, other: 'GramParts') -> 'GramParts':
+        """Return the parts of both row sets (the end state of ``other``)."""
+        return GramParts(self.grams + other.grams, self.sums + other.sums,
+                         self.counts + other.counts, other.end_state)
+
+    def normalised(self, selected: tuple[int, ...]) -> tuple[FloatArray, FloatArray, int]:
+        """Return the mean Gram matrix, column means and count over the given classes."""
+        count = int(sum(int(self.counts[c]) for c in selected))
+        gram = sum(self.grams[c] for c in selected)
+        total = sum(self.sums[c] for c in selected)
+        scale = 1.0 / max(count, 1)
+        return np.asarray(gram) * scale, np.asarray(total) * scale, count
+
+
+def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: FloatArray, *,
+                   state: FloatArray, classes: npt.NDArray[np.int8], n_classes: int,
+                   extra: FloatArray | None = None, start: int = 0, stop: int | None = None,
+                   chunk: int = 32768) -> GramParts:
+    """
+    Accumulate the Gram matrices of (34) per class of rows.
+
+    The plays run over every sample from ``start`` (from ``state``); rows of class -1
+    only advance them.  The regressor matrix is never formed whole: a compiled pass fills
+    the rows of a chunk (plays and dead zones) and BLAS adds the chunk's Gram matrix; a
+    short pass adds each row's outer product in the compiled loop itself (a BLAS call's
+    threads stall a loaded machine for milliseconds).
+
+    Parameters
+    ----------
+    xs, ys : ndarray of float, shape (N,)
+        Scaled input and output.
+    r_h, r_s_inv : ndarray of float
+        Scaled thresholds of H and S'.
+    state : ndarray of float, shape (n+1,)
+        Play outputs before sample ``start`` (scaled).
+    classes : ndarray of int8, shape (N,)
+        Class of each row: 0 .. n_classes - 1, or -1 for rows left out.
+    n_classes : int
+        Number of classes.
+    extra : ndarray of float, shape (N, k), optional
+        Extra regressors.
+    start, stop : int
+        The rows to run.
+    chunk : int
+        Rows per chunk (with extra regressors).
+
+    Returns
+    -------
+    GramParts
+        Gram matrices, sums and counts per class, and the plays' end state.
+
+    """
+    stop = xs.size if stop is None else stop
+    z = np.array(state, dtype=np.float64)
+    if extra is None and stop - start <= _SMALL_PASS:
+        # Few rows: one compiled pass (no BLAS call, whose threads stall a loaded machine).
+        nv = r_h.size + r_s_inv.size
+        grams = np.zeros((n_classes, nv, nv))
+        sums = np.zeros((n_classes, nv))
+        counts = np.zeros(n_classes, dtype=np.int64)
+        _gram_rows(np.ascontiguousarray(xs), np.ascontiguousarray(ys),
+                   np.ascontiguousarray(r_h), np.ascontiguousarray(r_s_inv), z,
+                   np.ascontiguousarray(classes), int(start), int(stop), grams, sums, counts)
+        upper = np.triu_indices(nv, 1)
+        for c in range(n_classes):
+            grams[c][upper[1], upper[0]] = grams[c][upper]
+        return GramParts(grams, sums, counts, z)
+    nv = r_h.size + r_s_inv.size + (0 if extra is None else extra.shape[1])
+    grams = np.zeros((n_classes, nv, nv))
+    sums = np.zeros((n_classes, nv))
+    counts = np.zeros(n_classes, dtype=np.int64)
+    # Many rows: the compiled pass fills a chunk of rows, BLAS multiplies it.
+    buffer = np.empty((min(chunk, stop - start), nv))
+    nh = r_h.size + r_s_inv.size
+    for a in range(start, stop, chunk):
+        b = min(a + chunk, stop)
+        phi = buffer[:b - a]
+        _fill_rows(xs, ys, r_h, r_s_inv, z, a, b, phi)
+        if extra is not None:
+            phi[:, nh:] = extra[a:b]
+        labels = classes[a:b]
+        for c in range(n_classes):
+            mask = labels == c
+            rows = phi if bool(np.all(mask)) else phi[mask]
+            if rows.shape[0]:
+                grams[c] += rows.T @ rows
+                sums[c] += rows.sum(axis=0)
+                counts[c] += rows.shape[0]
+    return GramParts(grams, sums, counts, z)
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
+               z: FloatArray, start: int, stop: int,
+               out: FloatArray) -> None:  # pragma: no cover - compiled
+    # Rows [plays, -dead zones] (4), (17) of samples start..stop; the plays advance z.
+    nh = r_h.shape[0]
+    ns = r_s.shape[0]
+    for k in range(start, stop):
+        x = xs[k]
+        row = out[k - start]
+        for i in range(nh):
+            z[i] = play_clamp(x, r_h[i], z[i])
+            row[i] = z[i]
+        y = ys[k]
+        for j in range(ns):
+            row[nh + j] = -_dead_zone(y, r_s[j])
+
+
+@numba.njit(cache=True, nogil=True)
+def _gram_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
+               z: FloatArray, classes: npt.NDArray[np.int8], start: int, stop: int,
+               grams: FloatArray, sums: FloatArray,
+               counts: npt.NDArray[np.int64]) -> None:  # pragma: no cover - compiled
+    # Upper triangles of the per-class Gram matrices of [plays, -dead zones] (4), (17).
+    nh = r_h.shape[0]
+    ns = r_s.shape[0]
+    nv = nh + ns
+    phi = np.empty(nv)
+    for k in range(start, stop):
+        x = xs[k]
+        for i in range(nh):
+            z[i] = play_clamp(x, r_h[i], z[i])
+        c = classes[k]
+        if c < 0:
+            continue
+        for i in range(nh):
+            phi[i] = z[i]
+        y = ys[k]
+        for j in range(ns):
+            phi[nh + j] = -_dead_zone(y, r_s[j])
+        counts[c] += 1
+        for a in range(nv):
+            pa = phi[a]
+            sums[c, a] += pa
+            for b in range(a, nv):
+                grams[c, a, b] += pa * phi[b]
 
 
 def _mpi_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: FloatArray, *,
@@ -305,3 +491,45 @@ def fit_model(current: npt.ArrayLike, displacement: npt.ArrayLike, n: int,
     design, w_h, w_s_inv, _, constant, info = identify_weights(
         x, y, n, l, epsilon=epsilon, anchor=anchor, rows=rows)
     return design.model(w_h, w_s_inv, constant), design, info
+
+
+def fit_plain(current: npt.ArrayLike, displacement: npt.ArrayLike, n: int = 14,
+              l: int = 7, *, epsilon: float = 1e-6) -> MPIModel:  # noqa: E741
+    """
+    Fit the plain QP with one constant term on a whole record: the reference fit.
+
+    The paper's QP (34)-(36) with its small bound ``epsilon`` on (8) and (19), the input
+    and output centred on their ranges, the plays from the centre (``z = 0``) at the first
+    sample, every sample fitted: what a careful engineer fits by hand.  No start state, no
+    dynamics, no ringing left out, no refusal.  :func:`~mpi_ros.identification.identify` is
+    judged against it (issue 17: within 1.1x or 0.5 points, simulated from sample 0).
+
+    Parameters
+    ----------
+    current, displacement : array_like of float, shape (N,)
+        Input [A] and output [m].
+    n, l : int
+        Model orders.
+    epsilon : float
+        The bound of (8) and (19), scaled units.
+
+    Returns
+    -------
+    MPIModel
+        Gamma, its initial states the centre: ``model.simulate(current)`` from sample 0.
+
+    """
+    x = np.asarray(current, dtype=np.float64).reshape(-1)
+    y = np.asarray(displacement, dtype=np.float64).reshape(-1)
+    design = scaled_design(x, y, n, l)
+    xs, ys = design.scaled_input(x), design.scaled_output(y)
+    parts = regressor_gram(xs, ys, design.hysteresis_thresholds,
+                           design.inverse_superposition_thresholds, state=np.zeros(n + 1),
+                           classes=np.zeros(x.size, dtype=np.int8), n_classes=1)
+    gram, mean, _ = parts.normalised((0,))
+    w_h, w_s, _, _ = fit_generalized_error(
+        gram - np.outer(mean, mean), 1.0 - design.hysteresis_thresholds,
+        n_hysteresis=n + 1, n_superposition=design.inverse_superposition_thresholds.size,
+        superposition_center=design.center, epsilon=epsilon, slope_floor=epsilon)
+    constant = -float(mean @ np.concatenate([w_h, w_s]))
+    return design.model(w_h, w_s, constant, initial_states=np.zeros(n + 1))

@@ -11,29 +11,18 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .checks import _check_excitation, _check_signals, _errors
-from .design import _MIN_DETERMINED_FRACTION, DEFAULT_ORDERS, scaled_design
-from .qp import fit_model
+from .checks import _check_signals, _errors
+from .design import DEFAULT_ORDERS
+from .procedure import fit_record, held_out_rows, InputDynamics, prepare_record, \
+    PreparedRecord, Segment
 from ..errors import DataError, IdentificationError
 
-__all__ = ['DEFAULT_ORDERS', 'select_order']
-
-
-def _held_out_rows(start: int, size: int, holdout: float,
-                   blocks: int = 10) -> npt.NDArray[np.bool_]:
-    # Held-out blocks spread over the determined part of the record (not only its end),
-    # so every kind of excitation it contains is represented on both sides.
-    held = np.zeros(size, dtype=bool)
-    edges = np.linspace(start, size, blocks + 1).astype(int)
-    count = min(max(int(round(holdout * blocks)), 1), blocks - 1)
-    for b in np.unique(np.round(np.linspace(1, blocks - 2, count)).astype(int)):
-        held[edges[b]:edges[b + 1]] = True
-    return held
+__all__ = ['DEFAULT_ORDERS', 'select_order', 'select_record_order']
 
 
 def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,
                  orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
-                 holdout: float = 0.3, tolerance: float = 0.05, patience: int = 3,
+                 holdout: float = 0.3, tolerance: float = 0.02, patience: int = 3,
                  absolute_tolerance: float = 1e-3, epsilon: float = 1e-6,
                  anchor: str = 'operating_point'
                  ) -> tuple[tuple[int, int], list[dict[str, Any]]]:
@@ -87,39 +76,96 @@ def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,
     if not 0.0 < holdout < 1.0:
         msg = f'holdout must be a fraction in (0, 1); found {holdout}'
         raise DataError(msg)
-    n_max = max(n for n, _ in orders)
-    start = scaled_design(x, y, n_max, 0, anchor=anchor).burn_in
-    if start >= x.size * (1.0 - _MIN_DETERMINED_FRACTION):
-        start = 0 if anchor == 'origin' else scaled_design(x, y, 0, 0, anchor=anchor).burn_in
-    held = _held_out_rows(start, x.size, holdout)
+    record = prepare_record(x, y, anchor=anchor, epsilon=epsilon)
+    held = held_out_rows(x.size, holdout, record.keep)
+    n_ref = min(8, max(n for n, _ in orders))
+    base = fit_record(record, n_ref, n_ref // 2, held=held)
+    return select_record_order(record, held, InputDynamics(), base.segments, orders=orders,
+                               tolerance=tolerance, patience=patience,
+                               absolute_tolerance=absolute_tolerance, burn_in=base.burn_in)
+
+
+def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
+                        dynamics: InputDynamics, starts: list[Segment], *,
+                        orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
+                        tolerance: float = 0.02, patience: int = 3,
+                        absolute_tolerance: float = 1e-3, burn_in: int = 0) -> tuple[
+                            tuple[int, int], list[dict[str, Any]]]:
+    """
+    Choose (n, l) as in the paper: raise the order until the held-out error saturates.
+
+    Each order (with at least ten training samples per weight) is fitted on the training
+    blocks with the record's start states and dynamics, simulated over the whole record
+    and scored on the held-out blocks by its RMS error over the output's range (and (37),
+    reported).  The search stops when ``patience`` successive orders fail to improve the
+    best error by the tolerance once an order has halved the linear one's; the chosen
+    order is the smallest within ``tolerance`` (relative) of the best.  Orders whose
+    held-out error is absurd (over the output's range) are marked ``unstable`` and not
+    considered.
+
+    Parameters
+    ----------
+    record : PreparedRecord
+        The record.
+    held : ndarray of bool, shape (N,)
+        Held-out rows.
+    dynamics : InputDynamics
+        The input's dynamics.
+    starts : list of Segment
+        Start states (their kinds are kept for every order).
+    orders : tuple of (int, int)
+        Candidate orders in increasing complexity.
+    tolerance : float
+        Relative difference of held-out RMS errors that counts as significant.
+    patience : int
+        Saturated orders before the search stops.
+    absolute_tolerance : float
+        Difference, as a fraction of the output range, below which errors count as equal
+        for the stop.
+    burn_in : int
+        Samples at the start left out of every fit (the reference fit's burn-in).
+
+    Returns
+    -------
+    order : (int, int)
+        The chosen order.
+    table : list of dict
+        ``{'n', 'l', 'nonlinearity_error', 'rms_error', 'unstable'}`` per order tried
+        (held-out blocks, fractions of the output's range).
+
+    """
+    y = record.displacement
+    train = int(np.count_nonzero(record.keep & ~held))
     table: list[dict[str, Any]] = []
-    best = np.inf
+    best = math.inf
     saturated = 0
     for n, l in orders:  # noqa: E741
-        _check_excitation(x, y, n, l, anchor=anchor)
-        model, design, _ = fit_model(x, y, n, l, epsilon=epsilon, anchor=anchor, rows=~held)
-        sim = model.simulate(x)
-        keep = held.copy()
-        keep[:design.burn_in] = False
-        if not np.any(keep):
+        if train < 10 * (n + 2 * l + 2) and table:
+            break
+        try:
+            fit = fit_record(record, n, l, dynamics=dynamics, held=held, starts=starts,
+                             choose=False, burn_in=burn_in)
+        except IdentificationError:
             continue
-        peak, rms = _errors(sim, y, keep)
-        row = {'n': n, 'l': l, 'nonlinearity_error': peak, 'rms_error': rms}
-        table.append(row)
-        error = row['nonlinearity_error']
+        peak, rms = _errors(fit.simulate(), y, held)
+        unstable = not (math.isfinite(rms) and rms < 1.0)
+        table.append({'n': n, 'l': l, 'nonlinearity_error': peak, 'rms_error': rms,
+                      'unstable': unstable})
+        if unstable:
+            continue
+        first = next(r for r in table if not r['unstable'])['rms_error']
         margin = max(tolerance * best, absolute_tolerance) if math.isfinite(best) else 0.0
-        if error < best - margin or not math.isfinite(best):
+        if rms < best - margin or not math.isfinite(best):
             saturated = 0
-        elif best < 0.5 * table[0]['nonlinearity_error']:
-            saturated += 1          # no better, once hysteresis models work: saturating
-        best = min(best, error)
+        elif best < 0.5 * first:
+            saturated += 1      # no better, once hysteresis models work: saturating
+        best = min(best, rms)
         if saturated >= patience:
             break
-    if not table:
-        msg = 'no order could be evaluated: the record is too short for a held-out part'
+    stable = [r for r in table if not r['unstable']]
+    if not stable:
+        msg = ('no order could be evaluated on the held-out blocks (every fit was absurd or'
+               ' failed); give the order (e.g. 8,4), or record more cycles')
         raise IdentificationError(msg)
-    # The choice is relative only: with a noisy output the held-out errors of the good
-    # orders are all near the noise's peak, and an absolute margin would pick an order
-    # whose error is well above the best one's.
-    chosen = next(r for r in table if r['nonlinearity_error'] <= best * (1.0 + tolerance))
+    chosen = next(r for r in stable if r['rms_error'] <= best * (1.0 + tolerance))
     return (chosen['n'], chosen['l']), table

@@ -25,7 +25,7 @@ from .messages import (
     Float64MultiArrayReader, MESSAGE_READERS, MessageReader, Selection, SelectionError,
     supported_types, typestore)
 from .options import DataOptions
-from .recording import FloatArray, MIN_SAMPLES, PathLike, Recording
+from .recording import check_magnitudes, FloatArray, MIN_SAMPLES, PathLike, Recording
 from ..errors import DataError
 
 __all__ = ['read_bag_signals', 'read_bag', 'BAG_SUFFIXES', 'TIME_SOURCES']
@@ -54,6 +54,7 @@ def read_bag_signals(
     array_axes: int | None = None,
     sample_period: float | None = None,
     time_source: str = 'receive',
+    time_scale: float = 1.0,
     drop_nonfinite: bool = False,
 ) -> Recording:
     """
@@ -109,9 +110,10 @@ def read_bag_signals(
         one sample (element `input_index`/`output_index`). Topics of other
         types ignore it.
     sample_period : float, optional
-        Interval [s] between the samples of a chunked message; by default
-        inferred from the log times (see above). Give it when the log times
-        are bursty (a recorder on a loaded machine) and the rate is known;
+        Interval [s] between the samples of a chunked message (in s after
+        `time_scale`); by default inferred from the log times (see above).
+        Give it when the log times are bursty (a recorder on a loaded
+        machine) and the rate is known;
         a sample that would fall at or before the previous message's last
         sample is moved 1 ns after it (as the plant simulator does), with a
         note.
@@ -119,13 +121,18 @@ def read_bag_signals(
         Which time stamps the samples: ``'receive'`` is the bag's log time.
         ``std_msgs/msg/Float64`` carries no header stamp, so it is the only
         source for every type.
+    time_scale : float, optional
+        Factor from the log time [s] to the actuator's time [s], > 0: 1 for
+        a live recording; e.g. 0.1 for a bag recorded while a record was
+        replayed at a tenth of its speed.
     drop_nonfinite : bool, optional
         Drop NaN/Inf messages (with a note) instead of raising.
 
     Returns
     -------
     Recording
-        ``time`` [s] relative to the first paired sample, ``current`` [A]
+        ``time`` [s] relative to the first paired sample (log time times
+        `time_scale`), ``current`` [A]
         (the held input), ``displacement`` [m], ``source`` = the path and
         ``notes`` on what was dropped, sorted or de-duplicated.
 
@@ -139,7 +146,9 @@ def read_bag_signals(
         message lists what the messages hold); a chunked message's layout does
         not fit its data, or its index is not an axis; a topic of chunks has a
         single message and no `sample_period`; a topic holds NaN/Inf (without
-        `drop_nonfinite`); or fewer than :data:`MIN_SAMPLES` samples pair up.
+        `drop_nonfinite`); fewer than :data:`MIN_SAMPLES` samples pair up; or a
+        signal is too large or spans too little to compute with
+        (:func:`~mpi_ros.recordings.recording.check_magnitudes`).
 
     Notes
     -----
@@ -157,7 +166,7 @@ def read_bag_signals(
                           input_field=input_field, output_field=output_field,
                           input_index=input_index, output_index=output_index,
                           array_axes=array_axes, sample_period=sample_period,
-                          drop_nonfinite=drop_nonfinite)
+                          time_scale=time_scale, drop_nonfinite=drop_nonfinite)
     return read_bag(path, options, time_source=time_source)
 
 
@@ -165,8 +174,9 @@ def read_bag(path: PathLike, options: DataOptions, *, time_source: str = 'receiv
     """
     Read a bag with the bag options of `options` (see :func:`read_bag_signals`).
 
-    The input and output are multiplied by ``options.input_scale`` and
-    ``options.output_scale``; messages name the options in ``options.spelling``.
+    The time, input and output are multiplied by ``options.time_scale``,
+    ``options.input_scale`` and ``options.output_scale``; messages name the
+    options in ``options.spelling``.
 
     Parameters
     ----------
@@ -216,9 +226,10 @@ def read_bag(path: PathLike, options: DataOptions, *, time_source: str = 'receiv
                'the recording before the actuator runs so both topics are captured')
         raise DataError(msg)
     t_out, s_out, x_held = t_out[paired], s_out[paired], x_in[held[paired]]
-    time = (t_out - t_out[0]).astype(np.float64) * 1e-9
-    return Recording(time, x_held * options.input_scale, s_out * options.output_scale,
-                     source=str(bag), notes=tuple(notes))
+    time = (t_out - t_out[0]).astype(np.float64) * (1e-9 * options.time_scale)
+    return check_magnitudes(Recording(time, x_held * options.input_scale,
+                                      s_out * options.output_scale, source=str(bag),
+                                      notes=tuple(notes)), options)
 
 
 def _selections(options: DataOptions) -> tuple[Selection, Selection]:
@@ -498,11 +509,14 @@ def _clean_topic(
         int(counts.sum()))
     stamps, values = stamps[kept], values[taken]
     if chunked:
-        stamps, first, n_moved = _sample_stamps(stamps, counts, options.sample_period)
+        # --sample-period is in the actuator's s, the log times before --time-scale.
+        period = (None if options.sample_period is None
+                  else options.sample_period / options.time_scale)
+        stamps, first, n_moved = _sample_stamps(stamps, counts, period)
         spacing = (f'{options.name("sample_period")} {options.sample_period:g} s apart'
                    if options.sample_period is not None else
                    'spaced by the log time since the previous message divided by its size '
-                   f'(first message: {first * 1e-9:.6g} s, the median)')
+                   f'(first message: {first * 1e-9 * options.time_scale:.6g} s, the median)')
         notes.append(f'{topic}: {values.size} samples in {counts.size} chunked message(s) '
                      f'of {_sizes(counts)} samples, the last of each at its log time, the '
                      f'others {spacing}')

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass
+import math
 from pathlib import Path
 import re
 from typing import Iterator, Mapping, Sequence
@@ -19,7 +20,7 @@ import numpy.typing as npt
 
 from .files import _equal_length_arrays, atomic_write
 from .options import DataOptions
-from .recording import FloatArray, MIN_SAMPLES, PathLike, Recording
+from .recording import check_magnitudes, FloatArray, MIN_SAMPLES, PathLike, Recording
 from ..errors import DataError
 
 __all__ = ['read_csv_signals', 'read_csv', 'read_csv_table', 'write_csv_columns']
@@ -71,8 +72,9 @@ def read_csv_signals(
     comment : str or None, optional
         Prefix of comment lines; None to disable.
     drop_nonfinite : bool, optional
-        Drop rows with NaN/Inf in the used columns (with a note) instead of
-        raising.
+        Drop rows with NaN/Inf or an empty field in the used columns (with a
+        note) instead of raising. An empty field is a missing value (pandas
+        writes NaN as one).
 
     Returns
     -------
@@ -87,7 +89,9 @@ def read_csv_signals(
         column is missing (the message lists those present); a used field is
         not a number (the message gives line and column); rows are ragged;
         fewer than :data:`MIN_SAMPLES` rows remain; or a used field is NaN/Inf
-        (without `drop_nonfinite`).
+        or empty (without `drop_nonfinite`); or a signal is too large or spans
+        too little to compute with (:func:`~mpi_ros.recordings.recording.check_magnitudes`).
+        The message names the first bad field in file order.
 
     Examples
     --------
@@ -163,12 +167,11 @@ def read_csv(path: PathLike, options: DataOptions, *, comment: str | None = '#')
     if time_column is not None:
         used['time'] = _column_index(table, time_column, option='time_column', options=options)
     _check_row_count(table, len(table.rows))
-    values = {role: _parse_column(table, index) for role, index in used.items()}
     notes: list[str] = []
-    keep = _nonfinite_rows(
-        table, values, used, drop_nonfinite=options.drop_nonfinite, notes=notes,
+    columns, keep = _numeric_columns(
+        table, sorted(set(used.values())), drop_nonfinite=options.drop_nonfinite, notes=notes,
         hint=f'pass {options.setting("drop_nonfinite")} to drop those rows')
-    values = {role: column[keep] for role, column in values.items()}
+    values = {role: columns[index][keep] for role, index in used.items()}
     n_rows = int(np.count_nonzero(keep))
     _check_row_count(table, n_rows, after_drop=n_rows != len(table.rows))
     if time_column is None:
@@ -182,9 +185,10 @@ def read_csv(path: PathLike, options: DataOptions, *, comment: str | None = '#')
             line = int(np.asarray(table.line_numbers)[keep][first])
             notes.append(f'time column {time_column!r} is not strictly increasing (first at '
                          f'line {line}); samples are kept in file order')
-    return Recording(time, values['input'] * options.input_scale,
-                     values['output'] * options.output_scale, source=str(source),
-                     notes=tuple(notes))
+    return check_magnitudes(Recording(time, values['input'] * options.input_scale,
+                                      values['output'] * options.output_scale,
+                                      source=str(source), notes=tuple(notes),
+                                      timed=time_column is not None), options)
 
 
 def read_csv_table(
@@ -207,7 +211,7 @@ def read_csv_table(
     comment : str or None, optional
         Prefix of comment lines; None to disable.
     drop_nonfinite : bool, optional
-        Drop rows holding NaN/Inf (instead of raising).
+        Drop rows holding NaN/Inf or an empty field (instead of raising).
     nonfinite_hint : str, optional
         What the NaN/Inf error tells the user to do (callers name their own
         options).
@@ -224,8 +228,8 @@ def read_csv_table(
     DataError
         If the file is missing, empty or has no header; it has no column
         besides ``time``; a field is not a number (line and column named);
-        rows are ragged; there is no data row; or a value is NaN/Inf (without
-        `drop_nonfinite`).
+        rows are ragged; there is no data row; or a value is NaN/Inf or empty
+        (without `drop_nonfinite`).
 
     """
     source = Path(path)
@@ -237,15 +241,14 @@ def read_csv_table(
     if not table.rows:
         msg = f'CSV file {source} has a header but no data rows; add the samples'
         raise DataError(msg)
-    columns = {name: _parse_column(table, index) for index, name in enumerate(table.header)}
-    used = {name: index for index, name in enumerate(table.header)}
     notes: list[str] = []
-    keep = _nonfinite_rows(table, columns, used, drop_nonfinite=drop_nonfinite, notes=notes,
-                           hint=nonfinite_hint)
+    columns, keep = _numeric_columns(table, list(range(len(table.header))),
+                                     drop_nonfinite=drop_nonfinite, notes=notes,
+                                     hint=nonfinite_hint)
     if not np.any(keep):
-        msg = f'CSV file {source}: every row holds NaN/Inf; no data left'
+        msg = f'CSV file {source}: every row holds NaN/Inf or an empty field; no data left'
         raise DataError(msg)
-    data = np.column_stack([columns[name][keep] for name in table.header])
+    data = np.column_stack([columns[index][keep] for index in range(len(table.header))])
     return list(table.header), data.astype(np.float64)
 
 
@@ -415,45 +418,59 @@ def _column_index(table: _Table, name: str, *, option: str, options: DataOptions
     raise DataError(msg)
 
 
-def _parse_column(table: _Table, index: int) -> FloatArray:
-    values = np.empty(len(table.rows), dtype=np.float64)
-    for row, (fields, line) in enumerate(zip(table.rows, table.line_numbers)):
-        field = fields[index]
-        if not _NUMBER.fullmatch(field):
-            found = 'an empty field' if not field else f'{field[:40]!r}'
-            msg = (f'CSV file {table.path} line {line}, column {table.header[index]!r} '
-                   f'(column {index + 1}): expected a number, found {found}; fix the value '
-                   'or remove the row')
-            raise DataError(msg)
-        values[row] = float(field)
-    return values
-
-
-def _nonfinite_rows(
+def _numeric_columns(
     table: _Table,
-    values: Mapping[str, FloatArray],
-    used: Mapping[str, int],
+    indices: Sequence[int],
     *,
     drop_nonfinite: bool,
     notes: list[str],
     hint: str,
-) -> npt.NDArray[np.bool_]:
-    """Return the mask of rows whose used values are all finite, or raise."""
-    bad = np.zeros(len(table.rows), dtype=bool)
-    for column in values.values():
-        bad |= ~np.isfinite(column)
+) -> tuple[dict[int, FloatArray], npt.NDArray[np.bool_]]:
+    """
+    Parse the columns `indices`; return them and the mask of the rows to keep.
+
+    An empty field is a missing value, like NaN and Inf (pandas writes NaN as an empty
+    field): such rows are dropped (with a note) when `drop_nonfinite`, else refused. Any
+    other field that is not a number is refused. Without `drop_nonfinite` the message names
+    the first bad field in file order (row by row, left to right), whichever kind it is.
+    """
+    n = len(table.rows)
+    order = sorted(indices)
+    values: dict[int, FloatArray] = {}
+    bad = np.zeros(n, dtype=bool)                     # rows with NaN, Inf or an empty field
+    text: tuple[int, int, str] | None = None          # first field that is not a number
+    for index in order:
+        fields = [row[index] for row in table.rows]
+        empty = np.array([not field for field in fields], dtype=bool)
+        number = np.array([_NUMBER.fullmatch(field) is not None for field in fields],
+                          dtype=bool)
+        column = np.full(n, np.nan)
+        column[number] = np.array([f for f, ok in zip(fields, number) if ok], dtype=np.float64)
+        values[index] = column
+        bad |= empty | (number & ~np.isfinite(column))
+        wrong = np.flatnonzero(~empty & ~number)
+        if wrong.size and (text is None or wrong[0] < text[0]):   # left to right: ties keep
+            text = (int(wrong[0]), index, fields[int(wrong[0])])  # the leftmost column
+    first = int(np.flatnonzero(bad)[0]) if bad.any() else n
+    if text is not None and (drop_nonfinite or text[0] <= first):
+        row, index, field = text
+        msg = (f'CSV file {table.path} line {table.line_numbers[row]}, column '
+               f'{table.header[index]!r} (column {index + 1}): expected a number, found '
+               f'{field[:40]!r}; fix the value or remove the row')
+        raise DataError(msg)
     n_bad = int(np.count_nonzero(bad))
     if n_bad and not drop_nonfinite:
-        first = int(np.flatnonzero(bad)[0])
-        role = next(role for role, column in values.items() if not np.isfinite(column[first]))
-        name = table.header[used[role]]
-        msg = (f'CSV file {table.path} has {n_bad} row(s) with non-finite values (NaN/Inf), '
-               f'the first at line {table.line_numbers[first]}, column {name!r}; fix the data '
-               f'or {hint}')
+        index = next(i for i in order if not math.isfinite(values[i][first]))
+        field = table.rows[first][index]
+        found = 'an empty field' if not field else repr(field[:40])
+        msg = (f'CSV file {table.path} has {n_bad} row(s) with non-finite values (NaN, Inf '
+               f'or empty fields), the first at line {table.line_numbers[first]}, column '
+               f'{table.header[index]!r} ({found}); fix the data or {hint}')
         raise DataError(msg)
     if n_bad:
-        notes.append(f'dropped {n_bad} row(s) with non-finite values (NaN/Inf)')
-    return ~bad
+        notes.append(f'dropped {n_bad} row(s) with non-finite values (NaN, Inf or empty '
+                     'fields)')
+    return values, ~bad
 
 
 def _check_row_count(table: _Table, n_rows: int, *, after_drop: bool = False) -> None:

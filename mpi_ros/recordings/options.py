@@ -115,13 +115,15 @@ DATA_OPTIONS = (
     DataOption('output_column', 'optional_str',
                'CSV column of the output (unset: the next column after the input)', '',
                'csv', ''),
-    DataOption('time_scale', 'float', 'multiply the CSV time by this to get s (1e-3 for ms)',
-               '', 'csv', 1.0),
+    DataOption('time_scale', 'float',
+               'multiply the time by this to get s (> 0): 1e-3 for a CSV time column in ms, '
+               '1e-6 in us; for a bag, the factor from its log time', '', 'any', 1.0),
     DataOption('input_scale', 'float', 'multiply the input by this to get A', '', 'any', 1.0),
     DataOption('output_scale', 'float',
                'multiply the output by this to get m (1e-9 for nm)', '', 'any', 1.0),
     DataOption('drop_nonfinite', 'bool',
-               'drop NaN/Inf samples (with a note) instead of refusing the data', '', 'any',
+               'drop NaN/Inf samples (and empty CSV fields) with a note instead of refusing '
+               'the data', '', 'any',
                False),
 )
 
@@ -170,11 +172,14 @@ class DataOptions:
         CSV columns; None picks the first column besides the time and the
         next one after it.
     time_scale : float
-        Factor from the CSV time column to s.
+        Factor from the recorded time to s, > 0: the CSV time column (1e-3
+        for ms), or a bag's log time (e.g. 0.1 for a bag recorded during a
+        replay at a tenth of the speed). ``sample_period`` is in s after it.
     input_scale, output_scale : float
         Factors from the recorded values to A and m.
     drop_nonfinite : bool
-        Drop NaN/Inf samples (with a note) instead of refusing the data.
+        Drop NaN/Inf samples (and CSV rows with an empty field), with a note,
+        instead of refusing the data.
     spelling : {'keyword', 'cli', 'parameter'}
         How error messages name the options (see :data:`SPELLINGS`).
 
@@ -183,7 +188,8 @@ class DataOptions:
     DataError
         If a topic is empty, a field is unknown, an index is negative or not
         a whole number, `array_axes` is not a whole number >= 1, the sample
-        period is negative or not finite, or a scale is zero or not finite.
+        period is negative or not finite, a scale is zero or not finite, or
+        the time scale is negative.
 
     Examples
     --------
@@ -269,6 +275,10 @@ class DataOptions:
             if not number or not math.isfinite(value) or value == 0:
                 msg = (f'{self.name(name)} must be a finite non-zero number; found '
                        f'{show_value(value)}')
+                raise DataError(msg)
+            if name == 'time_scale' and value < 0:
+                msg = (f'{self.name(name)} must be > 0 (the factor from the recorded time to '
+                       f's, e.g. 1e-3 for ms); found {show_value(value)}')
                 raise DataError(msg)
             object.__setattr__(self, name, float(value))
         object.__setattr__(self, 'drop_nonfinite', bool(self.drop_nonfinite))

@@ -23,7 +23,7 @@ __all__ = ['read_recording', 'read_signals', 'source_kind', 'BAG_KEYWORDS', 'CSV
 #: Keyword options of :func:`read_bag_signals` (listed, not inspected).
 BAG_KEYWORDS = ('input_topic', 'output_topic', 'input_joint', 'output_joint', 'input_field',
                 'output_field', 'input_index', 'output_index', 'array_axes', 'sample_period',
-                'time_source', 'drop_nonfinite')
+                'time_source', 'time_scale', 'drop_nonfinite')
 #: Keyword options of :func:`read_csv_signals` (listed, not inspected).
 CSV_KEYWORDS = ('input_column', 'output_column', 'time_column', 'input_scale', 'output_scale',
                 'time_scale', 'comment', 'drop_nonfinite')

@@ -16,15 +16,22 @@ from typing import Union
 import numpy as np
 import numpy.typing as npt
 
+from .options import DataOptions
 from ..errors import DataError
 
-__all__ = ['MIN_SAMPLES', 'Recording', 'PathLike', 'FloatArray']
+__all__ = ['MIN_SAMPLES', 'MAGNITUDE_LIMIT', 'Recording', 'PathLike', 'FloatArray',
+           'check_magnitudes']
 
 PathLike = Union[str, 'os.PathLike[str]']
 FloatArray = npt.NDArray[np.float64]
 
 #: Smallest number of paired samples a recording must hold to be usable.
 MIN_SAMPLES = 10
+
+#: Largest magnitude of a sample, and the inverse of the smallest non-zero span of a signal,
+#: that the fit's arithmetic handles (in SI units after the scales): squares and sums of
+#: squares of such values stay normal floats.  1e-12..1e12 (pm to Tm) is far inside.
+MAGNITUDE_LIMIT = 1e100
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,6 +57,9 @@ class Recording:
     notes : tuple of str
         What the reader changed or noticed (dropped, sorted or duplicate
         samples), one sentence each; empty when the data was clean.
+    timed : bool
+        False when the record has no time base (a CSV file without a time column: ``time``
+        is then the sample index); the identification then estimates no dynamics.
 
     Raises
     ------
@@ -69,6 +79,7 @@ class Recording:
     displacement: FloatArray
     source: str = ''
     notes: tuple[str, ...] = ()
+    timed: bool = True
 
     def __post_init__(self) -> None:
         """Validate and freeze the arrays."""
@@ -92,7 +103,57 @@ class Recording:
             raise DataError(msg)
         object.__setattr__(self, 'source', str(self.source))
         object.__setattr__(self, 'notes', tuple(str(note) for note in self.notes))
+        object.__setattr__(self, 'timed', bool(self.timed))
 
     def __len__(self) -> int:
         """Return the number of samples N."""
         return int(self.time.size)
+
+
+def check_magnitudes(recording: Recording, options: DataOptions | None = None) -> Recording:
+    """
+    Refuse a recording whose values a fit cannot compute with; return it otherwise.
+
+    Parameters
+    ----------
+    recording : Recording
+        As read, after the scales.
+    options : DataOptions, optional
+        The scales, named in the message in ``options.spelling`` (default: the
+        keyword spelling, scales 1).
+
+    Returns
+    -------
+    Recording
+        `recording` itself.
+
+    Raises
+    ------
+    DataError
+        If a sample exceeds :data:`MAGNITUDE_LIMIT` in magnitude (or is not finite: a
+        scale made it overflow), or a signal that varies spans less than its inverse (its
+        squared differences would overflow or underflow to 0, and every error measure with
+        them).
+
+    """
+    options = DataOptions() if options is None else options
+    for name, scale, unit in (('time', 'time_scale', 's'), ('current', 'input_scale', 'A'),
+                              ('displacement', 'output_scale', 'm')):
+        values = getattr(recording, name)
+        if values.size == 0:
+            continue
+        largest = float(np.max(np.abs(values)))
+        span = float(np.max(values) - np.min(values)) if largest <= MAGNITUDE_LIMIT else 0.0
+        if not largest <= MAGNITUDE_LIMIT:              # NaN or Inf: the scale overflowed
+            problem = f'reaches {largest:.3g} {unit}, too large'
+        elif 0.0 < span < 1.0 / MAGNITUDE_LIMIT:
+            problem = f'spans only {span:.3g} {unit}, too small'
+        else:
+            continue
+        msg = (f'{recording.source}: the {name} {problem} to compute with (its squares leave '
+               f'the floating-point range; magnitudes up to {MAGNITUDE_LIMIT:g} and spans '
+               f'from {1.0 / MAGNITUDE_LIMIT:g} are handled); check the column or topic, or '
+               f'rescale it to {unit} with {options.setting(scale, "<factor>")} (now '
+               f'{getattr(options, scale):g})')
+        raise DataError(msg)
+    return recording

@@ -1,0 +1,1042 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The identification procedure: a record, whole, from its first sample, to a model.
+
+Steps (documented in docs/design.md, "Identification on real records"):
+
+1. **What moves the output against the input** (:mod:`.dynamics`): a butterfly loop,
+   switching transients or an output unrelated to the input are refused, naming the cause;
+   ringing after steps is left out of the fit; lag and dead time are measured.
+2. **Segments**: a record stitched from several experiments (time gaps, time running back,
+   output jumps the input does not explain) is cut at the joins; each segment gets its own
+   start state.
+3. **Start state** (:mod:`.start_state`): one QP per candidate history; the best is the
+   record's start state, written into the model, so that the model simulated from the
+   first sample reproduces the record.  A burn-in is kept only where no candidate explains
+   the start (reported).
+4. **Dynamics** (with a time base): a grid over the dead time and the time constant of a
+   first-order lag of the input, one QP each, scored on held-out blocks by the output's
+   RMS error; kept when it beats the static model on them clearly.
+5. **Order** (``order='auto'``): raised until the held-out error saturates (:mod:`.selection`).
+6. **Judgement**: the model, simulated over the whole record from its start state, against
+   the best straight line on the same samples; never a model worse than the line.
+"""
+
+from dataclasses import dataclass, field, replace
+import math
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from .design import FloatArray, scaled_design, ScaledDesign
+from .dynamics import analyse_dynamics, DynamicsAnalysis
+from .qp import fit_generalized_error, GramParts, regressor_gram
+from .start_state import determined_from, end_state, refine_memory, start_candidates, \
+    StartState, turning_point_candidates
+from ..deadzone import dead_zone_operator
+from ..errors import DataError, IdentificationError
+from ..model import MPIModel
+from ..play import play_operator
+
+__all__ = ['DynamicsEstimate', 'InputDynamics', 'Segment', 'RecordFit', 'fit_record',
+           'find_segments', 'prepare_record', 'PreparedRecord']
+
+#: Tolerance of the OSQP solves (polished): trial fits are compared on held-out rows,
+#: which an unpolished solution can be off by a factor of two in ill-conditioned directions.
+_TRIAL_TOLERANCE = 1e-9
+
+#: A time gap: a sample interval this many times the median one.
+_GAP_FACTOR = 5.0
+
+#: A record is cut into at most this many experiments, each of at least _MIN_SEGMENT
+#: samples; a time column that runs back or jumps more often is not used for joins.
+_MAX_SEGMENTS = 20
+_MIN_SEGMENT = 50
+
+#: Dynamics are kept when they cut the held-out RMS output error by this fraction.
+_DYNAMICS_GAIN = 0.1
+
+#: A dead time and a lag whose held-out errors are within this fraction tie.
+_TIE = 0.03
+
+#: Rounds of the joint estimate of the plays' start states (refine, refit).
+_MEMORY_ROUNDS = 3
+
+#: A start state explains the record's start when the generalised RMS error before the
+#: plays are determined is at most this many times the error after, or below
+#: :data:`_START_FLOOR` (1 % of H's scaled range of 2): model error, not a wrong state.
+_START_TOLERANCE = 3.0
+_START_FLOOR = 0.02
+
+
+@dataclass(frozen=True)
+class InputDynamics:
+    """
+    Dynamics of the input path found in a record (0: none).
+
+    Attributes
+    ----------
+    dead_time : float
+        Pure delay ``L`` [s] between input and output.
+    lag_time_constant : float
+        Time constant ``tau`` [s] of a first-order lag of the input.
+
+    """
+
+    dead_time: float = 0.0
+    lag_time_constant: float = 0.0
+
+    @property
+    def present(self) -> bool:
+        """Tell whether any dynamics is modelled."""
+        return self.dead_time > 0.0 or self.lag_time_constant > 0.0
+
+    def apply(self, time: FloatArray, current: FloatArray) -> FloatArray:
+        """Return the input the hysteresis sees: delayed, then lagged."""
+        from ..extensions._signals import delay, first_order_lag
+        x = delay(time, current, self.dead_time) if self.dead_time > 0.0 else current
+        if self.lag_time_constant > 0.0:
+            x = first_order_lag(time, x, self.lag_time_constant)
+        return np.asarray(x, dtype=np.float64)
+
+    def describe(self) -> str:
+        """Return the dynamics in words."""
+        parts = []
+        if self.dead_time > 0.0:
+            parts.append(f'a dead time of {1e3 * self.dead_time:.3g} ms')
+        if self.lag_time_constant > 0.0:
+            parts.append(f'a first-order lag of {1e3 * self.lag_time_constant:.3g} ms')
+        return ' and '.join(parts) if parts else 'none'
+
+
+@dataclass(frozen=True)
+class DynamicsEstimate:
+    """
+    The input's dynamics estimated from a record: both kinds, their errors, the choice.
+
+    Attributes
+    ----------
+    modelled : InputDynamics
+        What the model carries (zeros: the static model is as good on held-out data).
+    dead_time : float
+        Best dead time [s] of the dead-time-only trials (0 without a time base).
+    lag_time_constant : float
+        Best time constant [s] of the lag-only trials.
+    static_error, dead_time_error, lag_error : float
+        Held-out RMS output errors of the static model and of the best of each kind
+        [fraction of the output range].
+    tie : bool
+        The dead time and the lag are within :data:`_TIE` of each other: this record cannot
+        tell them apart (a record with bursts at two rates can).
+    trials : list of dict
+        ``{'dead_time', 'lag_time_constant', 'held_error'}`` per trial.
+
+    """
+
+    modelled: InputDynamics = field(default_factory=InputDynamics)
+    dead_time: float = 0.0
+    lag_time_constant: float = 0.0
+    static_error: float = math.nan
+    dead_time_error: float = math.nan
+    lag_error: float = math.nan
+    tie: bool = False
+    trials: list[dict[str, float]] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        """Return the JSON form (no trials)."""
+        return {'dead_time': self.dead_time, 'lag_time_constant': self.lag_time_constant,
+                'static_held_out_error': _finite(self.static_error),
+                'dead_time_held_out_error': _finite(self.dead_time_error),
+                'lag_held_out_error': _finite(self.lag_error), 'tie': self.tie,
+                'modelled': ('dead_time' if self.modelled.dead_time > 0.0 else
+                             'lag' if self.modelled.lag_time_constant > 0.0 else 'none'),
+                'modelled_dead_time': self.modelled.dead_time,
+                'modelled_lag_time_constant': self.modelled.lag_time_constant}
+
+    def describe(self) -> str:
+        """Return what was found, in words (empty when nothing was estimated)."""
+        nothing = self.dead_time == 0.0 and self.lag_time_constant == 0.0
+        if not math.isfinite(self.static_error) or nothing:
+            return ''
+        both = (f'a dead time of {1e3 * self.dead_time:.3g} ms (held-out RMS'
+                f' {100 * self.dead_time_error:.3g} %) or a first-order lag of'
+                f' {1e3 * self.lag_time_constant:.3g} ms ({100 * self.lag_error:.3g} %),'
+                f' against {100 * self.static_error:.3g} % for the static model')
+        if not self.modelled.present:
+            return (f'the output follows the input with {both}: not modelled (less than'
+                    f' {100 * _DYNAMICS_GAIN:.0f} % better); mpi-ros diagnose tests it on'
+                    ' validation data')
+        tie = (' they tie on this record (one rate): the lag is modelled, its inverse is'
+               ' causal; bursts at two rates tell them apart (mpi-ros diagnose'
+               ' --excitation)' if self.tie else '')
+        return (f'the output follows the input with {both}; modelled:'
+                f' {self.modelled.describe()}{";" if tie else ""}{tie}')
+
+
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+@dataclass(frozen=True)
+class Segment:
+    """
+    One experiment of a record: samples ``[start, stop)`` and how it begins.
+
+    Attributes
+    ----------
+    start, stop : int
+        Its samples.
+    reason : str
+        Why a new segment begins here (``'start'`` for the first).
+    start_state : StartState or None
+        The chosen start state (None: continues from the previous segment).
+
+    """
+
+    start: int
+    stop: int
+    reason: str = 'start'
+    start_state: StartState | None = None
+
+
+@dataclass(frozen=True)
+class PreparedRecord:
+    """
+    A record checked and analysed, ready for trial fits.
+
+    Attributes
+    ----------
+    time : ndarray of float or None
+        Sample times [s] (None: no time base).
+    current, displacement : ndarray of float, shape (N,)
+        The data.
+    keep : ndarray of bool, shape (N,)
+        Samples that enter the fit (outside ringing).
+    segments : list of Segment
+        The experiments of the record.
+    analysis : DynamicsAnalysis
+        What moves the output against the input.
+    sign : int
+        Whether the output rises (1) or falls (-1) with the input.
+    anchor : str
+        The design's anchor.
+    epsilon : float
+        The bound of (8)/(19).
+
+    """
+
+    time: FloatArray | None
+    current: FloatArray
+    displacement: FloatArray
+    keep: npt.NDArray[np.bool_]
+    segments: list[Segment]
+    analysis: DynamicsAnalysis
+    sign: int
+    anchor: str = 'operating_point'
+    epsilon: float = 1e-6
+
+    def window(self, size: int) -> 'PreparedRecord':
+        """
+        Return the part of the record with the most input travel, at most ``size`` samples.
+
+        Trial fits on a long record (dynamics grid, order selection) run on such a window:
+        its content (the most sweeps, the fastest rates) decides them, and it keeps their
+        cost independent of the record's length.  The window is a record of its own: its
+        start state is chosen afresh.
+
+        Parameters
+        ----------
+        size : int
+            Largest number of samples.
+
+        Returns
+        -------
+        PreparedRecord
+            This record when it is short enough, else the window.
+
+        """
+        n = self.current.size
+        if n <= size:
+            return self
+        travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(self.current)))])
+        start = int(np.argmax(travel[size - 1:] - travel[:n - size + 1]))
+        stop = start + size
+        segments = [replace(s, start=max(s.start, start) - start,
+                            stop=min(s.stop, stop) - start,
+                            start_state=None if s.start > start else s.start_state)
+                    for s in self.segments if s.stop > start and s.start < stop]
+        segments[0] = replace(segments[0], start_state=None, reason='start')
+        time = None if self.time is None else self.time[start:stop]
+        return replace(self, time=time, current=self.current[start:stop],
+                       displacement=self.displacement[start:stop],
+                       keep=self.keep[start:stop], segments=segments)
+
+
+@dataclass(frozen=True)
+class RecordFit:
+    """
+    One fit of Gamma on a prepared record.
+
+    Attributes
+    ----------
+    model : MPIModel
+        Gamma (SI units) with the first segment's start state as its initial states.
+    design : ScaledDesign
+        Its design.
+    segments : list of Segment
+        With the chosen start states.
+    material_input : ndarray of float, shape (N,)
+        The input Gamma saw (after the dynamics).
+    train_error, held_error : float
+        Generalised RMS error on the training and held-out rows, in the input's unit
+        (NaN without held-out rows).
+    burn_in : int
+        Samples at the start left out of the fit because no start state explains them.
+    info : object
+        OSQP's info structure of the final solve.
+    notes : list of str
+        What the fit noticed (burn-in, weights fitted after the start).
+    fitted : ndarray of bool, shape (N,)
+        The samples the weights were fitted on (training rows, outside ringing, after a
+        burn-in, and, when enough samples follow, after the plays are determined).
+
+    """
+
+    model: MPIModel
+    design: ScaledDesign
+    segments: list[Segment]
+    material_input: FloatArray
+    train_error: float
+    held_error: float
+    burn_in: int = 0
+    info: Any = None
+    notes: list[str] = field(default_factory=list)
+    fitted: npt.NDArray[np.bool_] | None = None
+
+    def simulate(self) -> FloatArray:
+        """Return the model's output over the record, each segment from its start state."""
+        out = np.empty(self.material_input.size)
+        state: FloatArray | None = None
+        z_first = np.asarray(self.model.hysteresis.initial_states, dtype=np.float64)
+        for seg in self.segments:
+            part = self.material_input[seg.start:seg.stop]
+            if seg.start_state is None and state is not None:
+                z = state
+            else:
+                z = self._state_of(seg) if seg.start != 0 else z_first
+            h, state = self.model.hysteresis_output(part, z)
+            out[seg.start:seg.stop] = self.model.output(h)
+        return out
+
+    def _state_of(self, seg: Segment) -> FloatArray:
+        d = self.design
+        u = d.scaled_input(self.material_input[seg.start:seg.stop])
+        assert seg.start_state is not None
+        z = seg.start_state.states(float(u[0]), d.hysteresis_thresholds,
+                                   end_state(u, d.hysteresis_thresholds))
+        return _to_model_states(z, d, self.model)
+
+
+def find_segments(time: FloatArray | None, analysis: DynamicsAnalysis, size: int,
+                  jumps: list[int] | None = None) -> list[Segment]:
+    """
+    Cut a record at the joins of the experiments it was stitched from.
+
+    A join is a time gap (an interval over five times the median one), time running back
+    (each experiment's clock restarting), or an output jump the input does not explain
+    (the unrecorded input between two experiments) after the record's first samples.  At
+    most :data:`_MAX_SEGMENTS` experiments of at least :data:`_MIN_SEGMENT` samples each; a
+    time column that runs back or jumps more often is not a clock of stitched experiments
+    (duplicated, constant or scrambled time) and gives no joins.
+
+    Parameters
+    ----------
+    time : ndarray of float or None
+        Sample times [s].
+    analysis : DynamicsAnalysis
+        The record's analysis (its output jumps).
+    size : int
+        Number of samples.
+    jumps : list of int, optional
+        Output jumps the input does not explain (from the analysis).
+
+    Returns
+    -------
+    list of Segment
+        At least one.
+
+    """
+    cuts: dict[int, str] = {}
+    if time is not None and size > 2:
+        steps = np.diff(time)
+        positive = steps[steps > 0.0]
+        typical = float(np.median(positive)) if positive.size else 0.0
+        back = np.flatnonzero(steps <= 0.0)
+        gaps = (np.flatnonzero(steps > _GAP_FACTOR * typical) if typical > 0.0
+                else np.zeros(0, dtype=np.int64))
+        # A clock that runs back or jumps at many samples is no clock of a few stitched
+        # experiments (a duplicated, constant or scrambled time column): no joins from it.
+        if back.size + gaps.size <= _MAX_SEGMENTS:
+            for k in back.tolist():
+                cuts[k + 1] = 'time runs back'
+            for k in gaps.tolist():
+                cuts.setdefault(k + 1, f'time gap of {steps[k]:.4g} s')
+    for k in jumps or []:
+        if all(abs(k - c) > _MIN_SEGMENT for c in cuts):
+            cuts[k] = 'output jump the input does not explain'
+    bounds: list[int] = []
+    for c in sorted(cuts):               # experiments of at least _MIN_SEGMENT samples
+        if c - (bounds[-1] if bounds else 0) >= _MIN_SEGMENT and size - c >= _MIN_SEGMENT:
+            bounds.append(c)
+    bounds = bounds[:_MAX_SEGMENTS - 1]
+    starts = [0] + bounds
+    stops = bounds + [size]
+    return [Segment(a, b, 'start' if a == 0 else cuts[a]) for a, b in zip(starts, stops)]
+
+
+def prepare_record(current: FloatArray, displacement: FloatArray, *,
+                   time: FloatArray | None = None, anchor: str = 'operating_point',
+                   epsilon: float = 1e-6, sign: int | None = None) -> PreparedRecord:
+    """
+    Analyse a record: dynamics, ringing, segments (no refusal here).
+
+    Parameters
+    ----------
+    current, displacement : ndarray of float, shape (N,)
+        The data.
+    time : ndarray of float, optional
+        Sample times [s]; None for a record without a time base.
+    anchor : str
+        The design's anchor.
+    epsilon : float
+        The bound of (8)/(19).
+    sign : int, optional
+        The output's sign (detected by default).
+
+    Returns
+    -------
+    PreparedRecord
+        The record and what was found.
+
+    """
+    from .design import output_sign
+    x = np.asarray(current, dtype=np.float64)
+    y = np.asarray(displacement, dtype=np.float64)
+    if sign is None:
+        sign, _ = output_sign(x, y)
+    analysis = analyse_dynamics(_joined_time(time), x, y, sign=sign)
+    keep = analysis.mask(x.size)
+    segments = find_segments(time, analysis, x.size, jumps=analysis.jumps)
+    return PreparedRecord(time, x, y, keep, segments, analysis, int(sign), anchor, epsilon)
+
+
+def _joined_time(time: FloatArray | None) -> FloatArray | None:
+    # The clock of a stitched record with its joins closed: a time gap or a restart of the
+    # clock becomes one typical interval, so each experiment's dynamics (ringing after its
+    # start, lag) are measured in its own time.
+    if time is None or time.size < 3:
+        return time
+    steps = np.diff(time)
+    positive = steps[steps > 0.0]
+    if not positive.size:
+        return None
+    typical = float(np.median(positive))
+    joins = (steps <= 0.0) | (steps > _GAP_FACTOR * typical)
+    if not np.any(joins):
+        return time
+    steps = np.where(joins, typical, steps)
+    return np.concatenate([[float(time[0])], float(time[0]) + np.cumsum(steps)])
+
+
+def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
+               dynamics: InputDynamics = InputDynamics(),
+               held: npt.NDArray[np.bool_] | None = None,
+               starts: list[Segment] | None = None, choose: bool = True,
+               tolerance: float = 1e-9, burn_in: int | None = None) -> RecordFit:
+    """
+    Fit Gamma on a prepared record, choosing each segment's start state.
+
+    Parameters
+    ----------
+    record : PreparedRecord
+        The record.
+    n, l : int
+        Model orders.
+    dynamics : InputDynamics
+        Dead time and lag applied to the input before the fit.
+    held : ndarray of bool, shape (N,), optional
+        Held-out rows (scored, not fitted).
+    starts : list of Segment, optional
+        Segments with start states to use (e.g. from a fit at another order); chosen
+        afresh when None or when ``choose`` is True.
+    choose : bool
+        Choose the start states (one QP per candidate and segment).
+    tolerance : float
+        OSQP's tolerance of the final solve.
+    burn_in : int, optional
+        Samples at the start to leave out (trial fits compared with a reference fit use
+        its burn-in); by default 0, or found when the start states are chosen and none
+        explains the record's start.
+
+    Returns
+    -------
+    RecordFit
+        The fit.
+
+    """
+    x = record.current
+    if dynamics.present:
+        if record.time is None:
+            msg = 'input dynamics need a time base'
+            raise DataError(msg)
+        x = dynamics.apply(record.time, x)
+    y = record.displacement
+    design = scaled_design(x, y, n, l, anchor=record.anchor)
+    if record.sign != design.sign and record.anchor != 'origin':
+        design = replace(design, sign=record.sign)
+    xs, ys = design.scaled_input(x), design.scaled_output(y)
+    classes = np.where(record.keep, 0, -1).astype(np.int8)
+    if held is not None:
+        classes[held & record.keep] = 1
+    fitter = _Fitter(xs, ys, design, classes, record.epsilon)
+    segments = list(starts) if starts is not None else list(record.segments)
+    if record.anchor == 'origin':
+        segments = [replace(s, start_state=StartState('virgin', (0.0,))) for s in segments]
+        choose = False
+    notes: list[str] = []
+    if choose or any(s.start_state is None and s.start == 0 for s in segments):
+        segments = fitter.choose_starts(segments)
+    if burn_in:
+        classes[:burn_in] = -1
+        fitter = _Fitter(xs, ys, design, classes, record.epsilon)
+    parts = fitter.parts(segments)
+    weights = fitter.solve(parts, tolerance)
+    burn = int(burn_in or 0)
+    if burn_in is None and choose:
+        burn = fitter.undetermined_start(segments, weights)
+    if burn and not burn_in:
+        classes[:burn] = -1
+        fitter = _Fitter(xs, ys, design, classes, record.epsilon)
+        parts = fitter.parts(segments)
+        weights = fitter.solve(parts, tolerance)
+        notes.append(f'the first {burn} samples are left out of the fit: no start state'
+                     ' explains them (the record starts on a transient or after a history'
+                     ' none of the candidates covers)')
+    return _finish(record, design, fitter, parts, weights, segments, x, held, burn, notes)
+
+
+def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
+            parts: GramParts, weights: tuple[FloatArray, FloatArray, float, Any],
+            segments: list[Segment], x: FloatArray, held: npt.NDArray[np.bool_] | None,
+            burn: int, notes: list[str]) -> RecordFit:
+    # The model with the first segment's start state, and its errors.
+    w_h, w_s, constant, info = weights
+    xs = fitter.xs
+    first = segments[0].start_state
+    z0 = (first.states(float(xs[0]), design.hysteresis_thresholds,
+                       end_state(xs[:segments[0].stop], design.hysteresis_thresholds))
+          if first is not None else np.zeros(w_h.size))
+    model = design.model(w_h, w_s, constant, initial_states=z0)
+    train = fitter.error(parts, weights, 0) * design.x_scale
+    held_error = (fitter.error(parts, weights, 1) * design.x_scale
+                  if held is not None else math.nan)
+    return RecordFit(model, design, segments, x, train, held_error, burn, info, notes,
+                     fitter.classes == 0)
+
+
+def _placeholder(segments: list[Segment]) -> list[Segment]:
+    # A start state for every segment that has none: the first segment's periodic one,
+    # the others continue.
+    return [replace(seg, start_state=seg.start_state or (
+        StartState('periodic') if i == 0 else None)) for i, seg in enumerate(segments)]
+
+
+class _Fitter:
+    """Gram matrices per segment and start state, and the QP on their sum."""
+
+    def __init__(self, xs: FloatArray, ys: FloatArray, design: ScaledDesign,
+                 classes: npt.NDArray[np.int8], epsilon: float) -> None:
+        self.xs, self.ys, self.design = xs, ys, design
+        self.classes = classes
+        self.epsilon = epsilon
+        self.r_h = design.hysteresis_thresholds
+        self.r_s = design.inverse_superposition_thresholds
+        self._suffix: dict[int, tuple[int, GramParts]] = {}
+        self._prefixes: dict[tuple[int, bytes], GramParts] = {}
+        self._dead_zones: dict[int, FloatArray] = {}
+        self._splits: dict[tuple[int, int], int] = {}
+
+    def _state(self, seg: Segment, previous: FloatArray | None) -> FloatArray:
+        u = self.xs[seg.start:seg.stop]
+        if seg.start_state is None:
+            if previous is not None:
+                return previous
+            return StartState('periodic').states(float(u[0]), self.r_h,
+                                                 end_state(u, self.r_h))
+        end = end_state(u, self.r_h) if seg.start_state.kind == 'periodic' else None
+        return seg.start_state.states(float(u[0]), self.r_h, end)
+
+    def _segment_parts(self, seg: Segment, z0: FloatArray) -> GramParts:
+        # Rows of the segment once its plays are determined do not depend on its start
+        # state: accumulated once and reused.
+        split = self.split(seg)
+        key = (seg.start, z0.tobytes())
+        prefix = self._prefixes.get(key)
+        if prefix is None:
+            prefix = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
+                                    classes=self.classes, n_classes=2, start=seg.start,
+                                    stop=split)
+            self._prefixes[key] = prefix
+        if split >= seg.stop:
+            return prefix
+        cached = self._suffix.get(seg.start)
+        if cached is None or cached[0] != split:
+            suffix = regressor_gram(self.xs, self.ys, self.r_h, self.r_s,
+                                    state=prefix.end_state, classes=self.classes,
+                                    n_classes=2, start=split, stop=seg.stop)
+            self._suffix[seg.start] = (split, suffix)
+        else:
+            suffix = cached[1]
+        return prefix + suffix
+
+    def parts(self, segments: list[Segment]) -> GramParts:
+        """Return the Gram parts of the whole record for these start states."""
+        total: GramParts | None = None
+        previous: FloatArray | None = None
+        for seg in segments:
+            p = self._segment_parts(seg, self._state(seg, previous))
+            previous = p.end_state
+            total = p if total is None else total + p
+        assert total is not None
+        return total
+
+    def solve(self, parts: GramParts, tolerance: float) -> tuple[
+            FloatArray, FloatArray, float, Any]:
+        """Solve the QP on the training rows; return w_H, w'_S, the constant, OSQP info."""
+        gram, mean, count = parts.normalised((0,))
+        if count == 0:
+            msg = 'no samples left to fit (all in ringing windows or held out)'
+            raise IdentificationError(msg)
+        n1 = self.r_h.size
+        idle = None
+        if self.design.constant:
+            gram = gram - np.outer(mean, mean)
+            variance = np.diag(gram)[:n1]
+            from .design import _IDLE_PLAY
+            idle = np.flatnonzero(variance <= _IDLE_PLAY ** 2 * variance[0])
+        w_h, w_s, _, info = fit_generalized_error(
+            gram, 1.0 - self.r_h, n_hysteresis=n1, n_superposition=self.r_s.size,
+            superposition_center=self.design.center, epsilon=self.epsilon, fixed_zero=idle,
+            tolerance=tolerance)
+        constant = (-float(mean @ np.concatenate([w_h, w_s])) if self.design.constant
+                    else 0.0)
+        return w_h, w_s, constant, info
+
+    def error(self, parts: GramParts, weights: tuple[FloatArray, FloatArray, float, Any],
+              cls: int) -> float:
+        """Return the generalised RMS error, in scaled units, on the rows of one class."""
+        count = int(parts.counts[cls])
+        if count == 0:
+            return math.nan
+        w = np.concatenate([weights[0], weights[1]])
+        c = weights[2]
+        value = (float(w @ parts.grams[cls] @ w) + 2.0 * c * float(parts.sums[cls] @ w)
+                 + c * c * count) / count
+        return math.sqrt(max(value, 0.0))
+
+    def split(self, seg: Segment) -> int:
+        """Return the first sample of a segment whose plays no longer depend on its start."""
+        key = (seg.start, seg.stop)
+        if key not in self._splits:
+            self._splits[key] = seg.start + determined_from(self.xs[seg.start:seg.stop],
+                                                            float(self.r_h[-1]))
+        return self._splits[key]
+
+    def choose_starts(self, segments: list[Segment]) -> list[Segment]:
+        """
+        Choose each segment's start state (see :mod:`.start_state`).
+
+        The simple candidates (and, after the first segment, "continues") are one QP each;
+        the histories with turning points are scored with the best simple candidate's
+        weights on the rows before the plays are determined, and the best of those is
+        refitted; the smallest generalised error wins.
+        """
+        chosen = _placeholder(segments)
+        for i, seg in enumerate(segments):
+            u = self.xs[seg.start:seg.stop]
+            candidates: list[StartState | None] = list(start_candidates(u))
+            if i > 0:
+                candidates.insert(0, None)                  # continues from the previous
+            best: tuple[float, StartState | None, Any] | None = None
+            for cand in candidates:
+                error, weights = self._trial(chosen, i, cand)
+                if best is None or error < best[0] * (1.0 - 1e-6):
+                    best = (error, cand, weights)
+            if best is None:
+                continue
+            chosen[i] = replace(seg, start_state=best[1])
+            # Histories with turning points, scored without a QP, then the best refitted.
+            previous = self._previous_state(chosen, i)
+            scored: list[tuple[float, StartState | None]] = [
+                (self._prefix_error(seg, cand, best[2], previous), cand)
+                for cand in turning_point_candidates(u)]
+            scored.append((self._prefix_error(seg, best[1], best[2], previous), best[1]))
+            top = scored[-1]
+            for item in scored:
+                if item[0] < top[0] * (1.0 - 1e-6):
+                    top = item
+            if top[1] is not best[1]:
+                error, weights = self._trial(chosen, i, top[1])
+                if error < best[0] * (1.0 - 1e-6):
+                    chosen[i] = replace(seg, start_state=top[1])
+                    best = (error, top[1], weights)
+            chosen[i] = self._refine_memory(chosen, i, best, previous)
+        return chosen
+
+    def _refine_memory(self, chosen: list[Segment], i: int,
+                       best: tuple[float, StartState | None, Any],
+                       previous: FloatArray | None) -> Segment:
+        # A joint estimate of every play's start state (a history with more turning points
+        # than the grid), kept when its refit beats the best history.
+        seg = chosen[i]
+        if self.split(seg) <= seg.start + 1 or best[2] is None:
+            return seg
+        u = self.xs[seg.start:seg.stop]
+        error, _, weights = best
+        z = self._state(seg, previous)
+        rows = slice(seg.start, self.split(seg))
+        for _ in range(_MEMORY_ROUNDS):       # refine with the weights, refit, again
+            w_h, w_s, constant, _ = weights
+            target = self.prefix_dead_zones(seg) @ w_s - constant
+            refined, _ = refine_memory(self.xs[rows], self.r_h, z, w_h, target,
+                                       self.classes[rows] == 0)
+            if np.allclose(refined, z):
+                break
+            memory = StartState('memory', memory=tuple(
+                (float(r), float(v - u[0])) for r, v in zip(self.r_h, refined)))
+            trial_error, trial_weights = self._trial(chosen, i, memory)
+            if not trial_error < error * (1.0 - 1e-6):
+                break
+            seg, error, weights, z = (replace(seg, start_state=memory), trial_error,
+                                      trial_weights, refined)
+        return seg
+
+    def _trial(self, chosen: list[Segment], i: int,
+               cand: StartState | None) -> tuple[float, Any]:
+        trial = chosen[:i] + [replace(chosen[i], start_state=cand)] + chosen[i + 1:]
+        parts = self.parts(trial)
+        try:
+            weights = self.solve(parts, _TRIAL_TOLERANCE)
+        except IdentificationError:
+            return math.inf, None
+        return self.error(parts, weights, 0), weights
+
+    def _previous_state(self, chosen: list[Segment], i: int) -> FloatArray | None:
+        if i == 0:
+            return None
+        return self.parts(chosen[:i]).end_state
+
+    def _prefix_error(self, seg: Segment, cand: StartState | None, weights: Any,
+                      previous: FloatArray | None) -> float:
+        # Generalised RMS error on the training rows before the segment's plays are
+        # determined, with fixed weights: what a start state changes.
+        if weights is None:
+            return math.inf
+        return self._prefix_error_of(seg, self._state(replace(seg, start_state=cand), previous),
+                                     weights)
+
+    def _prefix_error_of(self, seg: Segment, z0: FloatArray, weights: Any) -> float:
+        # The same for given start states of the plays.
+        rows_ = slice(seg.start, self.split(seg))
+        train = self.classes[rows_] == 0
+        if not np.any(train):
+            return 0.0
+        plays, _ = play_operator(self.xs[rows_], self.r_h, z0)
+        w_h, w_s, constant, _ = weights
+        e = (plays @ w_h - self.prefix_dead_zones(seg) @ w_s + constant)[train]
+        return float(np.sqrt(np.mean(e * e)))
+
+    def prefix_dead_zones(self, seg: Segment) -> FloatArray:
+        """Return S' regressors of the samples before the segment's plays are determined."""
+        cached = self._dead_zones.get(seg.start)
+        if cached is None:
+            cached = dead_zone_operator(self.ys[seg.start:self.split(seg)], self.r_s)
+            self._dead_zones[seg.start] = cached
+        return cached
+
+    def undetermined_start(self, segments: list[Segment],
+                           weights: tuple[FloatArray, FloatArray, float, Any]) -> int:
+        """Return a burn-in when the first segment's start is explained by no candidate."""
+        seg = segments[0]
+        split = self.split(seg)
+        if split >= seg.stop or split < 10:
+            return 0
+        z0 = self._state(seg, None)
+        rest = self._segment_parts(seg, z0)
+        prefix = self._prefixes[(seg.start, z0.tobytes())]
+        before = self.error(prefix, weights, 0)
+        total = self.error(rest, weights, 0)
+        if not (math.isfinite(before) and math.isfinite(total)):
+            return 0
+        after_sq = (total ** 2 * rest.counts[0] - before ** 2 * prefix.counts[0]) / max(
+            int(rest.counts[0] - prefix.counts[0]), 1)
+        after = math.sqrt(max(after_sq, 0.0))
+        if before > max(_START_TOLERANCE * after, _START_FLOOR):
+            return int(split)
+        return 0
+
+
+def _to_model_states(z: FloatArray, design: ScaledDesign, model: MPIModel) -> FloatArray:
+    # Scaled play states -> the model's (SI, relative to its input offset): the plays of
+    # (x - x0_design) / x_scale shifted by the constant's input shift.
+    shift = design.input_offset - model.input_offset
+    return np.asarray(z, dtype=np.float64) * design.x_scale + shift
+
+
+def refuse_if_unmodellable(record: PreparedRecord, correlation: float) -> None:
+    """
+    Refuse a record the MPI model cannot represent, naming the cause found.
+
+    Parameters
+    ----------
+    record : PreparedRecord
+        The analysed record.
+    correlation : float
+        Pearson correlation of input and output (outside ringing).
+
+    Raises
+    ------
+    IdentificationError
+        For a butterfly loop, switching transients, an output unrelated to the input or a
+        counter-movement nothing explains.
+
+    """
+    a = record.analysis
+    x = record.current
+    move = 100.0 * a.static_counter_move
+    first, last = a.worst_sweep
+    found, large = a.band_sweeps
+    if a.verdict == 'butterfly':
+        lo, hi = a.band if a.band is not None else (math.nan, math.nan)
+        msg = (f'the output is not monotone in the input: a butterfly loop (ferroelectric'
+               f' switching) or another non-monotone map; in {found} of the {large} large'
+               f' sweeps of the input the output moves against it by up to {move:.3g} % of'
+               f' its range, over the input band {lo:.4g} to {hi:.4g} (samples {first} to'
+               f' {last}), well inside the sweep, not after the reversal; no delay or lag'
+               f' shorter than {_limit(a)} explains it, and no ringing window covers it.'
+               ' The MPI model (a monotone hysteresis) cannot represent it: lower the'
+               ' amplitude below the coercive field, record a unipolar excitation, or check'
+               ' the input and output columns/topics')
+        raise IdentificationError(msg)
+    if a.verdict == 'switching':
+        msg = (f'the output is not monotone in the input: switching transients'
+               f' (ferroelectric switching, as in a butterfly loop); while the input holds'
+               f' after a step, the output moves against it by up to'
+               f' {move:.3g} % of its range (samples {first} to {last}), for longer than'
+               f' {_limit(a)}, without ringing; the MPI model cannot represent it: stay'
+               ' below the coercive field, or leave the switching part out of the record')
+        raise IdentificationError(msg)
+    if abs(correlation) < _MIN_CORRELATION:
+        msg = (f'the output is not monotone in the input, nor related to it as a hysteresis:'
+               f' their correlation is {correlation:.2f} outside ringing windows (a'
+               f' hysteresis loop gives'
+               f' 0.3 or more) and the output moves against the input by up to {move:.3g} %'
+               ' of its range within one sweep; check the input and output columns/topics'
+               ' and that they belong to one experiment')
+        raise IdentificationError(msg)
+    if a.verdict == 'unexplained':
+        msg = (f'the output is not monotone in the input: it moves against the input by up'
+               f' to {move:.3g} % of its range within one sweep (samples {first} to {last});'
+               f' neither a delay or lag'
+               f' shorter than {_limit(a)} ({100 * a.explained_counter_move:.3g} % would be'
+               ' left), nor ringing after a step, nor switching over a fixed input band'
+               ' explains it: drift, transients or a second input dominate; the MPI model'
+               ' cannot represent it; check that the record is one experiment and that'
+               ' nothing else drives the output')
+        raise IdentificationError(msg)
+    del x
+
+
+def _limit(a: DynamicsAnalysis) -> str:
+    if a.unit == 's':
+        return f'{1e3 * a.explain_limit:.3g} ms'
+    return f'{a.explain_limit:.3g} samples'
+
+
+#: Below this |correlation| between input and output (outside ringing) the output is not
+#: related to the input as a hysteresis.
+_MIN_CORRELATION = 0.3
+
+
+def held_out_rows(size: int, holdout: float, keep: npt.NDArray[np.bool_],
+                  blocks: int | None = None) -> npt.NDArray[np.bool_]:
+    """
+    Return held-out blocks spread evenly over a record, ringing excluded.
+
+    Short blocks (30 of them, at least 8 samples each) keep every kind of excitation the
+    record holds on both sides: a long held-out block of a short record (one reversal
+    curve of a few) would hold content no training sample has.
+
+    Parameters
+    ----------
+    size : int
+        Samples in the record.
+    holdout : float
+        Fraction held out, in (0, 1).
+    keep : ndarray of bool, shape (N,)
+        Samples that may be fitted or scored.
+    blocks : int, optional
+        Blocks the record is cut into (default: 30, fewer for a record under 240 samples).
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        True on the held-out samples.
+
+    """
+    if blocks is None:
+        blocks = int(min(30, max(size // 8, 3)))
+    held = np.zeros(size, dtype=bool)
+    edges = np.linspace(0, size, blocks + 1).astype(int)
+    count = min(max(int(round(holdout * blocks)), 1), blocks - 1)
+    for b in np.unique(np.round(np.linspace(1, blocks - 2, count)).astype(int)):
+        held[edges[b]:edges[b + 1]] = True
+    return held & keep
+
+
+def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
+                      held: npt.NDArray[np.bool_], starts: list[Segment],
+                      burn_in: int = 0) -> 'DynamicsEstimate':
+    """
+    Estimate the input's dead time and first-order lag: a grid, one QP each, held-out.
+
+    Dead times from one sample interval and lag time constants from half a sample interval
+    up to a quarter of the input's sweep time (and 200 intervals) are tried one kind at a
+    time; the best of each kind is refined between its grid neighbours; each trial is
+    scored by the RMS error of the model's output on the held-out blocks.  The better kind
+    is modelled when it cuts the static model's held-out error by :data:`_DYNAMICS_GAIN` or
+    more, also at the highest order the record supports (up to (14, 7); a delay that only
+    stands in for hysteresis a low order misses loses its gain there); when the two kinds
+    are within :data:`_TIE` of each other the record cannot tell them apart (one rate), and
+    the lag is modelled (its inverse is causal).
+
+    Parameters
+    ----------
+    record : PreparedRecord
+        The record, with a time base.
+    n, l : int
+        The order of the trial fits.
+    held : ndarray of bool, shape (N,)
+        Held-out rows.
+    starts : list of Segment
+        Start states (from the static fit).
+    burn_in : int
+        The static fit's burn-in (every trial is scored on the same rows).
+
+    Returns
+    -------
+    DynamicsEstimate
+        The best dead time and lag, their held-out errors, whether they tie, and what is
+        modelled (nothing when the static model is as good).
+
+    """
+    t = record.time
+    trials: list[dict[str, float]] = []
+    if t is None:
+        return DynamicsEstimate()
+    dt = float(np.median(np.diff(t)))
+    if not dt > 0.0:
+        return DynamicsEstimate()
+    limit = min(max(record.analysis.explain_limit, 4.0 * dt), 200.0 * dt,
+                0.05 * float(t[-1] - t[0]))
+
+    def score(dyn: InputDynamics) -> float:
+        try:
+            fit = fit_record(record, n, l, dynamics=dyn, held=held, starts=starts,
+                             choose=False, burn_in=burn_in)
+        except (IdentificationError, DataError):
+            return math.inf
+        error = _held_output_error(fit, record.displacement, held)
+        trials.append({'dead_time': dyn.dead_time, 'lag_time_constant': dyn.lag_time_constant,
+                       'held_error': error})
+        return error
+
+    delays = np.unique(np.round(np.geomspace(1.0, max(limit / dt, 1.0), 8))) * dt
+    lags = np.geomspace(0.5 * dt, max(limit, dt), 8)
+    static_error = score(InputDynamics())
+    if not (math.isfinite(static_error) and static_error > 0.0):
+        return DynamicsEstimate(static_error=static_error, trials=trials)
+    best: dict[str, tuple[float, float]] = {}
+    for kind, grid in (('dead_time', delays), ('lag_time_constant', lags)):
+        # The best of each kind, refined between its grid neighbours (a lag and a dead time
+        # look alike at one frequency, not over several: both are reported).
+        errors = [score(InputDynamics(**{kind: float(v)})) for v in grid.tolist()]
+        i = int(np.argmin(errors))
+        error, dyn = _refine(score, (errors[i], InputDynamics(**{kind: float(grid[i])})), dt)
+        best[kind] = (error, float(getattr(dyn, kind)))
+    dead, lag = best['dead_time'], best['lag_time_constant']
+    tie = abs(dead[0] - lag[0]) <= _TIE * min(dead[0], lag[0])
+    # A tie models the lag: its inverse (a lead) is causal, a dead time's is not.
+    kind = 'lag_time_constant' if tie or lag[0] < dead[0] else 'dead_time'
+    chosen = best[kind]
+    modelled = (InputDynamics(**{kind: chosen[1]})
+                if chosen[0] <= (1.0 - _DYNAMICS_GAIN) * static_error else InputDynamics())
+    if modelled.present and not _persists(record, modelled, held):
+        modelled = InputDynamics()
+    return DynamicsEstimate(modelled, dead_time=dead[1], lag_time_constant=lag[1],
+                            static_error=static_error, dead_time_error=dead[0],
+                            lag_error=lag[0], tie=tie, trials=trials)
+
+
+def _persists(record: PreparedRecord, dynamics: InputDynamics,
+              held: npt.NDArray[np.bool_]) -> bool:
+    # The gain must persist at the highest order the record supports (up to (14, 7)): a
+    # delay or lag that only stands in for hysteresis a lower order misses (one excitation
+    # rate cannot tell them apart) loses its gain there; real dynamics keep it.
+    size = int(np.count_nonzero(record.keep & ~held))
+    orders = [order for order in ((14, 7), (12, 6), (10, 5))
+              if size >= 10 * (order[0] + 2 * order[1] + 2)]
+    if not orders:
+        return True
+    n, l = orders[0]  # noqa: E741
+    try:
+        static = fit_record(record, n, l, held=held)
+        dynamic = fit_record(record, n, l, dynamics=dynamics, held=held,
+                             starts=static.segments, choose=False, burn_in=static.burn_in)
+    except (IdentificationError, DataError):
+        return False
+    before = _held_output_error(static, record.displacement, held)
+    after = _held_output_error(dynamic, record.displacement, held)
+    return bool(after <= (1.0 - _DYNAMICS_GAIN) * before)
+
+
+def _held_output_error(fit: RecordFit, displacement: FloatArray,
+                       held: npt.NDArray[np.bool_]) -> float:
+    # RMS error of the model's output on the held-out rows, over the output's range.
+    if not np.any(held):
+        return math.nan
+    error = (fit.simulate() - displacement)[held]
+    return float(np.sqrt(np.mean(error * error)) / np.ptp(displacement))
+
+
+def _refine(score: Any, best: tuple[float, InputDynamics],
+            dt: float) -> tuple[float, InputDynamics]:
+    # A bounded search on the better kind, in log scale, between the grid's neighbours
+    # (a factor 1.6 either side).
+    from scipy.optimize import minimize_scalar
+    error, dyn = best
+    if not dyn.present:
+        return best
+    kind = 'dead_time' if dyn.dead_time > 0.0 else 'lag_time_constant'
+    value = getattr(dyn, kind)
+
+    def make(v: float) -> InputDynamics:
+        return replace(dyn, **{kind: float(v)})
+
+    res = minimize_scalar(lambda lv: score(make(math.exp(lv))),
+                          bounds=(math.log(value / 1.6), math.log(value * 1.6)),
+                          method='bounded', options={'maxiter': 8, 'xatol': 0.02})
+    if float(res.fun) < error:
+        error, dyn = float(res.fun), make(math.exp(float(res.x)))
+    return error, dyn

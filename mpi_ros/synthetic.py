@@ -1,0 +1,255 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Synthetic rig records: the built-in actuator as a real rig shows it.
+
+For tests, benchmarks and a user's own checks of a pipeline: the magnetostrictive-like
+actuator of :mod:`mpi_ros.actuator` (not an MPI model) driven through an unrecorded history
+before the record starts (at rest after a descent, virgin, or mid-history), with the rig's
+dynamics (an input lag, a dead time, a lightly damped mechanical resonance that rings after
+steps), sensor noise, an arbitrary sensor zero and sign.  Each record says what is in it
+(:attr:`SyntheticRecord.truth`), so an identification can be checked against it.
+
+The kinds (:data:`SYNTHETIC_KINDS`) are the plants of issue 17: lag 0.5-5 ms at 1-10 kHz,
+dead time of 1-10 samples, 500-1000 Hz ringing after steps, starts at rest, virgin and
+mid-history, rising-amplitude sines, and one quasi-static loop of 300 samples.
+"""
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from scipy import signal
+
+from .actuator import ActuatorConfig, MagnetostrictiveActuator
+from .errors import DataError
+from .excitation import identification_excitation
+
+__all__ = ['SyntheticRecord', 'synthetic_record', 'SYNTHETIC_KINDS', 'rising_amplitude_sine',
+           'resonance']
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Displacement range of the built-in actuator over 0.2-1.8 A [m] (about).
+_RANGE_M = 3.4e-5
+
+#: The kinds of record :func:`synthetic_record` builds.
+SYNTHETIC_KINDS = (
+    'lag 1.5 ms at 1 kHz', 'lag 3 ms at 1 kHz', 'lag 0.5 ms at 10 kHz', 'lag 5 ms at 10 kHz',
+    'dead time 2 samples at 1 kHz', 'dead time 5 samples at 1 kHz',
+    'dead time 1 sample at 10 kHz', 'dead time 10 samples at 10 kHz',
+    'ringing 500 Hz', 'ringing 740 Hz', 'ringing 1000 Hz',
+    'at rest, rising-amplitude sine', 'virgin', 'mid-history', '300-sample loop',
+)
+
+
+@dataclass(frozen=True)
+class SyntheticRecord:
+    """
+    One synthetic record and what is in it.
+
+    Attributes
+    ----------
+    time : ndarray of float, shape (N,), or None
+        Sample times [s]; None for a quasi-static record without a time base.
+    current : ndarray of float, shape (N,)
+        Input [A].
+    displacement : ndarray of float, shape (N,)
+        Measured output [m] (sensor zero, sign, noise included).
+    truth : dict
+        ``lag_time_constant`` [s], ``dead_time`` [s], ``resonance_hz``, ``noise`` (RMS noise
+        over the output's range), ``start`` (the history before the record).
+
+    """
+
+    time: FloatArray | None
+    current: FloatArray
+    displacement: FloatArray
+    truth: dict[str, Any] = field(default_factory=dict)
+
+
+def rising_amplitude_sine(sample_rate: float, frequency: float, *, cycles: int = 20,
+                          low: float = 0.2, high: float = 1.8,
+                          hold: float = 0.2) -> tuple[FloatArray, FloatArray]:
+    """
+    Return a hold at ``low``, then raised-cosine cycles of rising amplitude from ``low``.
+
+    The stimulus of the TUM piezo captures (``../shared/data/measured/tum_piezo``): nested
+    loops that share their lower turning point, the last one the major loop.
+
+    Parameters
+    ----------
+    sample_rate : float
+        Samples per second [Hz].
+    frequency : float
+        Cycle frequency [Hz].
+    cycles : int
+        Number of cycles (the last reaches ``high``).
+    low, high : float
+        Input range [A].
+    hold : float
+        Hold at ``low`` before the cycles [s].
+
+    Returns
+    -------
+    time, current : ndarray of float
+        Sample times [s] and the input [A].
+
+    """
+    period = int(round(sample_rate / frequency))
+    if period < 4 or cycles < 1:
+        msg = (f'rising_amplitude_sine needs at least 4 samples per cycle and one cycle; found'
+               f' {period} and {cycles}')
+        raise DataError(msg)
+    j = np.arange(period)
+    parts = [np.full(int(hold * sample_rate), low)]
+    parts += [low + (high - low) * k / cycles * (1.0 - np.cos(2.0 * np.pi * j / period)) / 2.0
+              for k in range(1, cycles + 1)]
+    current = np.concatenate(parts)
+    return np.arange(current.size) / sample_rate, current
+
+
+def resonance(displacement: FloatArray, sample_rate: float, frequency: float,
+              decay: float) -> FloatArray:
+    """
+    Pass a displacement through a lightly damped second-order resonance of unit DC gain.
+
+    Parameters
+    ----------
+    displacement : ndarray of float, shape (N,)
+        Displacement [m], starting at rest.
+    sample_rate : float
+        Samples per second [Hz].
+    frequency : float
+        Natural frequency [Hz].
+    decay : float
+        Time constant of the ringing's envelope [s] (damping ratio ``1 / (w decay)``).
+
+    Returns
+    -------
+    ndarray of float, shape (N,)
+        The measured displacement: it rings after every step.
+
+    """
+    w = 2.0 * np.pi * frequency
+    zeta = 1.0 / (w * decay)
+    b, a = signal.bilinear([w * w], [1.0, 2.0 * zeta * w, w * w], sample_rate)
+    state = signal.lfilter_zi(b, a) * displacement[0]
+    out, _ = signal.lfilter(b, a, displacement, zi=state)
+    return np.asarray(out, dtype=np.float64)
+
+
+def synthetic_record(kind: str, seed: int, *, noise: float = 0.002) -> SyntheticRecord:
+    """
+    Build one synthetic rig record of a kind in :data:`SYNTHETIC_KINDS`.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`SYNTHETIC_KINDS`.
+    seed : int
+        Seed of the excitation, the noise, the sensor zero and sign.
+    noise : float
+        Sensor noise, RMS, as a fraction of the displacement range.
+
+    Returns
+    -------
+    SyntheticRecord
+        The record and its truth.
+
+    """
+    if kind not in SYNTHETIC_KINDS:
+        msg = f'unknown synthetic record {kind!r}; one of: {", ".join(SYNTHETIC_KINDS)}'
+        raise DataError(msg)
+    rng = np.random.default_rng(seed)
+    zero = float(rng.uniform(-2e-5, 2e-5))
+    sign = 1 if rng.random() < 0.7 else -1
+    rest = [0.0, 2.0]                            # a descent from above: at rest, low end
+    truth: dict[str, Any] = {'lag_time_constant': 0.0, 'dead_time': 0.0,
+                             'resonance_hz': 0.0, 'start': 'at rest after a descent'}
+    config: dict[str, float] = {}
+    rate = 1000.0
+    if kind.startswith(('lag', 'dead time')):
+        rate = 1000.0 if '1 kHz' in kind else 10000.0
+        value = float(kind.split()[1 if kind.startswith('lag') else 2])
+        if kind.startswith('lag'):
+            truth['lag_time_constant'] = config['eddy_time_constant_s'] = value * 1e-3
+        else:
+            truth['dead_time'] = config['dead_time_s'] = value / rate
+        if rate == 1000.0:
+            t, x = identification_excitation(30.0, sample_rate=rate, seed=seed,
+                                             burst_frequency=40.0, hold_duration=2.0,
+                                             main_frequency=2.0)
+        else:
+            t, x = rising_amplitude_sine(rate, 20.0 if kind.startswith('lag') else 40.0)
+    elif kind.startswith('ringing'):
+        rate = 10000.0
+        t, x = _steps_and_sines(rate, rng)
+        truth['resonance_hz'] = float(kind.split()[1])
+    elif kind == 'at rest, rising-amplitude sine':
+        rate = 10000.0
+        t, x = rising_amplitude_sine(rate, 20.0, cycles=15)
+    elif kind == 'virgin':
+        rate = 200.0
+        t, x = identification_excitation(20.0, sample_rate=rate, seed=seed, ramp_duration=0.5)
+        rest, truth['start'] = [], 'virgin (at rest at 0 A, never driven)'
+    elif kind == 'mid-history':
+        rate = 200.0
+        t, x = identification_excitation(20.0, sample_rate=rate, seed=seed + 7)
+        cut = 300                                 # the record starts 1.5 s into the run
+        y = _measured(t, x, config, seed, [], noise)
+        truth['start'] = 'mid-history (the first 1.5 s of the run not recorded)'
+        return SyntheticRecord(t[cut:] - t[cut], x[cut:], zero + sign * y[cut:],
+                               {**truth, 'noise': noise})
+    else:                                         # one quasi-static loop, no time base
+        x = np.concatenate([np.linspace(1.0, 1.8, 75), np.linspace(1.8, 0.2, 150),
+                            np.linspace(0.2, 1.0, 75)])
+        y = _measured(np.arange(x.size, dtype=np.float64), x, config, seed, [0.0, 1.8, 0.2],
+                      noise)
+        truth['start'] = 'one period of a repeated loop'
+        return SyntheticRecord(None, x, zero + sign * y, {**truth, 'noise': noise})
+    y = _measured(t, x, config, seed, rest + [float(x[0])] if rest else [], noise,
+                  ringing=truth['resonance_hz'])
+    return SyntheticRecord(t, x, zero + sign * y, {**truth, 'noise': noise})
+
+
+def _measured(t: FloatArray, x: FloatArray, config: dict[str, float], seed: int,
+              history: list[float], noise: float, ringing: float = 0.0) -> FloatArray:
+    # The actuator driven through `history` (ramps of 0.3 s, then 0.1 s at the first
+    # value) before the record; the record's part of its output, rung and noisy.
+    actuator = MagnetostrictiveActuator(ActuatorConfig.from_mapping(config), seed=seed)
+    dt = float(t[1] - t[0])
+    if history:
+        ramps = [np.linspace(a, b, max(int(0.3 / dt), 3), endpoint=False)
+                 for a, b in zip(history[:-1], history[1:])]
+        before = np.concatenate(ramps + [np.full(max(int(0.1 / dt), 3), history[-1])])
+        th = t[0] - dt * np.arange(before.size, 0, -1)
+        y = actuator.simulate(np.concatenate([th, t]), np.concatenate([before, x]))
+        y = y[before.size:]
+    else:
+        y = actuator.simulate(t, x)
+    if ringing > 0.0:
+        y = resonance(y, 1.0 / dt, ringing, 0.013)
+    rng = np.random.default_rng(seed + 1000)
+    return y + rng.normal(0.0, noise * _RANGE_M, y.size)
+
+
+def _steps_and_sines(rate: float, rng: np.random.Generator,
+                     duration: float = 4.0) -> tuple[FloatArray, FloatArray]:
+    # Quarter-second pieces: a step to a random level and a hold, or a sine of 2-20 Hz.
+    t = np.arange(int(duration * rate)) / rate
+    x = np.empty(t.size)
+    piece = int(0.25 * rate)
+    level = 1.0
+    for k in range(0, t.size, piece):
+        n = min(piece, t.size - k)
+        if rng.integers(3) == 0:
+            level = float(rng.uniform(0.2, 1.8))
+            x[k:k + n] = level
+        else:
+            amplitude = float(rng.uniform(0.2, 0.8))
+            centre = float(np.clip(level, 0.2 + amplitude, 1.8 - amplitude))
+            x[k:k + n] = centre + amplitude * np.sin(
+                2.0 * np.pi * rng.uniform(2.0, 20.0) * np.arange(n) / rate)
+            level = float(x[k + n - 1])
+    return t, x
