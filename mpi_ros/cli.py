@@ -75,6 +75,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from .params import write_params_yaml
     from .pipeline import fit_recording
     from .progress import Progress
+    from .ranges import range_header
     from .recordings import atomic_write, read_recording
     _check_output(args.output, '--output')
     _check_output(args.json, '--json')
@@ -103,10 +104,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
               f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; start state: '
               f"{result.start_state.get('description', 'n/a')}")
-    record_range = (f'current {recording.current.min():.6g} to {recording.current.max():.6g} A,'
-                    f' displacement {recording.displacement.min():.6g} to '
-                    f'{recording.displacement.max():.6g} m')
-    _progress(f'identified on {record_range} (simulate and compensate warn outside it)')
+    record_range = range_header(recording.current, recording.displacement)
+    _progress(f'{record_range} (written in the YAML header: simulate and compensate warn'
+              ' outside it, compensate clamps to it)')
     if result.findings:
         _progress(f'found: {result.findings}')
     for note in result.notes:
@@ -120,7 +120,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                           header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
                                   f'order n={n}, l={l}; nonlinearity error (37) '
                                   f'{100 * result.nonlinearity_error:.2f} %\n'
-                                  f'identified on {record_range}'))
+                                  f'{record_range}'))
     except OSError as err:
         msg = f'cannot write --output {args.output}: {err}'
         raise MPIError(msg) from err
@@ -217,7 +217,7 @@ def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool)
 
 def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     from .extensions import extended_model_from_params
-    from .ranges import identified_range, outside
+    from .ranges import identified_range, outside, recorded_range
     from .recordings import read_csv_table, write_csv_columns
     parameters = _model_parameters(args.params, args.node_name)
     described = extended_model_from_params(parameters)
@@ -233,7 +233,8 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     column = header.index(input_column)
     values = table[:, column]
     time = None if time_column is None else table[:, header.index(time_column)]
-    ranges = identified_range(described)
+    # The range identify wrote in the file's header, else the one the model's thresholds tell.
+    ranges = recorded_range(args.params) or identified_range(described)
     if inverse:
         limits = _limits(args, parameters, ranges.current)
         result = _compensate(described, time, time_column, values, args, limits)

@@ -6,6 +6,15 @@ The range a model was identified on, and the samples of a signal outside a range
 the range the model knows (the model extrapolates there), and ``compensate`` clamps its
 commands as the compensator node does.
 
+Where the range comes from:
+
+- **The parameter file's header** (:func:`recorded_range`): ``mpi-ros identify`` writes the
+  record's current and displacement ranges into the YAML's header comment (a ROS parameter
+  file holds only node parameters; the comment is what ROS ignores), as
+  ``# identified on current 0 to 1.8 A, displacement 6.3e-06 to 4.36e-05 m``.  Exact.
+- **The model itself**, when the file has no such line (written by an older ``identify``,
+  by ``diagnose --params-out``, or by hand): :func:`identified_range`, below.
+
 What a model knows of its identification record (:func:`identified_range`):
 
 - **Displacement.** :func:`mpi_ros.identification.identify` places the thresholds of the
@@ -20,20 +29,31 @@ What a model knows of its identification record (:func:`identified_range`):
   ``a = x0 + (S'[v_lo] - sum w_i r_i) / W`` and ``b = x0 + (S'[v_hi] + sum w_i r_i) / W``.
   Any history inside ``[a, b]`` reaches the displacement range's ends within ``[a, b]``, so
   clamping commands to it never clips a desired value inside the displacement range.  On
-  records of the built-in actuator this is the recorded current range to about 1 %; an
-  output transient (ringing) at the record's start widens it.
+  records of the built-in actuator this is the recorded current range to about 1 % of its
+  span at orders (8, 4) and up; an output that overshoots (ringing after steps) widens it,
+  since the displacement range includes the overshoot (up to 90 % of the span above the
+  recorded current on synthetic records with ringing): the header's range is preferred.
 - A model whose S' thresholds are not spaced as (29)-(31) space them (the ``k`` thresholds
   of a branch at 1, 3, 5, ... times the first: a model written by hand, or ``l = 0``) does
   not tell its range: None.
 """
 
 from dataclasses import dataclass
+import os
+from pathlib import Path
+import re
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['IdentifiedRange', 'Outside', 'identified_range', 'outside']
+__all__ = ['IdentifiedRange', 'Outside', 'identified_range', 'outside', 'range_header',
+           'recorded_range']
+
+#: The header line :func:`range_header` writes and :func:`recorded_range` reads.
+_NUMBER = r'([-+0-9.eE]+|nan|inf)'
+_HEADER = re.compile(rf'^#\s*identified on current {_NUMBER} to {_NUMBER} A, displacement '
+                     rf'{_NUMBER} to {_NUMBER} m\s*$')
 
 
 @dataclass(frozen=True)
@@ -152,6 +172,64 @@ def identified_range(model: Any) -> IdentifiedRange:
     if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
         return IdentifiedRange()
     return IdentifiedRange((float(a), float(b)), (float(ends[0]), float(ends[1])))
+
+
+def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike) -> str:
+    """
+    Return the header line (without ``#``) that records a record's ranges in a YAML.
+
+    Parameters
+    ----------
+    current : array_like of float, shape (N,)
+        The record's current [A].
+    displacement : array_like of float, shape (N,)
+        The record's displacement [m].
+
+    Returns
+    -------
+    str
+        ``identified on current LO to HI A, displacement LO to HI m`` (the shortest digits
+        that read back as the same floats).
+
+    """
+    x = np.asarray(current, dtype=np.float64)
+    y = np.asarray(displacement, dtype=np.float64)
+    ends = [float(np.min(x)), float(np.max(x)), float(np.min(y)), float(np.max(y))]
+    return (f'identified on current {ends[0]!r} to {ends[1]!r} A, displacement {ends[2]!r} to '
+            f'{ends[3]!r} m')
+
+
+def recorded_range(path: 'str | os.PathLike[str]') -> IdentifiedRange | None:
+    """
+    Return the ranges ``identify`` recorded in a parameter file's header, or None.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The parameter YAML.
+
+    Returns
+    -------
+    IdentifiedRange or None
+        The ranges of the line :func:`range_header` wrote among the file's leading comment
+        lines; None when there is none (or it does not give two proper ranges).
+
+    """
+    try:
+        with Path(path).open(encoding='utf-8') as f:
+            for line in f:
+                if not line.startswith('#'):
+                    break
+                match = _HEADER.match(line.strip())
+                if match:
+                    lo_x, hi_x, lo_y, hi_y = (float(v) for v in match.groups())
+                    if all(np.isfinite([lo_x, hi_x, lo_y, hi_y])) and lo_x < hi_x and \
+                            lo_y < hi_y:
+                        return IdentifiedRange((lo_x, hi_x), (lo_y, hi_y))
+                    return None
+    except (OSError, UnicodeDecodeError):
+        return None
+    return None
 
 
 def outside(values: npt.ArrayLike, low: float, high: float) -> Outside:

@@ -5,7 +5,8 @@ The range a model was identified on; ``simulate`` and ``compensate`` outside it 
 ``compensate`` counts the desired displacements the model cannot reach with currents in
 its range and clamps as the compensator node does (``--no-clamp``: it does not);
 ``simulate`` counts the currents outside the identified input range.  Both warn on stderr
-with the count and how far the samples go.
+with the count and how far the samples go.  The range is the one ``identify`` wrote in the
+YAML's header, else the one the model's thresholds tell.
 """
 
 import re
@@ -14,7 +15,7 @@ from mpi_ros import identify, MPIModel
 from mpi_ros.cli import main
 from mpi_ros.compensation import Compensator, operating_range
 from mpi_ros.params import read_params_yaml, write_params_yaml
-from mpi_ros.ranges import identified_range, outside
+from mpi_ros.ranges import identified_range, outside, recorded_range
 from mpi_ros.recordings import read_csv_table, write_csv_columns
 from mpi_ros.synthetic import synthetic_record
 import numpy as np
@@ -105,6 +106,20 @@ def test_outside_counts_and_measures():
     assert outside([0.5, 1.5], 0.0, 2.0).count == 0
 
 
+def test_identify_records_the_range_in_the_header(identified, tmp_path):
+    tmp, rec = identified
+    found = recorded_range(tmp / 'p.yaml')
+    assert found.current == (rec.current.min(), rec.current.max())              # exact
+    assert found.displacement == (rec.displacement.min(), rec.displacement.max())
+    write_params_yaml(tmp_path / 'bare.yaml', read_params_yaml(tmp / 'p.yaml'),
+                      header='written by hand')
+    assert recorded_range(tmp_path / 'bare.yaml') is None
+    write_params_yaml(tmp_path / 'odd.yaml', read_params_yaml(tmp / 'p.yaml'),
+                      header='identified on current 2 to 1 A, displacement 0 to 1 m')
+    assert recorded_range(tmp_path / 'odd.yaml') is None
+    assert recorded_range(tmp_path / 'missing.yaml') is None
+
+
 # ------------------------------------------------------------------ compensate
 
 
@@ -134,7 +149,7 @@ def test_compensate_warns_and_clamps_as_the_node(identified, capsys):
     tmp, rec = identified
     path, desired = _desired_file(tmp, rec, 1.4)
     model = MPIModel.from_params(read_params_yaml(tmp / 'p.yaml'))
-    lo, hi = identified_range(model).current
+    lo, hi = recorded_range(tmp / 'p.yaml').current          # the record's, in the header
     capsys.readouterr()
     assert main(['compensate', str(tmp / 'p.yaml'), '--input', str(path),
                  '--output', str(tmp / 'c.csv')]) == 0
@@ -159,7 +174,7 @@ def test_no_clamp_writes_the_inverse_and_says_how_far(identified, capsys):
     tmp, rec = identified
     path, desired = _desired_file(tmp, rec, 1.4)
     model = MPIModel.from_params(read_params_yaml(tmp / 'p.yaml'))
-    lo, hi = identified_range(model).current
+    lo, hi = recorded_range(tmp / 'p.yaml').current
     capsys.readouterr()
     assert main(['compensate', str(tmp / 'p.yaml'), '--input', str(path), '--no-clamp',
                  '--output', str(tmp / 'n.csv')]) == 0
@@ -196,7 +211,7 @@ def test_options_and_parameter_file_limits_win(identified, capsys):
                  '1.5', '--output-max', '1.0', '--output', str(tmp / 'x.csv')]) == 1
     assert capsys.readouterr().err.strip().splitlines()[-1] == (
         'error: the current range must be finite with its minimum below its maximum; found '
-        "1.5 (--output-min) and 1 (--output-max); pass --output-min and --output-max with "
+        '1.5 (--output-min) and 1 (--output-max); pass --output-min and --output-max with '
         "the actuator's safe range")
     assert not (tmp / 'x.csv').exists()
 
@@ -216,9 +231,7 @@ def test_an_extended_model_is_clamped_too(tmp_path, capsys):
                  '--output', str(tmp_path / 'c.csv')]) == 0
     warnings = _warnings(capsys.readouterr().err)
     assert len(warnings) == 2 and 'clamped to' in warnings[1]
-    from mpi_ros.extensions import extended_model_from_params
-    lo, hi = identified_range(
-        extended_model_from_params(read_params_yaml(tmp_path / 'lag.yaml'))).current
+    lo, hi = recorded_range(tmp_path / 'lag.yaml').current
     commands = read_csv_table(tmp_path / 'c.csv')[1][:, 2]
     assert lo <= commands.min() and commands.max() <= hi
     assert main(['compensate', str(tmp_path / 'lag.yaml'), '--input', str(path), '--no-clamp',
@@ -247,7 +260,7 @@ def test_a_hand_written_model_is_not_clamped(tmp_path, capsys):
 def test_simulate_warns_about_currents_outside_the_identified_range(identified, capsys):
     tmp, rec = identified
     model = MPIModel.from_params(read_params_yaml(tmp / 'p.yaml'))
-    lo, hi = identified_range(model).current
+    lo, hi = recorded_range(tmp / 'p.yaml').current
     current = 0.9 + 1.2 * np.sin(np.linspace(0.0, 6 * np.pi, 900))
     write_csv_columns(tmp / 'cur.csv', {'current': current})
     capsys.readouterr()
@@ -261,8 +274,41 @@ def test_simulate_warns_about_currents_outside_the_identified_range(identified, 
         + '; the model extrapolates there']
     np.testing.assert_allclose(read_csv_table(tmp / 's.csv')[1][:, 1],
                                model.simulate(current), rtol=0, atol=1e-15)
-    inside = rec.current[::7]
-    write_csv_columns(tmp / 'in.csv', {'current': np.clip(inside, lo, hi)})
+    write_csv_columns(tmp / 'in.csv', {'current': rec.current[::7]})
     assert main(['simulate', str(tmp / 'p.yaml'), '--input', str(tmp / 'in.csv'),
                  '--output', str(tmp / 's2.csv')]) == 0
     assert _warnings(capsys.readouterr().err) == []
+
+
+def test_without_the_header_the_thresholds_range_is_used(identified, tmp_path, capsys):
+    tmp, rec = identified
+    write_params_yaml(tmp_path / 'bare.yaml', read_params_yaml(tmp / 'p.yaml'))
+    model = MPIModel.from_params(read_params_yaml(tmp_path / 'bare.yaml'))
+    lo, hi = identified_range(model).current
+    path, _ = _desired_file(tmp_path, rec, 1.4)
+    capsys.readouterr()
+    assert main(['compensate', str(tmp_path / 'bare.yaml'), '--input', str(path),
+                 '--output', str(tmp_path / 'c.csv')]) == 0
+    assert f'clamped to {lo:.4g} to {hi:.4g} A' in capsys.readouterr().err
+    commands = read_csv_table(tmp_path / 'c.csv')[1][:, 2]
+    assert commands.min() == lo and commands.max() == hi
+
+
+def test_ringing_widens_the_thresholds_range_the_header_does_not(tmp_path, capsys):
+    # Ringing after steps overshoots the output: the thresholds span the overshoot, and the
+    # current that reaches it on the major loop lies far above the recorded current.
+    rec = synthetic_record('ringing 740 Hz', 0)
+    write_csv_columns(tmp_path / 'ring.csv', {'time': rec.time, 'current': rec.current,
+                                              'displacement': rec.displacement})
+    assert main(['identify', str(tmp_path / 'ring.csv'), '--order', '8,4', '--dynamics',
+                 'off', '-o', str(tmp_path / 'ring.yaml')]) == 0
+    model = MPIModel.from_params(read_params_yaml(tmp_path / 'ring.yaml'))
+    lo, hi = recorded_range(tmp_path / 'ring.yaml').current
+    assert (lo, hi) == (rec.current.min(), rec.current.max())
+    assert identified_range(model).current[1] > hi + 0.5 * (hi - lo)
+    path, _ = _desired_file(tmp_path, rec, 1.4)
+    capsys.readouterr()
+    assert main(['compensate', str(tmp_path / 'ring.yaml'), '--input', str(path),
+                 '--output', str(tmp_path / 'c.csv')]) == 0
+    commands = read_csv_table(tmp_path / 'c.csv')[1][:, 2]
+    assert lo <= commands.min() and commands.max() == hi
