@@ -9,8 +9,9 @@ that install (apt + ``source /opt/ros/jazzy/setup.bash``), and colcon builds thi
 package with ``setup.py`` as an ament_python package. On a machine without ROS, a
 plain ``pip install .`` has to bring ROS along: the PyPI wheels
 ``ros-jazzy-rclpy[fastrtps]`` and ``ros-jazzy-common-interfaces`` provide rclpy,
-the Fast DDS middleware and the std_msgs / diagnostic_msgs / rcl_interfaces
-messages.
+the Fast DDS middleware and the std_msgs / diagnostic_msgs / rcl_interfaces /
+sensor_msgs messages; lifecycle_msgs (the managed compensator's services) comes with
+rclpy itself (``ros-rclpy`` requires ``ros-lifecycle-msgs``).
 
 The two cases are told apart by the environment at build time: sourcing a ROS
 install (which colcon and ``ros2`` require) sets ``AMENT_PREFIX_PATH`` and

@@ -13,6 +13,9 @@ Launch arguments
     ``model_params``: a further YAML for the compensator, e.g. the model written by
     ``mpi-ros identify`` (default: none, the compensator starts unconfigured).
     ``plant``: start the plant simulator (default ``true``; ``false`` for a real actuator).
+    ``autostart``: the compensator, a managed (lifecycle) node, configures and activates
+    itself at start-up (default ``true``); ``false`` leaves it unconfigured for a lifecycle
+    manager or ``ros2 lifecycle set /compensator configure`` (then ``activate``).
     ``bag``: when given, the identifier fits a model from this bag and pushes it into the
     compensator of this launch (``target_node`` is set to it), then exits.
 
@@ -58,6 +61,10 @@ def generate_launch_description():
             'plant', default_value='true',
             description='Start the plant simulator (false for a real actuator)'),
         DeclareLaunchArgument(
+            'autostart', default_value='true',
+            description='The compensator configures and activates itself at start-up (false: '
+                        'it waits unconfigured for the lifecycle transitions)'),
+        DeclareLaunchArgument(
             'bag', default_value='',
             description='rosbag2 bag to identify from; the identifier pushes the model into '
                         'this compensator and exits (empty: no identifier)'),
@@ -75,6 +82,11 @@ def _nodes(context, *args, **kwargs):
     compensator_params = [value('compensator_params')]
     if value('model_params'):
         compensator_params.append(value('model_params'))
+    if value('autostart').lower() not in ('true', '1'):
+        if value('autostart').lower() not in ('false', '0'):
+            msg = f"autostart must be true or false; found {value('autostart')!r}"
+            raise ValueError(msg)
+        compensator_params.append({'autostart': False})
     nodes = [Node(package='mpi_ros', executable='compensator', name='compensator',
                   namespace=namespace, parameters=compensator_params, output='screen')]
     nodes.append(Node(package='mpi_ros', executable='plant_simulator', name='plant_simulator',

@@ -70,8 +70,10 @@ from ..errors import DataError, IdentificationError
 from ..extensions import EFFECTS
 from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
-from ..identification import identify, output_sign, scaled_design
+from ..identification import burn_in, identify, output_sign
+from ..identification.start_state import estimate_start_state
 from ..metrics import range_error, rms_range_error
+from ..model import MPIModel
 from ..params import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
@@ -282,19 +284,46 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         base = identify(xt, yt, n=int(order[0]), l=int(order[1]))
     n, l = base.order  # noqa: E741
     data['training_burn_in'] = base.burn_in
+    estimate_start = False
     if validation is not None:
-        # A separate experiment starts from its own (unknown) state: score it only once its
-        # input has covered its range (the burn-in identify uses, for the same order).
-        start = scaled_design(xv, yv, n, l).burn_in
+        # A separate experiment starts from its own state.  Scored once its input has
+        # covered its range (the plays' and the effects' slow states then follow from the
+        # data) when that leaves at least half of it; else from its first sample (after the
+        # ringing of a step just before it), every model with the start state that explains
+        # the samples before its plays are determined (its weights kept).
+        covered = burn_in(xv, 0.99 * float(np.ptp(xv)), to_turning_point=True)
+        if covered <= 0.5 * tv.size:
+            start, left_out = covered, ('the samples before the input covered its range'
+                                        ' (the start state of the plays and effects)')
+        else:
+            start = _leading_ringing(tv, xv, yv, sign)
+            estimate_start = True
+            left_out = ('the ringing after a step just before the record' if start
+                        else 'nothing')
         if tv.size - start < 100:
-            msg = (f'the validation record covers its input range only at sample {start} of'
-                   f' {tv.size}: before that the states of the actuator and of the model are'
-                   ' unknown, leaving too little to score; record the validation with full'
-                   ' sweeps over the range early (e.g. mpi-ros diagnose --excitation)')
+            msg = ('too little to score: the validation record leaves only'
+                   f' {tv.size - start} samples (from sample {start}: {left_out}); record a longer validation'
+                   ' (e.g. mpi-ros diagnose --excitation)')
             raise DataError(msg)
         series['start'] = start
         data['validation_burn_in'] = start
+        data['validation_scored'] = {
+            'from_sample': start, 'samples': int(tv.size - start), 'left_out': left_out,
+            'start_state': ('estimated for each model (its weights kept)' if estimate_start
+                            else 'set by the data before the scored part')}
     val = slice(start, None)
+
+    def on_validation(model: Any) -> FloatArray:
+        # The model's simulation of the validation record, from the start state that fits
+        # a separate record best (the split's validation continues the training record).
+        if not estimate_start:
+            return (np.asarray(model.simulate(xv), dtype=np.float64)
+                    if isinstance(model, MPIModel) else model.simulate(tv, xv))
+        rows = np.arange(tv.size) >= start
+        fitted, _, _ = estimate_start_state(model, xv, yv, time=tv, rows=rows,
+                                            offset_free=True)
+        return (np.asarray(fitted.simulate(xv), dtype=np.float64)
+                if isinstance(fitted, MPIModel) else fitted.simulate(tv, xv))
     # Only the validation record's output offset (its sensor zero) is re-estimated, for the
     # baseline, the straight line and every candidate alike; nothing else is refitted.
     reestimate = validation is not None
@@ -302,7 +331,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     line = _linear_fit(xt[base.burn_in:], yt[base.burn_in:])
     linear = np.asarray(np.polyval(line, xv), dtype=np.float64)
     linear_shift = _zero_shift(linear[val], yv[val], reestimate)
-    sim0 = base.model.simulate(xv)
+    sim0 = on_validation(base.model)
     shift0 = _zero_shift(sim0[val], yv[val], reestimate)
     sim0 = sim0 + shift0
     r0 = yv[val] - sim0[val]
@@ -337,14 +366,16 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         if bursts is not None else None)
     candidates = []
     sims = {}
+    residuals: dict[str, FloatArray] = {}
     for cause in causes:
         say(f'fitting candidate {cause}')
         model = EFFECTS[cause].fit(tt, xt, yt, order=(n, l))
-        sim = model.simulate(tv, xv)
+        sim = on_validation(model)
         shift = _zero_shift(sim[val], yv[val], reestimate)
         sim = sim + shift
         sims[cause] = sim
         rc = yv[val] - sim[val]
+        residuals[cause] = rc
         errs = _errors(sim[val], yv[val])
         # A baseline without error leaves nothing to gain (and no ratio to form).
         gain = (1.0 - errs['rms_error'] / baseline['rms_error']
@@ -373,6 +404,12 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                 'noise_factor': noise_factor, 'noise_floor': sigma,
                 'baseline_above_noise': bool(excess), 'steps': []}
     chosen = _decide(candidates, excess, decision['steps'])
+    ties = _ties(chosen, candidates, residuals, z_critical, bandwidth, decision['steps'])
+    decision['ranking'] = _ranking(chosen, candidates, residuals, bandwidth)
+    decision['ambiguous'] = bool(ties)
+    decision['tied_with'] = [c['cause'] for c in ties]
+    decision['separate_by'] = (_separation([chosen['cause'], *decision['tied_with']])
+                               if chosen is not None and ties else '')
     series.update({'baseline': sim0, 'candidates': sims})
     if chosen is None:
         cause, model, extended, gain = 'none', base.model, dict(baseline), 0.0
@@ -383,6 +420,10 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                     'parameters': chosen['parameters']}
     extended.setdefault('parameters', {})
     evidence = _evidence(cause, baseline, candidates, residual, sigma, yv[val], data)
+    if decision['ambiguous']:
+        evidence += (f' Ambiguous: {", ".join(decision["tied_with"])} explain(s) the validation'
+                     f' data as well, within the noise (ranked by gain; the signature'
+                     f' decided). To separate them: {decision["separate_by"]}.')
     records = ([('record', t)] if validation is None
                else [('training record', t), ('validation record', tv)])
     warning = time_base_warning(implausible_time_constants(candidates, residual), records)
@@ -416,6 +457,13 @@ def _arrays(rec: Any, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:
         raise DataError(msg)
     check_magnitudes(Recording(t, x, y, source=getattr(rec, 'source', '') or name))
     return t, x, y
+
+
+def _leading_ringing(t: FloatArray, x: FloatArray, y: FloatArray, sign: int) -> int:
+    # The end of the ringing window at a record's start (a step just before it), else 0.
+    from ..identification.dynamics import analyse_dynamics
+    windows = analyse_dynamics(t, x, y, sign=sign).ringing
+    return int(windows[0][1]) if windows and windows[0][0] == 0 else 0
 
 
 def _errors(sim: FloatArray, measured: FloatArray) -> dict[str, float]:
@@ -490,6 +538,60 @@ def _decide(candidates: list[dict[str, Any]], excess: bool,
     steps.append(f'largest gain among the eligible: {best["cause"]}'
                  f' ({best["gain"]:.3f}){note}')
     return best
+
+
+def _ties(best: dict[str, Any] | None, candidates: list[dict[str, Any]],
+          residuals: dict[str, FloatArray], z_critical: float, bandwidth: int | None,
+          steps: list[str]) -> list[dict[str, Any]]:
+    # The significant candidates the chosen one does not beat significantly (a one-sided
+    # Diebold-Mariano test between the two): within the noise of each other.
+    if best is None:
+        return []
+    tied = []
+    for c in candidates:
+        if c is best or not c['significant']:
+            continue
+        z, _ = _dm_statistic(residuals[c['cause']], residuals[best['cause']], bandwidth)
+        if z < z_critical:
+            tied.append(c)
+            steps.append(f'{c["cause"]} is within the noise of {best["cause"]} (z {z:.1f} <'
+                         f' {z_critical}): ambiguous')
+    return tied
+
+
+def _ranking(best: dict[str, Any] | None, candidates: list[dict[str, Any]],
+             residuals: dict[str, FloatArray],
+             bandwidth: int | None) -> list[dict[str, Any]]:
+    # Every candidate by its validation gain, with its z against the chosen one.
+    out = []
+    for c in sorted(candidates, key=lambda c: -c['gain']):
+        z = (math.nan if best is None or c is best else
+             _dm_statistic(residuals[c['cause']], residuals[best['cause']], bandwidth)[0])
+        out.append({'cause': c['cause'], 'gain': c['gain'], 'z_against_chosen': z,
+                    'significant': c['significant'], 'signature': c['signature']})
+    return out
+
+
+#: What separates two causes that tie (the record cannot tell them apart).
+_SEPARATIONS = {
+    frozenset({'rate_dependence', 'dead_time'}):
+        "bursts at two or more rates: a lag's phase saturates and its amplitude falls with"
+        " the frequency, a dead time's phase grows in proportion to it",
+    frozenset({'creep', 'thermal_drift'}):
+        'holds after steps up and down: creep follows log t in the direction of the step,'
+        ' thermal drift follows the input power whatever the step',
+}
+
+
+def _separation(causes: list[str]) -> str:
+    pairs = [_SEPARATIONS[frozenset(pair)] for pair in
+             ((a, b) for i, a in enumerate(causes) for b in causes[i + 1:])
+             if frozenset(pair) in _SEPARATIONS]
+    general = 'holds (creep, thermal drift) and bursts at several rates (lag, dead time)'
+    what = '; '.join(pairs) or general
+    return (f'{what}; mpi-ros diagnose --excitation validation_input.csv writes such an input'
+            ' (holds from both sides, bursts at 5-40 Hz): play it on the rig and pass the record'
+            ' as --validate')
 
 
 def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatArray,

@@ -48,8 +48,8 @@ import numpy.typing as npt
 from .design import burn_in, FloatArray
 from ..play import play_operator
 
-__all__ = ['StartState', 'refine_memory', 'start_candidates', 'turning_point_candidates',
-           'START_KINDS']
+__all__ = ['StartState', 'estimate_start_state', 'refine_memory', 'start_candidates',
+           'turning_point_candidates', 'with_initial_states', 'START_KINDS']
 
 #: The kinds of history a start state is chosen from.
 START_KINDS = ('descent', 'ascent', 'virgin', 'reversal', 'reversals', 'periodic',
@@ -315,3 +315,92 @@ def end_state(u: FloatArray, thresholds: FloatArray) -> FloatArray:
 def finite_or(value: float, fallback: float) -> float:
     """Return ``value`` if finite, else ``fallback``."""
     return value if math.isfinite(value) else fallback
+
+
+def with_initial_states(model: Any, states: FloatArray) -> Any:
+    """
+    Return a model (Gamma, or an extended model of it) whose plays start in ``states``.
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        A forward model; an extended model holds its Gamma as ``model.model``.
+    states : ndarray of float, shape (n+1,)
+        Play outputs at the first sample [A], relative to the input offset.
+
+    Returns
+    -------
+    The same kind of model.
+
+    """
+    from dataclasses import replace as replace_field
+    from ..hysteresis import PIHysteresisOperator
+    from ..model import MPIModel
+    if isinstance(model, MPIModel):
+        h = model.hysteresis
+        return replace_field(model, hysteresis=PIHysteresisOperator(h.thresholds, h.weights,
+                                                                    states))
+    return replace_field(model, model=with_initial_states(model.model, states))
+
+
+def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArray, *,
+                         time: FloatArray | None = None,
+                         rows: npt.NDArray[np.bool_] | None = None,
+                         offset_free: bool = False) -> tuple[Any, StartState, int]:
+    """
+    Estimate the start state of another record of a fitted model (e.g. a validation record).
+
+    The weights stay; every candidate history (:func:`start_candidates`,
+    :func:`turning_point_candidates`) is simulated over the samples before the plays are
+    determined and the one with the smallest RMS output error there wins.
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        The fitted forward model (an extended model is simulated with ``time``).
+    current, displacement : ndarray of float, shape (N,)
+        The record [A], [m].
+    time : ndarray of float, shape (N,), optional
+        Its sample times [s] (needed by an extended model).
+    rows : ndarray of bool, shape (N,), optional
+        The samples that count (e.g. outside ringing); all by default.
+    offset_free : bool
+        The record has its own sensor zero: the error is taken about its mean.
+
+    Returns
+    -------
+    model : same kind
+        The model with the estimated initial states.
+    start : StartState
+        The history chosen.
+    determined : int
+        The first sample whose plays no longer depend on the start state.
+
+    """
+    from ..model import MPIModel
+    gamma = model if isinstance(model, MPIModel) else model.model
+    r = np.asarray(gamma.hysteresis.thresholds, dtype=np.float64)
+    u = np.asarray(current, dtype=np.float64) - gamma.input_offset
+    y = np.asarray(displacement, dtype=np.float64)
+    split = determined_from(u, float(r[-1]))
+    keep = np.ones(u.size, dtype=bool) if rows is None else np.asarray(rows, dtype=bool)
+    part = slice(0, max(split, 2))
+    counted = keep[part]
+    ends = end_state(u, r)
+    best: tuple[float, StartState, Any] | None = None
+    for cand in [*start_candidates(u), *turning_point_candidates(u)]:
+        trial = with_initial_states(model, cand.states(float(u[0]), r, ends))
+        if isinstance(trial, MPIModel):
+            sim = trial.simulate(current[part])
+        elif time is None:
+            raise ValueError('an extended model is simulated with its time base')
+        else:
+            sim = trial.simulate(time[part], current[part])
+        residual = (sim - y[part])[counted]
+        if offset_free and residual.size:
+            residual = residual - float(np.mean(residual))
+        error = float(np.mean(residual ** 2)) if residual.size else 0.0
+        if best is None or error < best[0] * (1.0 - 1e-9):
+            best = (error, cand, trial)
+    assert best is not None
+    return best[2], best[1], int(split)

@@ -11,7 +11,9 @@ Layout of the blocks (README, "Topics"): row-major ``samples x axes``.  A messag
 ``layout.dim`` has two entries is read with ``dim[0].size`` samples of ``dim[1].size``
 axes (``dim[0].stride`` apart, from ``layout.data_offset``); a message without ``dim`` is
 read as consecutive samples of every axis (its length a multiple of the axes).  Published
-blocks carry ``dim = [samples (K, K*N), axes (N, N)]`` and ``data_offset = 0``.
+blocks carry ``dim = [samples (K, K*N), axes (N, N)]`` and ``data_offset = 0``; the flat
+form of ros2_control's ``forward_command_controller`` (one value per joint, empty
+``layout.dim``, ``data_offset = 0``) is :func:`encode_flat_float64_multiarray`.
 
 CDR (XCDR1, as rmw_fastrtps writes it): a 4-byte encapsulation header (byte 1: 1 =
 little-endian, 0 = big-endian), then the fields, each aligned to its size relative to
@@ -27,7 +29,7 @@ import numpy.typing as npt
 from ..array_layout import chunk_layout, consecutive_layout
 
 __all__ = ['ArrayLayoutError', 'decode_float64_multiarray', 'encode_float64_multiarray',
-           'block_of']
+           'encode_flat_float64_multiarray', 'block_of']
 
 #: One dimension of ``layout.dim``: label, size, stride.
 Dimension = Tuple[str, int, int]
@@ -153,6 +155,29 @@ def encode_float64_multiarray(block: npt.NDArray[np.float64]) -> bytes:
             + np.ascontiguousarray(block, dtype='<f8').tobytes())
 
 
+def encode_flat_float64_multiarray(values: npt.NDArray[np.float64]) -> bytes:
+    """
+    Encode one value per axis as the CDR bytes of a ``Float64MultiArray`` without layout.
+
+    What ros2_control's ``forward_command_controller`` takes on ``~/commands``: ``data``
+    holds exactly one value per joint, in the controller's ``joints`` order; it reads
+    ``data`` alone (a message of any other size is dropped).
+
+    Parameters
+    ----------
+    values : ndarray of float, shape (N,)
+        One command per axis.
+
+    Returns
+    -------
+    bytes
+        ``layout.dim = []``, ``layout.data_offset = 0``, ``data = values``.
+
+    """
+    flat = np.ascontiguousarray(values, dtype='<f8').reshape(-1)
+    return _FLAT(_CDR_LE, 0, 0, flat.size) + flat.tobytes()
+
+
 def _fast_block(data: bytes, axes: int) -> Optional[npt.NDArray[np.float64]]:
     """
     Return the block of a message laid out as our encoder writes it, or None.
@@ -245,6 +270,11 @@ def _align(pos: int, size: int) -> int:
 # length; 4 bytes of padding: the doubles start at payload offset 56, aligned to 8.
 _HEADER_START = b'\x00\x01\x00\x00' + struct.pack('<II', 2, 8) + b'samples\x00'
 _LAYOUT = struct.Struct('<II I5s3x II II 4x').pack
+#: The encapsulation header CDR_LE (bytes 00 01) as a little-endian unsigned short.
+_CDR_LE = 0x0100
+# A flat array: header; no dim; data_offset; the data's length; 4 bytes of padding (the
+# doubles start at payload offset 16, aligned to 8).
+_FLAT = struct.Struct('<H2x III 4x').pack
 
 # The fast path of block_of (_fast_block): from byte 4 (after the encapsulation header),
 # the dim count (2) and the first label's length (8) and bytes, K and the first stride,

@@ -12,11 +12,21 @@ Topics (relative names, std_msgs/msg/Float64, SI units)
     ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
     ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray) every ``diagnostics_period``.
 
+Managed node (lifecycle)
+    A :class:`rclpy.lifecycle.LifecycleNode` (the states and transitions are in
+    :mod:`mpi_ros.nodes.compensator_base`): configure loads and validates the model of the
+    parameters and builds the core, its turning-point memory at the model's start state
+    (``model.hysteresis.initial_states``); activate publishes; deactivate publishes nothing
+    (inputs taken and dropped, the memory held, so re-activation continues bumplessly);
+    cleanup and shutdown drop the core.  ``autostart`` (default true) configures and
+    activates at start-up; ``/diagnostics`` reports ``lifecycle_state``.
+
 Model life cycle
-    The node starts *unconfigured* unless the five ``model.*`` keys of Gamma are given
-    (e.g. ``--params-file params.yaml`` written by ``mpi-ros identify``). While
-    unconfigured it publishes nothing: without a model there is no safe command, and
-    the current source keeps its last value. Its diagnostics say so (WARN).
+    The node has no model (its log and diagnostics call it *unconfigured*, apart from the
+    lifecycle state) unless the five ``model.*`` keys of Gamma are given (e.g.
+    ``--params-file params.yaml`` written by ``mpi-ros identify``). Without a model it
+    publishes nothing: there is no safe command, and the current source keeps its last
+    value. Its diagnostics say so (WARN).
     The model is every ``model.*`` key: Gamma's five arrays, the operating point
     (``model.input_offset`` [A], ``model.output_offset`` [m], ``model.output_sign``
     +1/-1, defaults 0, 0, +1: ``y = y0 + sign * S[H[x - x0]]``) and the extension keys.
@@ -77,7 +87,7 @@ Extended models (:mod:`mpi_ros.extensions`)
 
 A ``--params-file`` with an invalid model, or with output limits that are not
 ordered, makes the node refuse to start (exit status 1) rather than run a model
-nobody asked for.
+nobody asked for (with ``autostart: false`` it starts, and configure fails instead).
 """
 
 import struct
@@ -90,8 +100,8 @@ from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
 from .compensator_base import (
-    AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT, ENABLED,
-    is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params, new_faults,
+    AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
+    ENABLED, is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params, new_faults,
     ordered_limits, resolve_null, SAMPLE_PERIOD, whole_model_completion,
 )
 from .multi_axis import MultiAxisCompensatorNode
@@ -115,6 +125,7 @@ PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + LIMIT_PARAMETERS + (
     DIAGNOSTICS_PERIOD,
     *loop_qos_parameters('desired_displacement and current_command'),
     AXES,
+    AUTOSTART,
 )
 
 _SPECS = specs_by_name(PARAMETERS)
@@ -165,7 +176,7 @@ class CompensatorNode(CompensatorNodeBase):
         # Time object per message) or None: sample_period apart.
         self._stamp = (time.monotonic if self.get_parameter('message_time').value == 'arrival'
                        else _no_stamp)
-        self._configure_from_declared()
+        # Last: with autostart, configure (_load: the model) and activate run here.
         self._open_topics(Float64, 'desired_displacement', 'current_command',
                           self._on_desired_displacement, 'desired displacements')
 
@@ -197,13 +208,13 @@ class CompensatorNode(CompensatorNodeBase):
         -------
         float or None
             Current command [A], finite and within [output.min, output.max];
-            ``None`` while unconfigured.
+            ``None`` without a model or while the lifecycle state is not ``active``.
 
         """
         self._messages_in += 1
-        compensator = self._compensator
+        compensator: Optional[Compensator] = self._live
         if compensator is None:
-            self._dropped_unconfigured += 1
+            self._drop()
             return None
         return compensator.command(desired_displacement, time=stamp)
 
@@ -230,9 +241,9 @@ class CompensatorNode(CompensatorNodeBase):
         while True:
             value = (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0]
             self._messages_in += 1
-            compensator = self._compensator
+            compensator = self._live
             if compensator is None:
-                self._dropped_unconfigured += 1
+                self._drop()          # no model, or not active: nothing published
             else:
                 current = (compensator.command(value, time=self._stamp()) if self._extended
                            else compensator.command(value))
@@ -307,8 +318,16 @@ class CompensatorNode(CompensatorNodeBase):
         return {'model': model}
 
     def _install_prepared(self, prepared: Dict[str, Any]) -> None:
-        if 'model' in prepared:
+        # Lifecycle state unconfigured: the parameters hold it; configure loads it.
+        if 'model' in prepared and self._configured:
             self._install_model(prepared['model'])
+
+    def _load(self) -> None:
+        self._configure_from_declared()
+
+    def _unload(self) -> None:
+        self._extended = False
+        self._model_kind = 'none'
 
     def _configure_from_declared(self) -> None:
         values = parameter_values(self, list(_SPECS))
@@ -346,6 +365,7 @@ class CompensatorNode(CompensatorNodeBase):
                 sample_period=self.get_parameter('sample_period').value)
         else:
             self._compensator.install(model)
+        self._set_live()
         self._extended = self._compensator.has_effect
         self._model_version += 1
         self._model_kind = self._compensator.kind
@@ -408,17 +428,26 @@ def main(args: Optional[List[str]] = None) -> int:
     Returns
     -------
     int
-        Exit status: 0 on shutdown, 1 when the configured model or limits are invalid.
+        Exit status: 0 on shutdown (a signal, or the lifecycle transition ``shutdown``),
+        1 when the configured model or limits are invalid (with ``autostart``).
 
     """
-    return run_node_main(make_node, 'compensator', args)
+    return run_node_main(make_node, 'compensator', args, until=_finalized)
+
+
+def _finalized(node: Any) -> Any:
+    """Return the future the spin ends with: the node reached ``finalized``."""
+    return node.finalized
 
 
 def make_node(**kwargs: Any) -> Node:
     """
-    Build the compensator the parameters ask for: single-axis, or multi-axis for ``axes`` > 1.
+    Build the compensator the parameters ask for: single-axis, or the multi-axis node.
 
-    ``axes`` is read from the overrides (``-p axes:=8``, ``--params-file``) the way rclpy
+    The multi-axis node (array topics, ``axis<k>.model.*`` keys) serves ``axes`` > 1, and
+    any axis count whose ros2_control wiring is asked for (``joints`` given,
+    ``output_layout: flat`` or ``input_message: joint_state``: one joint is one axis).
+    These are read from the overrides (``-p axes:=8``, ``--params-file``) the way rclpy
     gives them to a node of this name: a short-lived probe node (no parameter services,
     no rosout) is created and destroyed first.
 
@@ -438,10 +467,19 @@ def make_node(**kwargs: Any) -> Node:
                  **kwargs)
     try:
         # rclpy 7.1.6 has no public accessor of the overrides (see declare_parameters).
-        override = getattr(probe, '_parameter_overrides', {}).get('axes')
+        overrides = dict(getattr(probe, '_parameter_overrides', {}))
     finally:
         probe.destroy_node()
-    if override is not None and isinstance(override.value, int) and override.value > 1:
+
+    def given(name: str) -> Any:
+        override = overrides.get(name)
+        return None if override is None else override.value
+
+    axes = given('axes')
+    joints = given('joints')
+    if ((isinstance(axes, int) and axes > 1)
+            or (isinstance(joints, (list, tuple)) and len(joints) > 0)
+            or given('output_layout') == 'flat' or given('input_message') == 'joint_state'):
         return MultiAxisCompensatorNode(**kwargs)
     return CompensatorNode(**kwargs)
 

@@ -16,6 +16,12 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
   output limits set together, :func:`mpi_ros.nodes.parameters.set_parameters_in_groups`);
 - the topics: the raw subscription and publisher of the loop with their
   :class:`~mpi_ros.nodes.loss.LossMonitor`, ``/diagnostics`` and the two timers;
+- the lifecycle (a managed node, :class:`rclpy.lifecycle.LifecycleNode`): configure loads
+  the model(s) from the parameters and opens the loop topics, activate starts publishing,
+  deactivate stops it (inputs are taken and dropped, the turning-point memory is held),
+  cleanup closes the topics and drops the core, shutdown does the same and completes
+  :attr:`CompensatorNodeBase.finalized`; ``autostart`` (default true) configures and
+  activates at start-up;
 - the message counters, the once-a-second log of losses and bad inputs, and the frame of
   the diagnostics message (rate window, loss problems, common values);
 - the model-key rules both nodes apply to a model (the single-axis node's ``model.*`` keys,
@@ -28,17 +34,31 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
 Each node keeps what differs: its message type and its drain loop (decode, command,
 encode, publish: the per-message path stays in the node so that it costs no extra Python
 call per message), its parameter specs and pre-set completion, its model candidate and
-installation, and its diagnostics status.
+installation, what configure loads and cleanup drops, and its diagnostics status.
+
+Lifecycle states (what each publishes on the loop's output topic)
+    ``unconfigured``: no loop topics, no core, nothing published; parameter pushes are
+    validated by the same rule as in every state and stored; configure loads them.
+    ``inactive``: loop topics open, core built (turning-point memory at the model's start
+    state after configure, held after a deactivation); every input is taken and dropped
+    (counted ``dropped_inactive``, never replayed later), nothing is published; pushes are
+    installed into the core as while active.  ``active``: one command per input.
+    ``finalized``: as unconfigured; the node's main returns (the process exits 0).
+    ``/diagnostics`` reports ``lifecycle_state`` in every state.
 """
 
 import math
 import time
+import traceback
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.task import Future
 
 from .loss import LossMonitor
 from .parameters import (
@@ -54,6 +74,7 @@ from ..model import MPIModel
 from ..params import OPERATING_POINT_DEFAULTS
 
 __all__ = [
+    'AUTOSTART',
     'AXES',
     'CompensatorNodeBase',
     'DIAGNOSTICS_PERIOD',
@@ -96,6 +117,13 @@ LIMIT_PARAMETERS = (
         'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
 )
 
+AUTOSTART = ParameterSpec(
+    'autostart', Type.BOOL, True,
+    'Managed (lifecycle) node: true = configure and activate at start-up (a plain node '
+    'to ros2 run and launch); false = start unconfigured and wait for the lifecycle '
+    'transitions (ros2 lifecycle set <node> configure, then activate; a lifecycle manager)',
+    read_only=True)
+
 ENABLED = ParameterSpec(
     'enabled', Type.BOOL, True,
     'true: invert the MPI model (27); false: pass the best linear map of the '
@@ -137,22 +165,29 @@ _FAULT_WORDS = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
                 'clamped': 'clamped'}
 
 
-class CompensatorNodeBase(Node):
+class CompensatorNodeBase(LifecycleNode):
     """
     Shell shared by the compensator nodes (see the module docstring).
 
     A node subclass sets ``self._specs`` and ``self._groups`` before it declares its
-    parameters, then calls :meth:`_declared`, builds its model(s), and calls
-    :meth:`_open_topics` with its drain loop.  It fills the hooks below (``_complete_request``,
-    ``_model_candidate``, ``_install_prepared``, ``_rejection``, ``_core_counters``,
-    ``_node_counters``, ``_status``, ``_status_values``, ``_status_name``).
+    parameters, then calls :meth:`_declared`, sets up its own state, and calls
+    :meth:`_open_topics` with its drain loop last (which runs ``autostart``).  It fills the
+    hooks below (``_load``, ``_unload``, ``_complete_request``, ``_model_candidate``,
+    ``_install_prepared``, ``_rejection``, ``_core_counters``, ``_node_counters``,
+    ``_status``, ``_status_values``, ``_status_name``).
 
     Parameters
     ----------
     node_name : str
         Node name.
     **kwargs
-        Passed on to :class:`rclpy.node.Node` (``context=``, ``parameter_overrides=``...).
+        Passed on to :class:`rclpy.lifecycle.LifecycleNode` (``context=``,
+        ``parameter_overrides=``...).
+
+    Attributes
+    ----------
+    finalized : rclpy.task.Future
+        Done once the node reached the lifecycle state ``finalized`` (its main then ends).
 
     """
 
@@ -163,11 +198,21 @@ class CompensatorNodeBase(Node):
         self._specs: Mapping[str, ParameterSpec] = {}
         self._groups: Tuple[Tuple[str, ...], ...] = ()
         self._compensator: Any = None
+        # The core that serves messages: the compensator while active, else None.
+        self._live: Any = None
+        self._configured = False
+        self._active = False
+        self._loop: Optional[Tuple[Any, ...]] = None
+        self._subscription: Any = None
+        self._publisher: Any = None
+        self._transition_error: Optional[Exception] = None
+        self.finalized = Future()
         self._rejected_updates = 0
         self._last_rejection = ''
         self._messages_in = 0
         self._messages_out = 0
         self._dropped_unconfigured = 0
+        self._dropped_inactive = 0
         self._what = 'desired displacements'
         self._last_report: Tuple[float, int, Dict[str, int]] = (time.monotonic(), 0, {})
         self._fault_log: Tuple[float, Dict[str, int]] = (-math.inf, {})
@@ -176,6 +221,41 @@ class CompensatorNodeBase(Node):
         self.add_pre_set_parameters_callback(self._complete_request)
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
+        self._guard_change_state()
+
+    def _guard_change_state(self) -> None:
+        """
+        Answer a transition the current state does not have with ``success: false``.
+
+        rclpy 7.1.6's ``change_state`` service raises ``RCLError`` out of the executor for
+        a transition *id* that the current state does not offer (e.g. activate while
+        unconfigured; a label is answered false), which would end the node.
+        """
+        service = getattr(self, '_service_change_state', None)   # rclpy 7.1.6: private
+        if service is None:
+            return
+        callback = service.callback
+
+        def guarded(request: Any, response: Any) -> Any:
+            try:
+                return callback(request, response)
+            except _rclpy.RCLError as err:
+                transition = request.transition
+                self.get_logger().warning(
+                    f'lifecycle: transition {transition.id} {transition.label!r} refused in '
+                    f'state {self.lifecycle_state}: {err}; ros2 lifecycle list '
+                    f'{self.get_fully_qualified_name()} lists the available ones')
+                response.success = False
+                return response
+
+        service.callback = guarded
+
+    def destroy_node(self) -> None:
+        """Destroy the node, and its lifecycle state machine now rather than when collected."""
+        super().destroy_node()
+        # rclpy 7.1.6 leaves the state machine to the garbage collector, which may run its
+        # rcl finaliser anywhere later, e.g. in a child process forked by a test.
+        self._state_machine.destroy_when_not_in_use()
 
     def _declared(self) -> None:
         """Close the declaration phase: serve set_parameters in groups from now on."""
@@ -183,23 +263,164 @@ class CompensatorNodeBase(Node):
         self._declaring = False
 
     def _open_topics(self, message_type: Any, input_topic: str, output_topic: str,
-                     callback: Callable[[bytes], None], what: str) -> None:
-        """Create the raw loop topics (loss-monitored), /diagnostics and the timers."""
+                     callback: Callable[[Any], None], what: str, *,
+                     input_type: Any = None, raw: bool = True) -> None:
+        """
+        Open /diagnostics and the timers, note the loop topics, and run ``autostart``.
+
+        The loop topics (``input_topic`` of ``input_type``, default ``message_type``,
+        subscribed raw unless ``raw`` is False; ``output_topic`` of ``message_type``) are
+        created by configure and destroyed by cleanup (:meth:`_open_loop`).
+        """
         self._what = what
+        self._loop = (message_type, input_topic, output_topic, callback,
+                      message_type if input_type is None else input_type, raw)
         reliability = self.get_parameter('qos_reliability').value
-        qos = loop_qos(self.get_parameter('qos_depth').value, reliability)
         # Counts what never arrived (sequence gaps, DDS sample-lost, incompatible peers).
         self._loss = LossMonitor(self, input_topic, output_topic, reliability)
-        self._publisher = self.create_publisher(
-            message_type, output_topic, qos, event_callbacks=self._loss.publisher_callbacks())
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self._subscription = self.create_subscription(
-            message_type, input_topic, callback, qos, raw=True,
-            event_callbacks=self._loss.subscription_callbacks())
-        self._loss.publisher_count = self._subscription.get_publisher_count
         self._timer = self.create_timer(
             self.get_parameter('diagnostics_period').value, self._publish_diagnostics)
         self._second_timer = self.create_timer(1.0, self._every_second)
+        if self.get_parameter('autostart').value:
+            self._autostart()
+
+    def _autostart(self) -> None:
+        """Configure and activate now; raise what made configure fail (refuse to start)."""
+        if self.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+            error = self._transition_error
+            self.destroy_node()
+            if error is not None:
+                raise error
+            msg = 'configure failed at start-up (autostart); see the log'
+            raise ParameterRejected(msg)
+        if self.trigger_activate() != TransitionCallbackReturn.SUCCESS:
+            self.destroy_node()
+            msg = 'activate failed at start-up (autostart); see the log'
+            raise ParameterRejected(msg)
+
+    def _open_loop(self) -> None:
+        """Create the loop's publisher and (raw) subscription with their loss monitor."""
+        assert self._loop is not None   # noqa: S101 - _open_topics ran in __init__
+        message_type, input_topic, output_topic, callback, input_type, raw = self._loop
+        reliability = self.get_parameter('qos_reliability').value
+        qos = loop_qos(self.get_parameter('qos_depth').value, reliability)
+        self._loss.restart()
+        self._publisher = self.create_publisher(
+            message_type, output_topic, qos, event_callbacks=self._loss.publisher_callbacks())
+        self._subscription = self.create_subscription(
+            input_type, input_topic, callback, qos, raw=raw,
+            event_callbacks=self._loss.subscription_callbacks())
+        self._loss.publisher_count = self._subscription.get_publisher_count
+
+    def _close_loop(self) -> None:
+        """Destroy the loop's subscription and publisher (if open)."""
+        subscription, self._subscription = self._subscription, None
+        publisher, self._publisher = self._publisher, None
+        if subscription is not None:
+            self.destroy_subscription(subscription)
+            self._loss.publishers = 0
+        if publisher is not None:
+            self.destroy_publisher(publisher)
+
+    def _set_live(self) -> None:
+        """Serve messages with the core while active; drop them otherwise."""
+        self._live = self._compensator if self._active else None
+
+    def _drop(self) -> None:
+        """Count an input that got no command: not active, or no model."""
+        if self._active:
+            self._dropped_unconfigured += 1
+        else:
+            self._dropped_inactive += 1
+
+    # -- lifecycle ----------------------------------------------------------------------
+    @property
+    def lifecycle_state(self) -> str:
+        """
+        Return the lifecycle state's label.
+
+        ``unconfigured``, ``inactive``, ``active``, ``finalized`` (or a transition state,
+        e.g. ``configuring``, while a transition runs).
+        """
+        # rclpy 7.1.6 has no public accessor of the state machine's current state.
+        return str(self._state_machine.current_state[1])
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Load and validate the model(s) from the parameters, build the core, open topics."""
+        return self._transition('configure', self._configure)
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Start publishing: one command per input, from the memory the core holds."""
+        return self._transition('activate', lambda: self._switch(True))
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Stop publishing: inputs are taken and dropped, the memory is held."""
+        return self._transition('deactivate', lambda: self._switch(False))
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Close the loop topics and drop the core (back to the state after creation)."""
+        return self._transition('cleanup', self._release)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Release everything from any state and let the node's main end."""
+        return self._transition('shutdown', self._finalize)
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """Release everything after a transition raised; the node goes to unconfigured."""
+        self._release()           # keeps _transition_error: what raised (for autostart)
+        self.get_logger().info('lifecycle: error processing done, state unconfigured')
+        return TransitionCallbackReturn.SUCCESS
+
+    def _transition(self, name: str, action: Callable[[], None]) -> TransitionCallbackReturn:
+        """Run one transition's work: a refusal fails it, anything else is an error."""
+        self._transition_error = None
+        try:
+            action()
+        except (ParameterRejected, MPIError) as err:
+            self._transition_error = err
+            self.get_logger().error(f'lifecycle: {name} failed: {err}')
+            return TransitionCallbackReturn.FAILURE
+        except Exception as err:  # noqa: B902 - rclpy would swallow it without a word
+            self._transition_error = err
+            self.get_logger().error(
+                f'lifecycle: {name} raised {type(err).__name__}: {err}\n'
+                f'{traceback.format_exc()}')
+            return TransitionCallbackReturn.ERROR
+        self.get_logger().info(f'lifecycle: {name} done, state {self._next_state(name)}')
+        return TransitionCallbackReturn.SUCCESS
+
+    def _configure(self) -> None:
+        self._configured = True
+        try:
+            self._load()
+            self._open_loop()
+        except BaseException:
+            self._release()
+            raise
+        self._set_live()
+
+    def _switch(self, active: bool) -> None:
+        self._active = active
+        self._set_live()
+
+    def _release(self) -> None:
+        self._active = False
+        self._configured = False
+        self._close_loop()
+        self._unload()
+        self._compensator = None
+        self._set_live()
+
+    @staticmethod
+    def _next_state(name: str) -> str:
+        return {'configure': 'inactive', 'activate': 'active', 'deactivate': 'inactive',
+                'shutdown': 'finalized'}.get(name, 'unconfigured')
+
+    def _finalize(self) -> None:
+        self._release()
+        if not self.finalized.done():
+            self.finalized.set_result(True)
 
     # -- public read-only state -------------------------------------------------------
     @property
@@ -212,7 +433,8 @@ class CompensatorNodeBase(Node):
         dict of str to int
             The core's ``clamped``, ``nonfinite_input``, ``out_of_range`` (summed over the
             axes of a multi-axis node; and ``bad_time`` for an extended model) plus
-            ``messages_in``, ``messages_out``, ``dropped_unconfigured``, ``messages_lost``
+            ``messages_in``, ``messages_out``, ``dropped_unconfigured`` (no model),
+            ``dropped_inactive`` (lifecycle state not active), ``messages_lost``
             (messages that never reached the node: the larger of ``lost_sequence_gaps``,
             jumps of the publisher's sequence number, and ``lost_dds_events``, what DDS
             reported lost), ``incompatible_qos`` (peers whose QoS cannot match),
@@ -225,6 +447,7 @@ class CompensatorNodeBase(Node):
             messages_in=self._messages_in,
             messages_out=self._messages_out,
             dropped_unconfigured=self._dropped_unconfigured,
+            dropped_inactive=self._dropped_inactive,
             **self._loss.counters(),
             rejected_updates=self._rejected_updates,
         )
@@ -326,6 +549,14 @@ class CompensatorNodeBase(Node):
                 'the displacement lags the desired one by it')
 
     # -- hooks of the nodes -------------------------------------------------------------
+    def _load(self) -> None:
+        """Configure: load and validate the model(s) of the parameters, build the core."""
+        raise NotImplementedError
+
+    def _unload(self) -> None:
+        """Cleanup: drop what :meth:`_load` built (the base drops the core itself)."""
+        raise NotImplementedError
+
     def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
         """Pre-set: normalise the request and complete a whole model (node specific)."""
         raise NotImplementedError
@@ -368,7 +599,8 @@ class CompensatorNodeBase(Node):
         self._diagnostics.publish(self.diagnostics())
 
     def _every_second(self) -> None:
-        self._loss.publishers = self._subscription.get_publisher_count()
+        if self._subscription is not None:
+            self._loss.publishers = self._subscription.get_publisher_count()
         self.log_faults()
         self._loss.log(time.monotonic(), self._what)
 
@@ -405,8 +637,10 @@ class CompensatorNodeBase(Node):
         Returns
         -------
         diagnostic_msgs.msg.DiagnosticArray
-            One status (see the node's ``_status``) with ``hardware_id`` the node's fully
-            qualified name, its counters and ``last_rejected_update``, ``rate_hz``,
+            One status (see the node's ``_status``; while the lifecycle state is not
+            ``active`` its message starts ``lifecycle state <state>: no commands
+            published``) with ``hardware_id`` the node's fully qualified name, its counters,
+            ``lifecycle_state`` and ``last_rejected_update``, ``rate_hz``,
             ``max_backlog``, ``qos_depth``, ``input_publishers``, ``enabled``,
             ``output_min`` and ``output_max``.
 
@@ -422,8 +656,17 @@ class CompensatorNodeBase(Node):
                                   hardware_id=self.get_fully_qualified_name())
         depth = self.get_parameter('qos_depth').value
         losses = self._loss.period(counters, before, depth, self._what)
-        status.level, status.message = self._status(losses, counters, before)
+        state = self.lifecycle_state
+        if self._configured:
+            status.level, status.message = self._status(losses, counters, before)
+        else:
+            status.level, status.message = DiagnosticStatus.OK, 'no model loaded'
+        if state != 'active':
+            note = f'lifecycle state {state}: no commands published'
+            status.message = note if status.level == DiagnosticStatus.OK else (
+                f'{note}; {status.message}')
         values: Dict[str, Any] = dict(counters)
+        values['lifecycle_state'] = state
         values['last_rejected_update'] = self._last_rejection
         values.update(
             rate_hz=round(rate, 3),

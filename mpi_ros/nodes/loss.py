@@ -96,6 +96,11 @@ class LossMonitor:
             f'{self._reliability}: a best_effort publisher does not reach a reliable '
             'subscription')
 
+    def restart(self) -> None:
+        """Forget the last sequence number: a new subscription (lifecycle configure)."""
+        self._last_number = None
+        self._unsequenced = 0
+
     # -- message path -------------------------------------------------------------------
     def delivered(self) -> None:
         """Account for a message the executor handed over (its number is unknown)."""

@@ -19,6 +19,15 @@ Topics (relative names, ``std_msgs/msg/Float64MultiArray``, SI units)
     compiled loop over every axis and sample of a message).  ``/diagnostics`` as the
     single-axis node.
 
+ros2_control (``joints``, ``output_layout``, ``input_message``, read-only)
+    ``output_layout: flat`` publishes what ``forward_command_controller`` takes on
+    ``~/commands``: one message per sample, ``data[k]`` the command of axis k (the joint
+    ``joints[k]``), empty ``layout.dim``, ``data_offset`` 0.  ``input_message: joint_state``
+    subscribes ``desired_joint_states`` (``sensor_msgs/JointState``): each joint's
+    ``position`` [m] mapped by name to the ``joints`` order; joints not in ``joints`` are
+    ignored; a message missing one is refused (``missing_joints``, WARN), one whose
+    positions do not match its names is ``malformed``.
+
 Node parameters
     ``axes`` (read-only); per axis k = 0..N-1 every model key of the single-axis node under
     ``axis<k>.``: ``axis<k>.model.hysteresis.thresholds``, ``.weights``,
@@ -89,13 +98,16 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 from rclpy.parameter import Parameter
+from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
+from .arrays import (
+    ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
+)
 from .compensator_base import (
-    AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT, ENABLED,
-    FAULT_KEYS, is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params, new_faults,
-    ordered_limits, resolve_null, SAMPLE_PERIOD, whole_model_completion,
+    AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
+    ENABLED, FAULT_KEYS, is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params,
+    new_faults, ordered_limits, resolve_null, SAMPLE_PERIOD, whole_model_completion,
 )
 from .parameters import (
     declare_parameters, EXTENSION_PARAMETERS, is_null, loop_qos_parameters, MODEL_KEYS,
@@ -106,15 +118,47 @@ from ..compensation import gamma_of, kind_of, MultiAxisCompensator
 from ..errors import MPIError
 from ..extensions import extended_model_from_params
 
-__all__ = ['AXES', 'MultiAxisCompensatorNode', 'axis_key', 'axis_parameters', 'chunk_times']
+__all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
+           'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
 
 Type = Parameter.Type
 
 #: Most array messages served in one subscription callback.
 _DRAIN_LIMIT = DRAIN_LIMIT
+
+#: The joint name of each axis (ros2_control); read-only.
+JOINTS = ParameterSpec(
+    'joints', Type.STRING_ARRAY, None,
+    'Joint name of each axis, in axis order: the joints parameter of the ros2_control '
+    'forward_command_controller that takes current_commands (output_layout flat), and the '
+    'names input_message joint_state maps by; unset: no names',
+    read_only=True, constraints='as many unique, non-empty names as axes')
+
+#: What current_commands carries; read-only.
+OUTPUT_LAYOUT = ParameterSpec(
+    'output_layout', Type.STRING, 'samples_x_axes',
+    'Layout of current_commands: samples_x_axes (one message per input message, '
+    'layout.dim = [samples, axes]) or flat (what ros2_control forward_command_controller '
+    'takes on ~/commands: one message per sample holding one value per axis in axis (joints) '
+    'order, empty layout.dim, data_offset 0)',
+    choices=('samples_x_axes', 'flat'), read_only=True)
+
+#: What the node subscribes to; read-only.
+INPUT_MESSAGE = ParameterSpec(
+    'input_message', Type.STRING, 'array',
+    'Input: array (std_msgs/Float64MultiArray, samples x axes, on desired_displacements) '
+    'or joint_state (sensor_msgs/JointState on desired_joint_states: the position [m] of '
+    'each joint, mapped by name to the joints order; needs joints; a message missing a '
+    'joint is refused and counted, missing_joints)',
+    choices=('array', 'joint_state'), read_only=True)
+
+#: The ros2_control options, declared by the multi-axis node only.
+_WIRING = (JOINTS, OUTPUT_LAYOUT, INPUT_MESSAGE)
+#: At most this many JointState name orders are remembered (their index arrays).
+_NAME_ORDERS = 64
 #: The node-wide parameters (the single-axis node's, less its model keys).
 _COMMON = LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_PERIOD) + (
-    loop_qos_parameters('desired_displacements and current_commands'))
+    loop_qos_parameters('desired_displacements and current_commands')) + (AUTOSTART,)
 #: One axis's model keys, single-axis names: Gamma's five first, the operating point, the
 #: extension keys of the effect registry.
 _AXIS_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + tuple(
@@ -171,6 +215,53 @@ def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
     return tuple(replace(spec, name=axis_key(k, spec.name),
                          description=f'Axis {k}: {spec.description}')
                  for k in range(axes) for spec in MODEL_PARAMETERS + EXTENSION_PARAMETERS)
+
+
+def joint_names(names: Any, axes: int) -> Tuple[str, ...]:
+    """
+    Check the ``joints`` parameter against the axis count.
+
+    Parameters
+    ----------
+    names : list of str or None
+        The parameter's value (None or empty: no names).
+    axes : int
+        Number of axes.
+
+    Returns
+    -------
+    tuple of str
+        The names, one per axis; empty when none are given.
+
+    Raises
+    ------
+    ParameterRejected
+        When the count differs from ``axes``, a name is empty or repeated.
+
+    Examples
+    --------
+    >>> joint_names(['a', 'b'], 2)
+    ('a', 'b')
+    >>> joint_names(None, 3)
+    ()
+
+    """
+    given = tuple(names or ())
+    if not given:
+        return ()
+    if len(given) != axes:
+        msg = (f'joints names {len(given)} joints ({", ".join(given)}) but axes is {axes}; '
+               f'give one name per axis (axes:={len(given)}, or as many joints as axes)')
+        raise ParameterRejected(msg)
+    empty = [str(k) for k, name in enumerate(given) if not name.strip()]
+    if empty:
+        msg = f'joints: the name of axis {", ".join(empty)} is empty; name every joint'
+        raise ParameterRejected(msg)
+    repeated = sorted({name for name in given if given.count(name) > 1})
+    if repeated:
+        msg = f'joints names {", ".join(repeated)} more than once; each joint once'
+        raise ParameterRejected(msg)
+    return given
 
 
 def chunk_times(arrival: float, previous: Optional[float], samples: int,
@@ -233,7 +324,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        self._specs = dict(specs_by_name((AXES,) + _COMMON))
+        self._specs = dict(specs_by_name((AXES,) + _COMMON + _WIRING))
         declare_parameters(self, (AXES,))
         self.axes = int(self.get_parameter('axes').value)
         per_axis = axis_parameters(self.axes) + _axis_limit_parameters(self.axes)
@@ -250,8 +341,15 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         # Models and limits of one set_parameters request succeed or fail together.
         self._groups = (tuple(key for keys in self._model_keys for key in keys)
                         + self._all_limit_keys,)
-        declare_parameters(self, per_axis + _COMMON)
+        declare_parameters(self, per_axis + _COMMON + _WIRING)
         self._declared()
+        self.joints = joint_names(self.get_parameter('joints').value, self.axes)
+        self._flat = self.get_parameter('output_layout').value == 'flat'
+        joint_state = self.get_parameter('input_message').value == 'joint_state'
+        if joint_state and not self.joints:
+            msg = ('input_message joint_state needs the joints parameter (one name per axis, '
+                   'in axis order) to map the JointState names to the axes')
+            raise ParameterRejected(msg)
 
         self._models: List[Any] = [None] * self.axes
         self._compensator: Optional[MultiAxisCompensator] = None
@@ -265,9 +363,18 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._samples_in = 0
         self._malformed = 0
         self._last_malformed = ''
-        self._configure_from_declared()
-        self._open_topics(Float64MultiArray, 'desired_displacements', 'current_commands',
-                          self._on_desired_displacements, 'desired displacement arrays')
+        self._missing_joints = 0
+        self._last_missing = ''
+        #: JointState name order -> index of each axis's joint in it.
+        self._joint_index: Dict[Tuple[str, ...], Any] = {}
+        # Last: with autostart, configure (_load: the models) and activate run here.
+        if joint_state:
+            self._open_topics(Float64MultiArray, 'desired_joint_states', 'current_commands',
+                              self._on_joint_states, 'desired joint states',
+                              input_type=JointState, raw=False)
+        else:
+            self._open_topics(Float64MultiArray, 'desired_displacements', 'current_commands',
+                              self._on_desired_displacements, 'desired displacement arrays')
 
     # -- public read-only state -------------------------------------------------------
     @property
@@ -290,10 +397,11 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         Returns
         -------
         ndarray of float, shape (K, N), or None
-            Current commands [A]; None while unconfigured.
+            Current commands [A]; None until every axis has a model, and while the
+            lifecycle state is not ``active``.
 
         """
-        compensator = self._compensator
+        compensator = self._live
         if compensator is None:
             return None
         return compensator.command(np.asarray(block, dtype=np.float64), times)
@@ -317,16 +425,21 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                 self._last_malformed = str(err)
             else:
                 self._samples_in += block.shape[0]
-                compensator = self._compensator
+                compensator = self._live
                 if compensator is None:
-                    self._dropped_unconfigured += 1
+                    self._drop()      # an axis without a model, or not active
                 else:
                     if self._timed:
                         commands = self._timed_command(compensator, block)
                     else:
                         commands = compensator.command(block)
-                    publish(encode_float64_multiarray(commands))
-                    self._messages_out += 1
+                    if self._flat:        # ros2_control: one message per sample
+                        for row in commands:
+                            publish(encode_flat_float64_multiarray(row))
+                        self._messages_out += commands.shape[0]
+                    else:
+                        publish(encode_float64_multiarray(commands))
+                        self._messages_out += 1
             served += 1
             if served >= _DRAIN_LIMIT:
                 break
@@ -336,6 +449,75 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             data, info = taken
             loss.taken(info['publication_sequence_number'])
         loss.served(served)
+
+    def _on_joint_states(self, msg: Any) -> None:
+        # input_message joint_state: JointState objects (rclpy deserialises them), each
+        # one sample of every axis; queued ones taken here as in the array loop.
+        take = self._subscription.handle.take_message
+        loss = self._loss
+        loss.delivered()
+        served = 0
+        while True:
+            self._messages_in += 1
+            block = self._joint_block(msg)
+            if block is not None:
+                self._samples_in += 1
+                self._serve(block)
+            served += 1
+            if served >= _DRAIN_LIMIT:
+                break
+            taken = take(JointState, False)
+            if taken is None:
+                break
+            msg, info = taken
+            loss.taken(info['publication_sequence_number'])
+        loss.served(served)
+
+    def _joint_block(self, msg: Any) -> Any:
+        """Return the 1 x N block of a JointState in axis order, or None (refused, counted)."""
+        names = tuple(msg.name)
+        index = self._joint_index.get(names)
+        if index is None:
+            position_of = {name: i for i, name in enumerate(names)}
+            missing = [joint for joint in self.joints if joint not in position_of]
+            if missing:
+                self._missing_joints += 1
+                self._last_missing = (
+                    f'JointState without {", ".join(missing)} (it names '
+                    f'{", ".join(names[:8]) or "no joint"}{" ..." if len(names) > 8 else ""})')
+                return None
+            if len(position_of) != len(names):
+                self._malformed += 1
+                self._last_malformed = 'JointState names a joint more than once'
+                return None
+            if len(self._joint_index) >= _NAME_ORDERS:
+                self._joint_index.clear()
+            index = np.array([position_of[joint] for joint in self.joints], dtype=np.intp)
+            self._joint_index[names] = index
+        position = msg.position
+        if len(position) != len(names):
+            self._malformed += 1
+            self._last_malformed = (f'JointState with {len(names)} names and {len(position)} '
+                                    'positions; each joint needs its position')
+            return None
+        return np.asarray(position, dtype=np.float64)[index].reshape(1, -1)
+
+    def _serve(self, block: Any) -> None:
+        """Command one block and publish it in the output layout (the JointState path)."""
+        compensator = self._live
+        if compensator is None:
+            self._drop()
+            return
+        commands = (self._timed_command(compensator, block) if self._timed
+                    else compensator.command(block))
+        publish = self._publisher.handle.publish_raw
+        if self._flat:
+            for row in commands:
+                publish(encode_flat_float64_multiarray(row))
+            self._messages_out += commands.shape[0]
+        else:
+            publish(encode_float64_multiarray(commands))
+            self._messages_out += 1
 
     def _timed_command(self, compensator: MultiAxisCompensator, block: Any) -> Any:
         """Command a block with its samples' times (message_time: arrival, see chunk_times)."""
@@ -409,7 +591,17 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return model
 
     def _install_prepared(self, prepared: Dict[str, Any]) -> None:
-        self._install(prepared['models'])
+        # Lifecycle state unconfigured: the parameters hold them; configure loads them.
+        if self._configured:
+            self._install(prepared['models'])
+
+    def _load(self) -> None:
+        self._configure_from_declared()
+
+    def _unload(self) -> None:
+        self._models = [None] * self.axes
+        self._timed = False
+        self._last_arrival = None
 
     def _limits_candidate(self, names: Any, parameters: List[Parameter]) -> Any:
         """Return {axis: (min, max)} of every axis whose range the request touches."""
@@ -459,6 +651,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                 self._models, output_min=lows, output_max=highs,
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value)
+        self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
                        and any(axis.has_effect for axis in compensator.axes))
@@ -493,7 +686,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return counters
 
     def _node_counters(self) -> Dict[str, int]:
-        return {'samples_in': self._samples_in, 'malformed': self._malformed}
+        counters = {'samples_in': self._samples_in, 'malformed': self._malformed}
+        if self.joints:
+            counters['missing_joints'] = self._missing_joints
+        return counters
 
     def _status_name(self) -> str:
         return f'{self.get_name()}: feedforward ({self.axes} axes)'
@@ -504,14 +700,18 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         Return the level and message of a diagnostics period.
 
         WARN after a period with lost messages, incompatible peers, a queue more than half
-        full, malformed arrays or non-finite / out-of-range / clamped inputs, and while an
-        axis has no model; else OK.
+        full, malformed arrays, JointStates missing a joint or non-finite / out-of-range /
+        clamped inputs, and while an axis has no model; else OK.
         """
         problems = list(losses)
         malformed = counters['malformed'] - before.get('malformed', 0)
         if malformed:
-            problems.append(f'{malformed} malformed arrays in the last period (last: '
+            problems.append(f'{malformed} malformed {self._what} in the last period (last: '
                             f'{self._last_malformed})')
+        missing_joints = counters.get('missing_joints', 0) - before.get('missing_joints', 0)
+        if missing_joints:
+            problems.append(f'{missing_joints} JointState messages missing a joint of joints '
+                            f'in the last period, refused (last: {self._last_missing})')
         faults = new_faults(counters, before)
         if any(faults.values()):
             problems.append(f'{describe_faults(faults)} in the last period')
@@ -526,6 +726,9 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
     def _status_values(self) -> Dict[str, Any]:
         values: Dict[str, Any] = {
             'axes': self.axes, 'model_versions': ' '.join(map(str, self._model_versions))}
+        if self.joints:
+            values['joints'] = ' '.join(self.joints)
+        values['output_layout'] = 'flat' if self._flat else 'samples_x_axes'
         for key, limits in zip(('output_min', 'output_max'), self._effective_limits()):
             values[key] = limits[0] if len(set(limits)) == 1 else ' '.join(map(str, limits))
         causes = ['-' if model is None else getattr(model, 'cause', 'none')

@@ -74,7 +74,10 @@ def test_multi_axis_compensator_and_plant_as_processes(group, bags, tmp_path):
     try:
         spin_until(lambda: publisher.get_subscription_count() > 0
                    and node.count_publishers('current_commands') > 0
-                   and node.count_publishers('displacements') > 0, 'the nodes to match')
+                   and node.count_publishers('displacements') > 0
+                   # the plant's reader of the commands (else the first block can be lost
+                   # between the two processes on a loaded machine)
+                   and node.count_subscribers('current_commands') >= 2, 'the nodes to match')
         time.sleep(1.0)                                    # let DDS finish matching
         rng = np.random.default_rng(3)
         desired = rng.uniform(8e-6, 2.5e-5, (11, AXES))
