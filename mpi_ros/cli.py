@@ -5,18 +5,23 @@ The ``mpi-ros`` command: offline tools and the three nodes behind one console sc
 Subcommands
 -----------
 ``identify BAG|CSV``      fit a model, write a parameter YAML (and ``--json`` statistics)
-``simulate PARAMS``       forward model Gamma on a CSV column
-``compensate PARAMS``     inverse model Gamma^-1 on a CSV column (offline feed-forward)
+``simulate PARAMS``       forward model Gamma on a CSV column (warns about currents outside
+                          the range the model was identified on)
+``compensate PARAMS``     inverse model Gamma^-1 on a CSV column (offline feed-forward),
+                          clamped as the compensator node clamps (``--no-clamp``: not)
 ``diagnose DATA``         find what the model misses in measured data (see ``mpi_ros.diagnosis``)
 ``demo``                  the closed loop over DDS: record, identify, push, track, report
 ``compensator|identifier|plant-simulator [--ros-args ...]``  run a node, as ``ros2 run``
 
-The command returns an exit code; errors are printed as ``error: ...`` on stderr.
+The command returns an exit code; errors are printed as ``error: ...`` on stderr, warnings
+as ``warning: ...``.  Long work (``identify``, ``diagnose``, ``demo``) draws a progress line on
+stderr when it is a terminal (:mod:`mpi_ros.progress`; ``--quiet``: none).
 """
 
 import argparse
 from collections.abc import Sequence
 import json
+import math
 from pathlib import Path
 import sys
 
@@ -24,13 +29,24 @@ from typing import Any
 
 from .errors import MPIError
 
-__all__ = ['main']
+__all__ = ['main', 'order_table_lines']
 
 _NODE_COMMANDS = ('compensator', 'identifier', 'plant-simulator', 'plant_simulator')
 
 
 def _progress(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
+
+
+def _finite(value: Any) -> Any:
+    # JSON has no NaN or Infinity: such values (an unstable order's error) become null.
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {key: _finite(v) for key, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
 
 
 def _read_data(path: str, args: argparse.Namespace) -> Any:
@@ -58,26 +74,25 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from .order import format_order
     from .params import write_params_yaml
     from .pipeline import fit_recording
+    from .progress import Progress
+    from .ranges import range_header
     from .recordings import atomic_write, read_recording
     _check_output(args.output, '--output')
     _check_output(args.json, '--json')
     options = data_options(args)             # refuse bad options before reading
     order = order_option(args)
-    recording = read_recording(args.data, options)
-    for note in recording.notes:
-        _progress(f'note: {note}')
-    _progress(f'identifying from {len(recording.time)} samples of {args.data} '
-              f'(order {format_order(order)}) ...')
-    result = fit_recording(recording, order=order, anchor=args.anchor,
-                           periodic=args.periodic, dynamics=args.dynamics).result
-    for row in result.order_table:
-        if row.get('unstable'):
-            _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out error unstable (not"
-                      ' considered)')
-            continue
-        _progress(f"  n={row['n']:2d} l={row['l']:2d}  held-out RMS error "
-                  f"{100 * row['rms_error']:6.3f} %, nonlinearity error (37) "
-                  f"{100 * row['nonlinearity_error']:6.2f} % of the output range")
+    with Progress(quiet=args.quiet) as progress:
+        progress('reading the record')
+        recording = read_recording(args.data, options)
+        for note in recording.notes:
+            progress.say(f'note: {note}')
+        progress.say(f'identifying from {len(recording.time)} samples of {args.data} '
+                     f'(order {format_order(order)}) ...')
+        result = fit_recording(recording, order=order, anchor=args.anchor,
+                               periodic=args.periodic, dynamics=args.dynamics,
+                               progress=progress).result
+    for line in order_table_lines(result.order_table):
+        _progress(line)
     n, l = result.order  # noqa: E741
     model = result.model
     _progress(f'order n={n}, l={l}: nonlinearity error (37) '
@@ -89,6 +104,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
               f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; start state: '
               f"{result.start_state.get('description', 'n/a')}")
+    record_range = range_header(recording.current, recording.displacement)
+    _progress(f'{record_range} (written in the YAML header: simulate and compensate warn'
+              ' outside it, compensate clamps to it)')
     if result.findings:
         _progress(f'found: {result.findings}')
     for note in result.notes:
@@ -101,14 +119,15 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         write_params_yaml(args.output, result.full_model.to_params(), node_name=args.node_name,
                           header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
                                   f'order n={n}, l={l}; nonlinearity error (37) '
-                                  f'{100 * result.nonlinearity_error:.2f} %'))
+                                  f'{100 * result.nonlinearity_error:.2f} %\n'
+                                  f'{record_range}'))
     except OSError as err:
         msg = f'cannot write --output {args.output}: {err}'
         raise MPIError(msg) from err
     if args.json:
         try:
             with atomic_write(args.json) as f:
-                json.dump(summary, f, indent=2)
+                json.dump(_finite(summary), f, indent=2, allow_nan=False)
         except BaseException:
             if created:
                 Path(args.output).unlink(missing_ok=True)
@@ -117,6 +136,35 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     if args.json:
         _progress(f'wrote {args.json}')
     return 0
+
+
+def order_table_lines(table: list[dict[str, Any]]) -> list[str]:
+    """
+    Return the order selection's table as printed by ``identify`` (one line per order).
+
+    Parameters
+    ----------
+    table : list of dict
+        :attr:`mpi_ros.identification.IdentificationResult.order_table`.
+
+    Returns
+    -------
+    list of str
+        One line per order: its held-out errors, or ``held-out error unstable (not
+        considered)`` for a row marked ``unstable`` (an absurd held-out error, such as a
+        high order on a short record), never its absurd percentage.
+
+    """
+    lines = []
+    for row in table:
+        if row.get('unstable'):
+            lines.append(f"  n={row['n']:2d} l={row['l']:2d}  held-out error unstable (not"
+                         ' considered)')
+            continue
+        lines.append(f"  n={row['n']:2d} l={row['l']:2d}  held-out RMS error "
+                     f"{100 * row['rms_error']:6.3f} %, nonlinearity error (37) "
+                     f"{100 * row['nonlinearity_error']:6.2f} % of the output range")
+    return lines
 
 
 def _model_parameters(path: str, node_name: str | None) -> dict[str, Any]:
@@ -169,9 +217,10 @@ def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool)
 
 def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     from .extensions import extended_model_from_params
-    from .model import MPIModel
+    from .ranges import identified_range, outside, recorded_range
     from .recordings import read_csv_table, write_csv_columns
-    described = extended_model_from_params(_model_parameters(args.params, args.node_name))
+    parameters = _model_parameters(args.params, args.node_name)
+    described = extended_model_from_params(parameters)
     header, table = read_csv_table(args.input,
                                    nonfinite_hint='remove those rows or fill in the values')
     time_column, input_column = _input_column(header, args, inverse=inverse)
@@ -183,12 +232,21 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
         raise MPIError(msg)
     column = header.index(input_column)
     values = table[:, column]
-    if isinstance(described, MPIModel):
-        operator = described.inverse() if inverse else described
-        result = operator.simulate(values)
+    time = None if time_column is None else table[:, header.index(time_column)]
+    # The range identify wrote in the file's header, else the one the model's thresholds tell.
+    ranges = recorded_range(args.params) or identified_range(described)
+    if inverse:
+        limits = _limits(args, parameters, ranges.current)
+        result = _compensate(described, time, time_column, values, args, limits)
     else:
-        result = _apply_extended(described, table, header, time_column, values, args,
-                                 inverse=inverse)
+        result = _simulate(described, time, time_column, values, args)
+        if ranges.current is None:
+            _progress(f'note: {_UNKNOWN_RANGE.format(params=args.params)}: no range check')
+        else:
+            out = outside(values, *ranges.current)
+            if out.count:
+                _progress(f'warning: {out.describe("currents", ", " + _INPUT_RANGE, "A")};'
+                          ' the model extrapolates there')
     columns = {}
     if time_column is not None:
         columns[time_column] = table[:, header.index(time_column)]
@@ -200,29 +258,123 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     return 0
 
 
-def _apply_extended(model: Any, table: Any, header: list[str], time_column: str | None,
-                    values: Any, args: argparse.Namespace, *, inverse: bool) -> Any:
-    # A model with an effect (dead time, lag, creep, ...) depends on time: the input needs
-    # its time column.  The forward model is simulated; the inverse is the compensator's
-    # streaming inverse (with a dead time: Gamma only, as the node does).
+#: What simulate and compensate say of the range a model was identified on.
+_INPUT_RANGE = 'the input range the model was identified on'
+_UNKNOWN_RANGE = ('the model in {params} does not tell the range it was identified on (the '
+                  'thresholds of its superposition operator are not spaced as mpi-ros '
+                  'identify spaces them: written by hand, or l = 0)')
+
+
+def _limits(args: argparse.Namespace, parameters: dict[str, Any],
+            identified: tuple[float, float] | None) -> tuple[float, float, str] | None:
+    """Return the clamp range [A] and where it comes from, as the node would have it."""
+    ends: list[float] = []
+    sources: list[str] = []
+    for end, option, key in ((0, 'output_min', 'output.min'), (1, 'output_max', 'output.max')):
+        given = getattr(args, option)
+        if given is not None:
+            ends.append(float(given))
+            sources.append(f'--{option.replace("_", "-")}')
+        elif isinstance(parameters.get(key), (int, float)):
+            ends.append(float(parameters[key]))
+            sources.append(f'{key} of {args.params}')
+        elif identified is not None:
+            ends.append(identified[end])
+            sources.append(_INPUT_RANGE)
+        else:
+            return None
+    lo, hi = ends
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        msg = (f'the current range must be finite with its minimum below its maximum; found '
+               f'{lo:g} ({sources[0]}) and {hi:g} ({sources[1]}); pass --output-min and '
+               "--output-max with the actuator's safe range")
+        raise MPIError(msg)
+    source = sources[0] if sources[0] == sources[1] else ' and '.join(sources)
+    return lo, hi, source
+
+
+def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
+                args: argparse.Namespace, limits: tuple[float, float, str] | None) -> Any:
+    # As the compensator node: the inverse of the model, its commands clamped to the safe
+    # current range (the forward state follows the clamped command), unless --no-clamp.
+    # With an effect (time column needed) the compensator's streaming inverse (with a dead
+    # time: Gamma only, as the node does).
     import numpy as np
-    if time_column is None:
+    from .compensation import gamma_of, operating_range
+    from .model import MPIModel
+    from .ranges import outside
+    plain = isinstance(model, MPIModel)
+    if not plain:
+        _check_time_column(model, time, time_column, args)
+    if limits is None:
+        _progress(f'note: {_UNKNOWN_RANGE.format(params=args.params)}: no range check and no'
+                  ' clamping; pass --output-min and --output-max to clamp')
+    else:
+        lo, hi, source = limits
+        reach = operating_range(gamma_of(model), lo, hi)
+        out = outside(values, *reach)
+        if out.count:
+            where = (f', the range the model reaches with currents from {lo:.4g} to {hi:.4g}'
+                     f' A (from {source})')
+            _progress(f'warning: {out.describe("desired displacements", where, "m")}')
+    if limits is None or args.no_clamp:
+        if plain:
+            result = model.inverse().simulate(values)
+        else:
+            wide = 1e12 * (1.0 + float(np.max(np.abs(values))))
+            result = _streaming(model, time, values, -wide, wide)
+        if limits is not None:
+            out = outside(result, limits[0], limits[1])
+            if out.count:
+                where = f' (from {limits[2]})'
+                _progress(f'warning: {out.describe("commands", where, "A")}; not clamped'
+                          ' (--no-clamp)')
+        return result
+    lo, hi, source = limits
+    compensator = _streaming_compensator(model, time, lo, hi)
+    result = compensator.command_batch(values, None if plain else time)
+    clamped = compensator.counters['clamped']
+    if clamped:
+        _progress(f'warning: {clamped} of {len(values)} commands clamped to {lo:.4g} to '
+                  f'{hi:.4g} A (from {source}), as the compensator node clamps; --no-clamp '
+                  'writes the unclamped inverse')
+    return result
+
+
+def _streaming_compensator(model: Any, time: Any, lo: float, hi: float) -> Any:
+    import numpy as np
+    from .compensation import Compensator
+    period = 1e-3 if time is None or len(time) < 2 else float(np.median(np.diff(time)))
+    return Compensator(model, output_min=lo, output_max=hi, sample_period=period)
+
+
+def _streaming(model: Any, time: Any, values: Any, lo: float, hi: float) -> Any:
+    return _streaming_compensator(model, time, lo, hi).command_batch(values, time)
+
+
+def _check_time_column(model: Any, time: Any, time_column: str | None,
+                       args: argparse.Namespace) -> None:
+    # A model with an effect (dead time, lag, creep, ...) depends on time: the input needs
+    # its time column, increasing.
+    import numpy as np
+    if time is None:
         msg = (f'{args.params} holds a model with {model.cause} (it depends on time):'
                f' --input {args.input} needs a time column [s]; pass --time-column with its'
                ' name')
         raise MPIError(msg)
-    time = table[:, header.index(time_column)]
     if not np.all(np.diff(time) > 0.0):
         msg = (f'--input {args.input}: the time column {time_column!r} must increase strictly'
                f' for a model with {model.cause}; sort or repair it')
         raise MPIError(msg)
-    if not inverse:
-        return model.simulate(time, values)
-    from .compensation import Compensator
-    wide = 1e12 * (1.0 + float(np.max(np.abs(values))))
-    compensator = Compensator(model, output_min=-wide, output_max=wide,
-                              sample_period=float(np.median(np.diff(time))))
-    return compensator.command_batch(values, time)
+
+
+def _simulate(model: Any, time: Any, time_column: str | None, values: Any,
+              args: argparse.Namespace) -> Any:
+    from .model import MPIModel
+    if isinstance(model, MPIModel):
+        return model.simulate(values)
+    _check_time_column(model, time, time_column, args)
+    return model.simulate(time, values)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -278,6 +430,9 @@ def _parser() -> argparse.ArgumentParser:
                         'and lag and model them when they cut the held-out error clearly '
                         '(written as model.dead_time / model.rate_dependence.*); off: the '
                         'static model only')
+    p.add_argument('--quiet', action='store_true',
+                   help='no progress line on stderr (it is drawn only when stderr is a '
+                        'terminal)')
     add_data_options(p)
     p.set_defaults(func=_cmd_identify)
     for name, func, what, column in (
@@ -293,6 +448,18 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument('--node-name', default=None,
                        help='node whose parameters to use (default: compensator, or the '
                             "file's only node)")
+        if name == 'compensate':
+            p.add_argument('--output-min', type=float, default=None, metavar='A',
+                           help="lowest current command [A], as the node's output.min "
+                                '(default: output.min of PARAMS if set, else the lower end of '
+                                'the identified input range)')
+            p.add_argument('--output-max', type=float, default=None, metavar='A',
+                           help='highest current command [A], as output.max (default: '
+                                'output.max of PARAMS if set, else the upper end of the '
+                                'identified input range)')
+            p.add_argument('--no-clamp', action='store_true',
+                           help='write the unclamped inverse (commands outside the range '
+                                'are counted and warned about, not limited)')
         add_data_options(p, names=['time_column', 'input_column'], descriptions={
             'input_column': f'CSV column of the {column} (needed when the file has several '
                             'columns besides the time)'})

@@ -2,8 +2,8 @@
 """
 ``mpi-ros demo``: the whole product in one run, over DDS, with separate processes.
 
-(Somewhat over 500 lines: the two demo paths, plain and with an effect, share one process
-harness and one report; splitting them would scatter one script.)
+(The two demo paths, plain and with an effect, share one process harness here; the report
+and its plots are :mod:`mpi_ros.demo_report`.)
 
 1. Start the plant simulator (built-in magnetostrictive-like actuator, not an MPI
    model, with sensor noise) as its own process.
@@ -14,7 +14,11 @@ harness and one report; splitting them would scatter one script.)
    ``set_parameters_atomically`` service, track a smooth desired trajectory with minor
    loops, and measure the control error (38).  The uncompensated baseline is the
    compensator with ``enabled:=false`` (the best linear map).
-5. Print and save ``report.md`` and PNG plots (loops, tracking error) in the output folder.
+5. Print and save ``report.md`` and PNG plots (loops, tracking error) in the output folder
+   (:mod:`mpi_ros.demo_report`).
+
+While it works, a progress line on stderr says which phase runs, with the time since the
+start (only on a terminal; ``--quiet``: none).
 
 With ``--effect creep`` or ``--effect rate_dependence`` the plant simulator runs with that
 effect switched on (``actuator.creep_gain``, ``actuator.eddy_time_constant_s``; see
@@ -36,11 +40,9 @@ by the demo. The bag has real time stamps (the wall clock from the start of the 
 
 import argparse
 from collections.abc import Callable
-import json
 import os
 from pathlib import Path
 import random
-import sys
 import time
 from typing import Any, TYPE_CHECKING
 
@@ -48,11 +50,11 @@ import numpy as np
 
 from .cli_options import ArgumentParser
 from .errors import MPIError
+from .progress import Progress
 
 if TYPE_CHECKING:  # the nodes (and rclpy) are imported only when the demo runs
     from .extensions import EffectModel
     from .harness import NodeProcess
-    from .model import MPIModel
 
 __all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']
 
@@ -63,10 +65,6 @@ EFFECTS = ('creep', 'rate_dependence')
 _REPLY_TIMEOUT = 5.0
 #: Excitation and tracking lengths [s] when not given: (plain demo, --effect demo).
 _DURATIONS = {False: (40.0, 12.0), True: (60.0, 30.0)}
-
-
-def _progress(text: str) -> None:
-    print(text, file=sys.stderr, flush=True)
 
 
 class _DemoLoop:
@@ -113,13 +111,14 @@ class _DemoLoop:
             self.processes.remove(proc)
 
 
-def _run(args: argparse.Namespace) -> dict[str, Any]:
+def _run(args: argparse.Namespace, progress: Progress) -> dict[str, Any]:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)      # the nodes it starts inherit it
     import rclpy
 
     from .excitation import identification_excitation
     from .identification import identify
+    from .demo_report import write_report
     from .metrics import control_error
     from .harness import LoopDriver, NodeProcess
     from .recordings import BagRecorder, read_bag_signals
@@ -137,18 +136,20 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
         loop = _DemoLoop(driver, out, processes, plant_args, args)
 
         # 1-2: record the identification bag.
-        _progress(f'[demo] ROS_DOMAIN_ID={args.domain_id}, output in {out}')
+        progress.say(f'[demo] ROS_DOMAIN_ID={args.domain_id}, output in {out}')
+        progress('starting the plant simulator')
         plant = loop.start_plant()
         t, current = identification_excitation(args.duration, sample_rate=args.sample_rate,
                                                seed=args.seed, holds=False, bursts=False)
         bag = out / 'identification_bag'
-        _progress(f'[demo] recording {t.size} excitation samples into {bag} ...')
+        progress.say(f'[demo] recording {t.size} excitation samples into {bag} ...')
         driver.handshake(driver.current_pub, current[0])
         with BagRecorder(bag, overwrite=True) as recorder:
             # Real time stamps: the wall clock at the start of the recording plus the
             # excitation's own time (the samples are exchanged in lock step).
             wall_start = time.time() - float(t[0])
             for k in range(t.size):
+                progress.update(f'recording the excitation: sample {k + 1} of {t.size}')
                 s = driver.exchange(driver.current_pub, current[k])
                 recorder.write_input(wall_start + float(t[k]), float(current[k]))
                 recorder.write_output(wall_start + float(t[k]) + 1e-6, s)
@@ -160,13 +161,14 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
         models = {}
         results['identification'] = []
         for n, l in ORDERS:  # noqa: E741
-            fit = identify(data.current, data.displacement, n=n, l=l)
+            fit = identify(data.current, data.displacement, n=n, l=l,
+                           progress=_phase(progress, f'identifying n={n}, l={l}: '))
             models[(n, l)] = fit.model
             results['identification'].append({'n': n, 'l': l,
                                               'nonlinearity_error': fit.nonlinearity_error,
                                               'rms_error': fit.rms_error})
-            _progress(f'[demo] identified n={n:2d} l={l}: nonlinearity error (37) '
-                      f'{100 * fit.nonlinearity_error:5.2f} %')
+            progress.say(f'[demo] identified n={n:2d} l={l}: nonlinearity error (37) '
+                         f'{100 * fit.nonlinearity_error:5.2f} %')
         # 4: track with each compensator.
         final = models[ORDERS[-1]]
         t_track, desired, lead = _desired_trajectory(final, args)
@@ -175,18 +177,24 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
             (f'MPI n={n}, l={l}', models[(n, l)], True) for n, l in ORDERS[1:]]
         traces = {}
         for label, model, enabled in runs:
+            progress(f'{label}: starting a plant and a compensator, pushing the model')
             started_here = loop.start_compensated(
                 model.to_params(), ['-p', f'enabled:={str(enabled).lower()}'], desired_all[0])
-            measured = np.array([driver.exchange(driver.desired_pub, v) for v in desired_all])
+            measured = np.empty(desired_all.size)
+            for k, value in enumerate(desired_all):
+                progress.update(f'{label}: tracking, sample {k + 1} of {desired_all.size}')
+                measured[k] = driver.exchange(driver.desired_pub, value)
+            progress(f'{label}: stopping its processes')
             loop.stop(*started_here)
             tracked = slice(lead.size, None)
             err = control_error(desired_all[tracked], measured[tracked])
             traces[label] = measured
             results['tracking'].append({'controller': label, 'control_error': err})
-            _progress(f'[demo] {label:28s} control error (38) {100 * err:5.2f} %')
+            progress.say(f'[demo] {label:28s} control error (38) {100 * err:5.2f} %')
         results['elapsed_s'] = time.monotonic() - started
-        _report(out, data, models, t_track, desired_all[lead.size:],
-                {k: v[lead.size:] for k, v in traces.items()}, results)
+        progress('writing the report and the plots')
+        write_report(out, data, models, t_track, desired_all[lead.size:],
+                     {k: v[lead.size:] for k, v in traces.items()}, results)
         driver.destroy_node()
     finally:
         for p in processes:
@@ -195,7 +203,7 @@ def _run(args: argparse.Namespace) -> dict[str, Any]:
     return results
 
 
-def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
+def _run_effect(args: argparse.Namespace, progress: Progress) -> dict[str, Any]:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)      # the nodes it starts inherit it
     import rclpy
@@ -203,7 +211,8 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
     from .excitation import identification_excitation
     from .extensions import fit_creep, fit_rate_dependence
     from .identification import identify
-    from .metrics import control_error, nonlinearity_error
+    from .demo_report import write_effect_report
+    from .metrics import control_error
     from .harness import LoopDriver, NodeProcess
     from .recordings import BagRecorder, read_bag_signals
 
@@ -237,14 +246,17 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
                                            'p99': float(np.percentile(late, 99.0))}
 
         # Record the identification bag in real time.
-        _progress(f'[demo] ROS_DOMAIN_ID={args.domain_id}, effect {args.effect} '
-                  f'({", ".join(f"{k}={v:g}" for k, v in strength.items())}), output in {out}')
+        progress.say(f'[demo] ROS_DOMAIN_ID={args.domain_id}, effect {args.effect} '
+                     f'({", ".join(f"{k}={v:g}" for k, v in strength.items())}), output in '
+                     f'{out}')
+        progress('starting the plant simulator')
         plant = loop.start_plant()
         t, current = identification_excitation(args.duration, sample_rate=args.sample_rate,
                                                seed=args.seed, holds=True, bursts=True)
         bag = out / 'identification_bag'
-        _progress(f'[demo] recording {t.size} excitation samples in real time '
-                  f'({t[-1]:.0f} s) into {bag} ...')
+        progress.say(f'[demo] recording {t.size} excitation samples in real time '
+                     f'({t[-1]:.0f} s) into {bag} ...')
+        progress(f'recording {t.size} samples in real time ({t[-1]:.0f} s)')
         driver.handshake(driver.current_pub, current[0])
         wall_start = time.time()
         sent, measured = driver.exchange_paced(driver.current_pub, current, t,
@@ -260,19 +272,20 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
         # Identify the plain and the extended model of the same order.
         data = read_bag_signals(bag)
         results['samples'] = int(data.time.size)
-        plain = identify(data.current, data.displacement, n=n, l=l).model
+        plain = identify(data.current, data.displacement, n=n, l=l,
+                         progress=_phase(progress, f'identifying the plain n={n}, l={l}: ')).model
+        progress(f'fitting the model extended by {args.effect}')
         extended = fit(data.time, data.current, data.displacement, order=(n, l))
         params = extended.to_params()
         results['extension'] = {key: value for key, value in params.items()
                                 if key.startswith(f'model.{args.effect}.')}
         results['identification'] = [
-            {'model': 'plain', 'nonlinearity_error': nonlinearity_error(
-                plain.simulate(data.current), data.displacement)},
-            {'model': 'extended', 'nonlinearity_error': nonlinearity_error(
-                extended.simulate(data.time, data.current), data.displacement)}]
+            _model_error(name, simulated, data)
+            for name, simulated in (('plain', plain.simulate(data.current)),
+                                    ('extended', extended.simulate(data.time, data.current)))]
         for row in results['identification']:
-            _progress(f'[demo] identified {row["model"]:8s} n={n} l={l}: nonlinearity error '
-                      f'(37) {100 * row["nonlinearity_error"]:5.2f} %')
+            progress.say(f'[demo] identified {row["model"]:8s} n={n} l={l}: nonlinearity '
+                         f'error (37) {100 * row["nonlinearity_error"]:5.2f} %')
         # Track the same trajectory with each compensator, in real time.
         t_track, desired, lead = _desired_trajectory(plain, args)
         desired_all = np.concatenate([lead, desired])
@@ -281,11 +294,15 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
                 (f'extended MPI + {args.effect}', params)]
         traces = {}
         for label, model_params in runs:
+            progress(f'{label}: starting a plant and a compensator, pushing the model')
             started_here = loop.start_compensated(
                 model_params, ['-p', f'sample_period:={1.0 / args.sample_rate!r}'],
                 desired_all[0])
+            progress(f'{label}: tracking {desired_all.size} samples in real time '
+                     f'({t_all[-1]:.0f} s)')
             sent, measured = driver.exchange_paced(driver.desired_pub, desired_all, t_all,
                                                    timeout=_REPLY_TIMEOUT)
+            progress(f'{label}: stopping its processes')
             loop.stop(*started_here)
             lateness(label, sent, t_all)
             tracked = slice(lead.size, None)
@@ -295,10 +312,11 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
             traces[label] = measured[tracked]
             results['tracking'].append({'controller': label, 'control_error': err,
                                         'rms_error': rms})
-            _progress(f'[demo] {label:30s} control error (38) {100 * err:5.2f} % '
-                      f'(RMS {100 * rms:.2f} %)')
+            progress.say(f'[demo] {label:30s} control error (38) {100 * err:5.2f} % '
+                         f'(RMS {100 * rms:.2f} %)')
         results['elapsed_s'] = time.monotonic() - started
-        _report_effect(out, t_track, desired_all[lead.size:], traces, results)
+        progress('writing the report and the plot')
+        write_effect_report(out, t_track, desired_all[lead.size:], traces, results)
         driver.destroy_node()
     finally:
         for p in processes:
@@ -307,45 +325,13 @@ def _run_effect(args: argparse.Namespace) -> dict[str, Any]:
     return results
 
 
-def _report_effect(out: Path, t: np.ndarray, desired: np.ndarray,
-                   traces: dict[str, np.ndarray], results: dict[str, Any]) -> None:
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    um = 1e6
-    fig, ax = plt.subplots(figsize=(11, 3.6))
-    for label, measured in traces.items():
-        ax.plot(t, (measured - desired) * um, lw=0.7, label=label)
-    ax.set(xlabel='time [s]', ylabel='tracking error [µm]',
-           title=f'Tracking error, plant with {results["effect"]}')
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / 'tracking_error.png', dpi=110)
-    plt.close(fig)
-    strength = ', '.join(f'`{k}:={v:g}`' for k, v in results['plant'].items())
-    late = max(v['max'] for v in results['lateness_s'].values())
-    lines = ['# mpi_ros demo: extended compensator', '',
-             f'Plant: built-in magnetostrictive-like actuator with {results["effect"]} '
-             f'({strength}) and sensor noise; {results["samples"]} identification samples '
-             f'sent in real time at {results["sample_rate"]:g} Hz (latest sample '
-             f'{1e3 * late:.1f} ms behind schedule); ROS_DOMAIN_ID {results["domain_id"]}; '
-             f'{results["elapsed_s"]:.0f} s in all.', '',
-             '| model | nonlinearity error (37), identification data |', '|---|---|']
-    lines += [f"| {r['model']} | {100 * r['nonlinearity_error']:.2f} % |"
-              for r in results['identification']]
-    lines += ['', 'Fitted extension: ' + ', '.join(
-        f'`{k}` = {np.round(np.asarray(v, dtype=float), 6).tolist()}'
-        for k, v in results['extension'].items()), '',
-        '| controller | control error (38) | RMS |', '|---|---|---|']
-    lines += [f"| {r['controller']} | {100 * r['control_error']:.2f} % "
-              f"| {100 * r['rms_error']:.2f} % |" for r in results['tracking']]
-    lines += ['', '(RMS: root-mean-square tracking error over max|s_c|, as (38) divides.)',
-              '', '![tracking error](tracking_error.png)', '']
-    (out / 'report.md').write_text('\n'.join(lines))
-    (out / 'results.json').write_text(json.dumps(results, indent=2))
-    arrays: dict[str, Any] = {'time': t, 'desired': desired,
-                              **{f'measured_{k}': v for k, v in enumerate(traces.values())}}
-    np.savez(out / 'tracking.npz', **arrays)
+def _model_error(name: str, simulated: np.ndarray, data: Any) -> dict[str, Any]:
+    # (37) over the whole record, over the displacement range (as identify reports it), and
+    # where the largest error is (at the start: the model starts in another state).
+    from .metrics import range_error
+    error = np.abs(simulated - data.displacement)
+    return {'model': name, 'nonlinearity_error': range_error(simulated, data.displacement),
+            'largest_error_at_s': float(data.time[int(np.argmax(error))] - data.time[0])}
 
 
 def _desired_trajectory(model: Any, args: argparse.Namespace) -> tuple[
@@ -374,54 +360,6 @@ def _desired_trajectory(model: Any, args: argparse.Namespace) -> tuple[
     t_track, desired = tracking_trajectory(args.track_duration, sample_rate=args.sample_rate,
                                            low=lo + 0.1 * span, high=hi - 0.1 * span)
     return t_track, desired, np.linspace(0.0, desired[0], int(args.sample_rate))
-
-
-def _report(out: Path, data: Any, models: dict[tuple[int, int], 'MPIModel'], t: np.ndarray,
-            desired: np.ndarray, traces: dict[str, np.ndarray],
-            results: dict[str, Any]) -> None:
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    um = 1e6
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    axes[0].plot(data.current, data.displacement * um, lw=0.6, color='0.5', label='measured')
-    for (n, l), style in zip(ORDERS[::3], ('C3--', 'C0-')):  # noqa: E741
-        axes[0].plot(data.current, models[(n, l)].simulate(data.current) * um, style, lw=0.7,
-                     label=f'MPI n={n}, l={l}')
-    axes[0].set(xlabel='current [A]', ylabel='displacement [µm]',
-                title='Identification data and models')
-    axes[0].legend(fontsize=8)
-    for label, measured in traces.items():
-        if label.startswith('linear') or label.endswith('l=7'):
-            axes[1].plot(desired * um, measured * um, lw=0.7, label=label)
-    axes[1].plot(desired * um, desired * um, 'k:', lw=0.8, label='ideal')
-    axes[1].set(xlabel='desired displacement [µm]', ylabel='measured displacement [µm]',
-                title='Compensated characteristic (cf. Fig. 12)')
-    axes[1].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / 'loops.png', dpi=110)
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(11, 3.6))
-    for label, measured in traces.items():
-        ax.plot(t, (measured - desired) * um, lw=0.7, label=label)
-    ax.set(xlabel='time [s]', ylabel='tracking error [µm]', title='Tracking error')
-    ax.legend(fontsize=8, ncol=2)
-    fig.tight_layout()
-    fig.savefig(out / 'tracking_error.png', dpi=110)
-    plt.close(fig)
-    lines = ['# mpi_ros demo', '',
-             f'Plant: built-in magnetostrictive-like actuator (Preisach + static map, not an '
-             f'MPI model) with sensor noise; {results["samples"]} identification samples; '
-             f'ROS_DOMAIN_ID {results["domain_id"]}; {results["elapsed_s"]:.0f} s in all.', '',
-             '| n | l | nonlinearity error (37) |', '|---|---|---|']
-    lines += [f"| {r['n']} | {r['l']} | {100 * r['nonlinearity_error']:.2f} % |"
-              for r in results['identification']]
-    lines += ['', '| controller | control error (38) |', '|---|---|']
-    lines += [f"| {r['controller']} | {100 * r['control_error']:.2f} % |"
-              for r in results['tracking']]
-    lines += ['', '![loops](loops.png)', '', '![tracking error](tracking_error.png)', '']
-    (out / 'report.md').write_text('\n'.join(lines))
-    (out / 'results.json').write_text(json.dumps(results, indent=2))
 
 
 def demo_domain_id(given: int | None = None) -> int:
@@ -508,22 +446,35 @@ def demo_main(argv: list[str]) -> int:
     parser.add_argument('--seed', type=int, default=1)
     parser.add_argument('--goal', type=float, default=0.03,
                         help='compensated control error (38) to reach (fraction)')
+    parser.add_argument('--quiet', action='store_true',
+                        help='no progress line on stderr (it is drawn only when stderr is a '
+                        'terminal)')
     args = parser.parse_args(argv)
     args.domain_id = demo_domain_id(args.domain_id)
     duration, track_duration = _DURATIONS[args.effect is not None]
     args.duration = duration if args.duration is None else args.duration
     args.track_duration = track_duration if args.track_duration is None else args.track_duration
-    if args.effect is not None:
-        results = _run_effect(args)
-        plain, extended = (r['control_error'] for r in results['tracking'])
-        _progress(f'[demo] plant with {args.effect}: control error (38) plain MPI '
-                  f'{100 * plain:.2f} %, extended {100 * extended:.2f} %; report in '
-                  f'{args.output}/report.md ({results["elapsed_s"]:.0f} s)')
-        return 0 if extended < plain else 1
-    results = _run(args)
-    best = results['tracking'][-1]['control_error']
-    linear = results['tracking'][0]['control_error']
-    _progress(f'[demo] control error (38): linear map {100 * linear:.2f} %, compensated '
-              f'(n=14, l=7) {100 * best:.2f} % (goal <= {100 * args.goal:.1f} %); report in '
-              f'{args.output}/report.md ({results["elapsed_s"]:.0f} s)')
-    return 0 if best <= args.goal else 1
+    with Progress(quiet=args.quiet, prefix='[demo] ') as progress:
+        if args.effect is not None:
+            results = _run_effect(args, progress)
+            plain, extended = (r['control_error'] for r in results['tracking'])
+            progress.clear()
+            progress.say(f'[demo] plant with {args.effect}: control error (38) plain MPI '
+                         f'{100 * plain:.2f} %, extended {100 * extended:.2f} %; report in '
+                         f'{args.output}/report.md ({results["elapsed_s"]:.0f} s)')
+            return 0 if extended < plain else 1
+        results = _run(args, progress)
+        best = results['tracking'][-1]['control_error']
+        linear = results['tracking'][0]['control_error']
+        progress.clear()
+        progress.say(f'[demo] control error (38): linear map {100 * linear:.2f} %, compensated '
+                     f'(n=14, l=7) {100 * best:.2f} % (goal <= {100 * args.goal:.1f} %); report '
+                     f'in {args.output}/report.md ({results["elapsed_s"]:.0f} s)')
+        return 0 if best <= args.goal else 1
+
+
+def _phase(progress: Progress, prefix: str) -> Callable[[str], None]:
+    # A progress callback for a library function: its lines under the demo's phase.
+    def show(text: str) -> None:
+        progress(prefix + text)
+    return show

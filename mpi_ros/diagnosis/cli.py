@@ -26,6 +26,7 @@ from .signatures import diagnostic_excitation
 from ..cli_options import (
     add_data_options, add_order_option, ArgumentParser, data_options, order_option)
 from ..errors import DataError, MPIError
+from ..progress import Progress
 from ..recordings import read_recording, Recording, write_csv_columns
 
 __all__ = ['diagnose_main', 'build_parser']
@@ -56,6 +57,9 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p.add_argument('--excitation-amplitude', type=float, default=0.8,
                    help='half-width of --excitation [A] (default 0.8)')
     p.add_argument('--seed', type=int, default=0, help='seed of --excitation (default 0)')
+    p.add_argument('--quiet', action='store_true',
+                   help='no progress line on stderr (it is drawn only when stderr is a '
+                        'terminal)')
     add_data_options(p)
     return p
 
@@ -106,12 +110,17 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
 
     """
     parser = build_parser()
+    progress = Progress(quiet=True)
 
     def say(line: str) -> None:
-        print(line, file=sys.stderr, flush=True)
+        # Each message on its own line; the progress line below it shows the phase running
+        # and the time since the start (a terminal only).
+        progress.say(line)
+        progress(f'{line} ...')
 
     try:
         args = parser.parse_args(argv)
+        progress = Progress(quiet=args.quiet)
         order = order_option(args)
         if args.data is None and args.excitation is None:
             parser.error('give DATA to diagnose, or --excitation OUT.csv')
@@ -142,7 +151,10 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
                 write_extended_params(report, args.params_out)
                 say(f'wrote {args.params_out}')
     except (MPIError, OSError) as err:
+        progress.clear()
         print(f'error: {err}', file=sys.stderr)
         return 1
+    finally:
+        progress.close()
     print(report.cause)
     return 0

@@ -64,6 +64,7 @@ Real records (documented in docs/design.md, "Identification on real records"):
   non-invertible model.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 import math
 import time as time_module
@@ -229,8 +230,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
              l: int | None = None, order: str | tuple[int, int] | None = None,  # noqa: E741
              epsilon: float = 1e-6, holdout: float = 0.3,
              anchor: str = 'operating_point', periodic: bool = False,
-             time: npt.ArrayLike | None = None,
-             dynamics: str = 'auto') -> IdentificationResult:
+             time: npt.ArrayLike | None = None, dynamics: str = 'auto',
+             progress: Callable[[str], None] | None = None) -> IdentificationResult:
     """
     Identify a modified Prandtl-Ishlinskii model from measured input/output data.
 
@@ -269,6 +270,9 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         ``'auto'``: with a time base, estimate the input's dead time and lag and model them
         when they cut the held-out error clearly; ``'off'``: the static model only (the
         diagnosis' baseline).
+    progress : callable, optional
+        Called with a line of text at each phase, each trial fit of the dynamics grid and
+        each order tried (for a progress display such as :class:`mpi_ros.progress.Progress`).
 
     Returns
     -------
@@ -324,6 +328,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     if periodic:
         _check_one_period(x, order)
     _check_levels(x, y)
+    say = progress if progress is not None else _silent
+    say(f'analysing the record ({x.size} samples)')
     record = prepare_record(x, y, time=t, anchor=anchor, epsilon=epsilon)
     keep = record.keep
     _, correlation = output_sign(x[keep], y[keep])
@@ -344,20 +350,24 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         # On a window of a long record: trials cost the window, not the record.
         trial = record.window(_DYNAMICS_WINDOW)
         held = held_out_rows(trial.current.size, holdout, trial.keep)
+        say('dynamics: start state of the trial window')
         base = fit_record(trial, *reference, held=held, choose=choose)
         estimate = estimate_dynamics(trial, *reference, held, base.segments,
-                                     burn_in=base.burn_in)
+                                     burn_in=base.burn_in, progress=progress)
     found = estimate.modelled
     table: list[dict[str, Any]] = []
     if auto:
         trial = record.window(_ORDER_WINDOW)
         held = held_out_rows(trial.current.size, holdout, trial.keep)
+        say('order selection: start state of the trial window')
         base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose)
         (n, l), table = select_record_order(trial, held, found, base.segments,
-                                            burn_in=base.burn_in)
+                                            burn_in=base.burn_in, progress=progress)
     _check_excitation(x, y, n, l, anchor=anchor)
+    say(f'fitting n={n}, l={l} on the whole record')
     fit = fit_record(record, n, l, dynamics=found, choose=choose)
     notes.extend(fit.notes)
+    say('judging the fit against the straight line')
     sim = fit.simulate()                 # each segment from its start state
     fitted = fit.fitted if fit.fitted is not None else keep
     rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
@@ -394,6 +404,10 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
         findings=findings,
         excluded=int(np.count_nonzero(~keep)), notes=notes)
+
+
+def _silent(text: str) -> None:
+    pass
 
 
 def _check_time(time: npt.ArrayLike | None, size: int) -> FloatArray | None:

@@ -22,6 +22,7 @@ Steps (documented in docs/design.md, "Identification on real records"):
    the best straight line on the same samples; never a model worse than the line.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 import math
 from typing import Any
@@ -907,7 +908,8 @@ def held_out_rows(size: int, holdout: float, keep: npt.NDArray[np.bool_],
 
 def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
                       held: npt.NDArray[np.bool_], starts: list[Segment],
-                      burn_in: int = 0) -> 'DynamicsEstimate':
+                      burn_in: int = 0, *,
+                      progress: Callable[[str], None] | None = None) -> 'DynamicsEstimate':
     """
     Estimate the input's dead time and first-order lag: a grid, one QP each, held-out.
 
@@ -933,6 +935,8 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
         Start states (from the static fit).
     burn_in : int
         The static fit's burn-in (every trial is scored on the same rows).
+    progress : callable, optional
+        Called with a line of text before each trial fit (a progress display).
 
     Returns
     -------
@@ -952,6 +956,9 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
                 0.05 * float(t[-1] - t[0]))
 
     def score(dyn: InputDynamics) -> float:
+        if progress is not None:
+            progress(f'dynamics: trial fit {len(trials) + 1}, '
+                     f'{dyn.describe() if dyn.present else "static"}')
         try:
             fit = fit_record(record, n, l, dynamics=dyn, held=held, starts=starts,
                              choose=False, burn_in=burn_in)

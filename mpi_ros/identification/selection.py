@@ -5,6 +5,7 @@ Order selection.
 Raise (n, l) until the held-out error saturates.
 """
 
+from collections.abc import Callable
 import math
 from typing import Any
 
@@ -89,7 +90,8 @@ def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
                         dynamics: InputDynamics, starts: list[Segment], *,
                         orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
                         tolerance: float = 0.02, patience: int = 3,
-                        absolute_tolerance: float = 1e-3, burn_in: int = 0) -> tuple[
+                        absolute_tolerance: float = 1e-3, burn_in: int = 0,
+                        progress: Callable[[str], None] | None = None) -> tuple[
                             tuple[int, int], list[dict[str, Any]]]:
     """
     Choose (n, l) as in the paper: raise the order until the held-out error saturates.
@@ -124,6 +126,8 @@ def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
         for the stop.
     burn_in : int
         Samples at the start left out of every fit (the reference fit's burn-in).
+    progress : callable, optional
+        Called with a line of text before each order is fitted (a progress display).
 
     Returns
     -------
@@ -139,9 +143,11 @@ def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
     table: list[dict[str, Any]] = []
     best = math.inf
     saturated = 0
-    for n, l in orders:  # noqa: E741
+    for i, (n, l) in enumerate(orders):  # noqa: E741
         if train < 10 * (n + 2 * l + 2) and table:
             break
+        if progress is not None:
+            progress(f'order selection: n={n}, l={l} ({i + 1} of at most {len(orders)})')
         try:
             fit = fit_record(record, n, l, dynamics=dynamics, held=held, starts=starts,
                              choose=False, burn_in=burn_in)

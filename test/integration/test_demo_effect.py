@@ -39,6 +39,9 @@ def test_extended_compensator_beats_plain_on_plant_with_rate_dependence(ros_env,
     assert extended < plain, (plain, extended, proc.stderr[-2000:])
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (out / 'report.md').is_file() and (out / 'tracking_error.png').is_file()
+    # stderr is not a terminal here: the messages, and no progress line.
+    assert '[demo] identified' in proc.stderr
+    assert '\r' not in proc.stderr and '\x1b' not in proc.stderr
     # The bag has real time stamps (wall clock), not times from 1970.
     metadata = yaml.safe_load((out / 'identification_bag' / 'metadata.yaml').read_text())
     info = metadata['rosbag2_bagfile_information']

@@ -1,0 +1,267 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The range a model was identified on, and the samples of a signal outside a range.
+
+``mpi-ros simulate`` and ``mpi-ros compensate`` warn when they are asked for values outside
+the range the model knows (the model extrapolates there), and ``compensate`` clamps its
+commands as the compensator node does.
+
+Where the range comes from:
+
+- **The parameter file's header** (:func:`recorded_range`): ``mpi-ros identify`` writes the
+  record's current and displacement ranges into the YAML's header comment (a ROS parameter
+  file holds only node parameters; the comment is what ROS ignores), as
+  ``# identified on current 0 to 1.8 A, displacement 6.3e-06 to 4.36e-05 m``.  Exact.
+- **The model itself**, when the file has no such line (written by an older ``identify``,
+  by ``diagnose --params-out``, or by hand): :func:`identified_range`, below.
+
+What a model knows of its identification record (:func:`identified_range`):
+
+- **Displacement.** :func:`mpi_ros.identification.identify` places the thresholds of the
+  inverse superposition operator S' over the record's output range, (29)-(31): the largest
+  of ``l`` positive thresholds is ``(l - 1/2)/l`` of the output's extent above the operating
+  point ``y0`` (and the same below), so the output range follows from them exactly.
+- **Current.** The plays' thresholds give the input's extent, but the operating point
+  ``x0`` is shifted by the QP's constant term, so not where it lies.  The current range is
+  therefore taken as the currents at which the model's major loop reaches the two ends of
+  its displacement range: after a descent to ``a`` every play is at ``a - x0 + r_i``, after
+  an ascent to ``b`` at ``b - x0 - r_i``, so (with ``W = sum w_i`` and S' the inverse of S)
+  ``a = x0 + (S'[v_lo] - sum w_i r_i) / W`` and ``b = x0 + (S'[v_hi] + sum w_i r_i) / W``.
+  Any history inside ``[a, b]`` reaches the displacement range's ends within ``[a, b]``, so
+  clamping commands to it never clips a desired value inside the displacement range.  On
+  records of the built-in actuator this is the recorded current range to about 1 % of its
+  span at orders (8, 4) and up; an output that overshoots (ringing after steps) widens it,
+  since the displacement range includes the overshoot (up to 90 % of the span above the
+  recorded current on synthetic records with ringing): the header's range is preferred.
+- A model whose S' thresholds are not spaced as (29)-(31) space them (the ``k`` thresholds
+  of a branch at 1, 3, 5, ... times the first: a model written by hand, or ``l = 0``) does
+  not tell its range: None.
+"""
+
+from dataclasses import dataclass
+import os
+from pathlib import Path
+import re
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = ['IdentifiedRange', 'Outside', 'identified_range', 'outside', 'range_header',
+           'recorded_range']
+
+#: The header line :func:`range_header` writes and :func:`recorded_range` reads.
+_NUMBER = r'([-+0-9.eE]+|nan|inf)'
+_HEADER = re.compile(rf'^#\s*identified on current {_NUMBER} to {_NUMBER} A, displacement '
+                     rf'{_NUMBER} to {_NUMBER} m\s*$')
+
+
+@dataclass(frozen=True)
+class IdentifiedRange:
+    """
+    The current and displacement ranges a model was identified on (None: unknown).
+
+    Attributes
+    ----------
+    current : (float, float) or None
+        Lowest and highest current [A].
+    displacement : (float, float) or None
+        Lowest and highest displacement [m].
+
+    """
+
+    current: tuple[float, float] | None = None
+    displacement: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Outside:
+    """
+    The samples of a signal outside a range.
+
+    Attributes
+    ----------
+    count : int
+        Finite samples below or above the range.
+    total : int
+        All samples.
+    below, above : float
+        Largest distance below the lower end and above the upper end (0 if none).
+    low, high : float
+        The range.
+
+    """
+
+    count: int
+    total: int
+    below: float
+    above: float
+    low: float
+    high: float
+
+    def describe(self, what: str, where: str, unit: str, scale: float = 1.0) -> str:
+        """
+        Say how many samples lie outside the range and by how much.
+
+        Parameters
+        ----------
+        what : str
+            The samples, plural (``'desired displacements'``).
+        where : str
+            The range in words, written right after it (``', the input range the model was
+            identified on'``).
+        unit : str
+            Unit of the numbers after multiplying by ``scale`` (``'A'``, ``'µm'``).
+        scale : float
+            Factor from the signal's unit to ``unit``.
+
+        Returns
+        -------
+        str
+            E.g. ``'120 of 5000 currents (2.4 %) lie outside 0.19 to 3.5 A, the input range
+            the model was identified on: below it by up to 0.2 A, above it by up to
+            1.06 A'``.
+
+        """
+        share = 100.0 * self.count / self.total if self.total else 0.0
+        sides = []
+        if self.below > 0.0:
+            sides.append(f'below it by up to {self.below * scale:.3g} {unit}')
+        if self.above > 0.0:
+            sides.append(f'above it by up to {self.above * scale:.3g} {unit}')
+        return (f'{self.count} of {self.total} {what} ({share:.3g} %) lie outside '
+                f'{self.low * scale:.4g} to {self.high * scale:.4g} {unit}{where}: '
+                f'{", ".join(sides)}')
+
+
+def identified_range(model: Any) -> IdentifiedRange:
+    """
+    Return the current and displacement ranges a model's thresholds say it was fitted on.
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        A forward model (an extended model's Gamma is used).
+
+    Returns
+    -------
+    IdentifiedRange
+        Both ranges, or None for both when the thresholds of S' are not spaced as
+        (29)-(31) space them (a model written by hand, or ``l = 0``), or give no proper
+        range (see the module docstring).
+
+    """
+    from .compensation import gamma_of
+    gamma = gamma_of(model)
+    s_inv = gamma.inverse().superposition
+    r = np.asarray(s_inv.thresholds, dtype=np.float64)
+    positive, negative = r[r > 0.0], -r[r < 0.0][::-1]
+    if not (positive.size or negative.size) or not all(
+            _spaced_as_identified(branch) for branch in (positive, negative)):
+        return IdentifiedRange()
+    # (30)-(31): the k thresholds of a branch end at (k - 1/2)/k of its extent.
+    v_hi = float(positive[-1]) * positive.size / (positive.size - 0.5) if positive.size else 0.0
+    v_lo = -float(negative[-1]) * negative.size / (negative.size - 0.5) if negative.size else 0.0
+    h = gamma.hysteresis
+    w = np.asarray(h.weights, dtype=np.float64)
+    total, spread = float(np.sum(w)), float(np.sum(w * np.asarray(h.thresholds)))
+    h_lo, h_hi = (float(v) for v in s_inv.apply(np.array([v_lo, v_hi])))
+    a = gamma.input_offset + (h_lo - spread) / total
+    b = gamma.input_offset + (h_hi + spread) / total
+    ends = sorted(gamma.output_offset + gamma.output_sign * v for v in (v_lo, v_hi))
+    if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
+        return IdentifiedRange()
+    return IdentifiedRange((float(a), float(b)), (float(ends[0]), float(ends[1])))
+
+
+def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike) -> str:
+    """
+    Return the header line (without ``#``) that records a record's ranges in a YAML.
+
+    Parameters
+    ----------
+    current : array_like of float, shape (N,)
+        The record's current [A].
+    displacement : array_like of float, shape (N,)
+        The record's displacement [m].
+
+    Returns
+    -------
+    str
+        ``identified on current LO to HI A, displacement LO to HI m`` (the shortest digits
+        that read back as the same floats).
+
+    """
+    x = np.asarray(current, dtype=np.float64)
+    y = np.asarray(displacement, dtype=np.float64)
+    ends = [float(np.min(x)), float(np.max(x)), float(np.min(y)), float(np.max(y))]
+    return (f'identified on current {ends[0]!r} to {ends[1]!r} A, displacement {ends[2]!r} to '
+            f'{ends[3]!r} m')
+
+
+def recorded_range(path: 'str | os.PathLike[str]') -> IdentifiedRange | None:
+    """
+    Return the ranges ``identify`` recorded in a parameter file's header, or None.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The parameter YAML.
+
+    Returns
+    -------
+    IdentifiedRange or None
+        The ranges of the line :func:`range_header` wrote among the file's leading comment
+        lines; None when there is none (or it does not give two proper ranges).
+
+    """
+    try:
+        with Path(path).open(encoding='utf-8') as f:
+            for line in f:
+                if not line.startswith('#'):
+                    break
+                match = _HEADER.match(line.strip())
+                if match:
+                    lo_x, hi_x, lo_y, hi_y = (float(v) for v in match.groups())
+                    if all(np.isfinite([lo_x, hi_x, lo_y, hi_y])) and lo_x < hi_x and \
+                            lo_y < hi_y:
+                        return IdentifiedRange((lo_x, hi_x), (lo_y, hi_y))
+                    return None
+    except (OSError, UnicodeDecodeError):
+        return None
+    return None
+
+
+def outside(values: npt.ArrayLike, low: float, high: float) -> Outside:
+    """
+    Count the samples outside ``[low, high]`` and how far they go.
+
+    Parameters
+    ----------
+    values : array_like of float, shape (N,)
+        The signal (non-finite samples are not counted).
+    low, high : float
+        The range.
+
+    Returns
+    -------
+    Outside
+        The count and the largest distances below and above.
+
+    """
+    x = np.asarray(values, dtype=np.float64).reshape(-1)
+    finite = x[np.isfinite(x)]
+    under = low - finite[finite < low]
+    over = finite[finite > high] - high
+    return Outside(int(under.size + over.size), int(x.size),
+                   float(np.max(under)) if under.size else 0.0,
+                   float(np.max(over)) if over.size else 0.0, float(low), float(high))
+
+
+def _spaced_as_identified(branch: npt.NDArray[np.float64]) -> bool:
+    # (30)-(31): the k thresholds of a branch, ascending, are (i - 1/2)/k of its extent,
+    # i.e. 1, 3, 5, ... times the first (an empty branch: the output never went there).
+    if not branch.size:
+        return True
+    odd = 2.0 * np.arange(branch.size) + 1.0
+    return bool(np.allclose(branch, odd * branch[0], rtol=1e-6, atol=0.0))
