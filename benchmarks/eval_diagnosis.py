@@ -1,13 +1,14 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """
-Diagnosis acceptance of issue 9: a sensor zeroed in operation, a validation zero of its own.
+Diagnosis sweep (issues 9 and 18): a sensor zeroed in operation, a validation zero of its own.
 
 The built-in actuator reads 0 m at the lowest current of its range (zeroed after the current
 went from rest to 1.8 A and down to 0.2 A), and the validation record, a separate experiment,
 reads +7 um more (its own sensor zero).  For each cause (and noise only) and three seeds the
-hidden effect is switched on with a seeded, realistic strength, ``diagnose`` runs on a 60 s
-identification-excitation training record and a diagnostic validation record, and the
-verdict, the gain, the re-estimated validation offset and every candidate's gain are printed.
+hidden effect (or creep and an eddy-current lag together) is switched on with a seeded,
+realistic strength, ``diagnose`` runs on a 60 s identification-excitation training record and
+a diagnostic validation record, and the verdict, the gain (each effect's own for two), whether
+the verdict is tied, the re-estimated validation offset and every candidate's gain are printed.
 
 Run: ``python benchmarks/eval_diagnosis.py [--seeds 1 2 3] [--offset 7e-6] [--at-rest]``
 (``--at-rest --offset 0``: the scenario of test_diagnosis.py's original test).
@@ -26,7 +27,8 @@ from mpi_ros.excitation import identification_excitation
 from mpi_ros.recordings import Recording
 import numpy as np
 
-CAUSES = ('none', 'creep', 'rate_dependence', 'thermal_drift', 'dead_time')
+CAUSES = ('none', 'creep', 'rate_dependence', 'thermal_drift', 'dead_time',
+          'creep + rate_dependence')
 EXCITATION = {'sample_rate': 1000.0, 'burst_frequency': 40.0, 'hold_duration': 5.0}
 DURATION = 60.0
 NOISE = 2e-8          # [m], 0.05 % of the 40 um stroke
@@ -35,6 +37,11 @@ ZERO_PEAK, ZERO_CURRENT = 1.8, 0.2     # [A] where the sensor was zeroed (issue 
 
 def strength(cause, rng):
     """Return the seeded effect strength of a cause (the ranges of test_diagnosis)."""
+    if ' + ' in cause:
+        values = {}
+        for part in cause.split(' + '):
+            values.update(strength(part, rng))
+        return values
     if cause == 'creep':
         return {'creep_gain': rng.uniform(0.04, 0.08)}
     if cause == 'rate_dependence':
@@ -85,9 +92,9 @@ def main(argv=None):
     args = p.parse_args(argv)
     print(f'# {platform.node()} {platform.processor() or platform.machine()},'
           f' {os.cpu_count()} CPUs, Python {sys.version.split()[0]}')
-    print('| truth | seed | verdict | gain | baseline order | baseline RMS | offset [um] |'
-          ' candidates (gain, z, signature) | s |')
-    print('|---|---|---|---|---|---|---|---|---|')
+    print('| truth | seed | verdict | gain | each effect | tie | baseline order | baseline RMS |'
+          ' offset [um] | candidates (gain, z, signature) | s |')
+    print('|---|---|---|---|---|---|---|---|---|---|---|')
     failures = 0
     for cause in args.causes:
         for seed in args.seeds:
@@ -99,8 +106,13 @@ def main(argv=None):
             failures += not ok
             cands = '; '.join(f'{c["cause"]} {c["gain"]:+.2f} z{c["z"]:.1f}'
                               f' {c["signature"][:4]}' for c in r.candidates)
+            chosen = next((c for c in r.candidates if c['cause'] == r.cause), {})
+            each = ', '.join(f'{name} {gain:+.2f}'
+                             for name, gain in chosen.get('part_gains', {}).items())
+            tie = (f'tied with {", ".join(r.decision["tied_with"])}'
+                   if r.decision.get('ambiguous') else 'no')
             print(f'| {cause} | {seed} | {r.cause}{"" if ok else " (FAIL)"} | {r.gain:.2f} |'
-                  f' {tuple(r.baseline["order"])} | {100 * r.baseline["rms_error"]:.2f} % |'
+                  f' {each or "-"} | {tie} | {tuple(r.baseline["order"])} | {100 * r.baseline["rms_error"]:.2f} % |'
                   f' {1e6 * r.baseline["validation_output_offset"]:+.2f} | {cands} |'
                   f' {elapsed:.0f} |', flush=True)
     print(f'# {failures} failure(s)')

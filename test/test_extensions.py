@@ -4,17 +4,17 @@
 import warnings
 
 from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.compensation import Compensator, FeedforwardCompensator
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import DataError, ModelError, MPIWarning
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
-from mpi_ros.extensions import compensator_from_params, CreepModel, DeadTimeModel, \
-    extended_model_from_params, ExtendedCompensator, fit_creep, fit_dead_time, \
+from mpi_ros.extensions import compensator_from_params, CompositeModel, CreepModel, \
+    DeadTimeModel, EFFECTS, extended_model_from_params, fit_composite, ExtendedCompensator, fit_creep, fit_dead_time, \
     fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
 from mpi_ros.extensions._signals import delay, first_order_lag, lag_bank, \
     lag_feedback_inverse
 from mpi_ros.identification import identify
-from mpi_ros.metrics import control_error
+from mpi_ros.metrics import control_error, rms_range_error
 from mpi_ros.params import OPERATING_POINT_KEYS
 import numpy as np
 import pytest
@@ -89,8 +89,50 @@ def test_missing_key_and_two_extensions_are_rejected():
     del params['model.creep.weights']
     with pytest.raises(ModelError, match=r'model\.creep\.weights is missing'):
         extended_model_from_params(params)
+    thermal = _models(np.random.default_rng(1))[2]
     with pytest.raises(ModelError, match='keys of several model extensions'):
-        extended_model_from_params({**creep.to_params(), **rate.to_params()})
+        extended_model_from_params({**creep.to_params(), **thermal.to_params()})
+
+
+@pytest.mark.parametrize('seed', range(3))
+def test_composite_model_chains_its_effects_and_inverts_exactly(seed):
+    # Creep behind an input lag, and a dead time before both: the parameter form of several
+    # effects builds the composite; it simulates the chain; its compensator (Gamma^-1, the
+    # creep's inverse, the lead filter; the dead time left out) reproduces the current.
+    rng = np.random.default_rng(seed)
+    t, x = _signal(rng)
+    creep, rate, _, dead = _models(np.random.default_rng(seed))
+    both = extended_model_from_params({**creep.to_params(), **rate.to_params()})
+    assert isinstance(both, CompositeModel) and both.cause == 'creep + rate_dependence'
+    assert both.causes == ('rate_dependence', 'creep')
+    np.testing.assert_allclose(both.simulate(t, x),
+                               creep.simulate(t, first_order_lag(t, x, 0.004)), atol=1e-15)
+    again = extended_model_from_params(both.to_params())
+    np.testing.assert_array_equal(again.simulate(t, x), both.simulate(t, x))
+    comp = Compensator(both, output_min=-10.0, output_max=10.0)
+    commands = [comp.command(s, time=tk) for s, tk in zip(both.simulate(t, x), t)]
+    np.testing.assert_allclose(commands, x, atol=EXACT, rtol=0.0)
+    three = extended_model_from_params({**both.to_params(), **dead.to_params()})
+    assert three.causes == ('rate_dependence', 'dead_time', 'creep')
+    assert three.not_inverted == ('dead_time',)
+    np.testing.assert_allclose(
+        three.simulate(t, x),
+        creep.simulate(t, delay(t, first_order_lag(t, x, 0.004), 0.003)), atol=1e-15)
+
+
+def test_composite_fit_finds_both_effects():
+    # A plant with creep and an eddy-current lag: the composite fit finds the lag and
+    # fits the creep on the lagged current; it beats each effect alone on its record.
+    cfg = ActuatorConfig(creep_gain=0.06, eddy_time_constant_s=0.004, noise_std_m=4e-8)
+    t, x = identification_excitation(40.0, sample_rate=1000.0, seed=3)
+    y = MagnetostrictiveActuator(cfg, seed=3).simulate(t, x)
+    both = fit_composite(t, x, y, ['creep', 'rate_dependence'], order=(10, 5))
+    assert both.inputs[0].time_constant == pytest.approx(0.004, rel=0.3)
+    keep = slice(5000, None)
+    err = rms_range_error(both.simulate(t, x)[keep], y[keep])
+    for name in ('creep', 'rate_dependence'):
+        alone = EFFECTS[name].fit(t, x, y, order=(10, 5))
+        assert err < 0.8 * rms_range_error(alone.simulate(t, x)[keep], y[keep])
 
 
 @pytest.mark.parametrize('seed', range(3))

@@ -83,9 +83,11 @@ def kind_of(model: Any) -> str:
     """Name a model's effect: ``none``, its cause, or ``dead_time (not compensated)``."""
     if isinstance(model, MPIModel):
         return 'none'
+    cause = str(model.cause).replace(' + ', '+')       # one token (diagnostics join by spaces)
     if inverse_step_of(model) is None:
-        return f'{model.cause} (not compensated)'
-    return str(model.cause)
+        return f'{cause} (not compensated)'
+    left_out = getattr(model, 'not_inverted', ())
+    return f'{cause} ({"+".join(left_out)} not compensated)' if left_out else cause
 
 
 class Compensator:

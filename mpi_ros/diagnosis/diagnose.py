@@ -66,8 +66,9 @@ from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .signatures import burst_signature, hold_segments, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
-from ..errors import DataError, IdentificationError
-from ..extensions import EFFECTS
+from ..errors import DataError, IdentificationError, ModelError
+from ..extensions import EFFECTS, fit_composite
+from ..extensions.composite import check_combination, composite_cause
 from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
 from ..identification import burn_in, identify, output_sign
@@ -367,9 +368,9 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     candidates = []
     sims = {}
     residuals: dict[str, FloatArray] = {}
-    for cause in causes:
-        say(f'fitting candidate {cause}')
-        model = EFFECTS[cause].fit(tt, xt, yt, order=(n, l))
+
+    def score(cause: str, model: Any, parameter_count: int) -> dict[str, Any]:
+        # A candidate model on the validation data, against the baseline.
         sim = on_validation(model)
         shift = _zero_shift(sim[val], yv[val], reestimate)
         sim = sim + shift
@@ -386,12 +387,17 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                   and k not in OPERATING_POINT_KEYS}
         determined = slice(base.burn_in, None)
         train = rms_range_error(model.simulate(tt, xt)[determined], yt[determined])
-        candidates.append({'cause': cause, **errs, 'gain': gain, 'z': z, 'bandwidth': lags,
-                           'training_rms_error': train, 'validation_output_offset': shift,
-                           'parameter_count': EFFECTS[cause].parameter_count(params),
-                           'parameters': params, 'model': model})
         say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
             f' z {z:.1f}')
+        return {'cause': cause, **errs, 'gain': gain, 'z': z, 'bandwidth': lags,
+                'training_rms_error': train, 'validation_output_offset': shift,
+                'parameter_count': parameter_count, 'parameters': params, 'model': model}
+
+    for cause in causes:
+        say(f'fitting candidate {cause}')
+        model = EFFECTS[cause].fit(tt, xt, yt, order=(n, l))
+        candidates.append(score(cause, model, EFFECTS[cause].parameter_count(
+            model.to_params())))
     excess = math.sqrt(float(np.mean(r0 ** 2))) > noise_factor * sigma
     level = alpha / len(catalogue)               # Bonferroni over the catalogue
     verdicts = {cause: EFFECTS[cause].signature(residual, level) for cause in causes}
@@ -404,6 +410,48 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                 'noise_factor': noise_factor, 'noise_floor': sigma,
                 'baseline_above_noise': bool(excess), 'steps': []}
     chosen = _decide(candidates, excess, decision['steps'])
+    pair = _pair(candidates) if excess else None
+    if pair is not None:
+        # Two effects with their physical signatures, at different places of the chain
+        # (an input stage and a material effect): fit both at once.  Each alone can miss
+        # on the validation data (the other effect biases its fit), so the pair is tried
+        # whenever both signatures are present.
+        names = sorted(c['cause'] for c in pair)
+        cause = composite_cause(names)
+        say(f'fitting candidate {cause} (both signatures present)')
+        fitted = {c['cause']: c['model'] for c in pair}
+        model = fit_composite(tt, xt, yt, names, order=(n, l), fits=fitted)
+        both = score(cause, model, sum(c['parameter_count'] for c in pair))
+        both['signature'] = 'present'
+        both['significant'] = bool(excess and both['gain'] >= min_gain
+                                   and both['z'] >= z_critical)
+        both['parts'] = names
+        alone = {c['cause']: c for c in pair}
+        # Each effect's own gain: what adding it to the other one alone gains, and whether
+        # that is beyond the noise (Diebold-Mariano, the other alone against both).
+        both['part_gains'] = {}
+        both['part_z'] = {}
+        for name in names:
+            other = alone[next(m for m in names if m != name)]
+            both['part_gains'][name] = (1.0 - both['rms_error'] / other['rms_error']
+                                        if other['rms_error'] > 0.0 else 0.0)
+            both['part_z'][name] = _dm_statistic(residuals[other['cause']], residuals[cause],
+                                                 bandwidth)[0]
+        candidates.append(both)
+        each = all(both['part_gains'][m] >= min_gain and both['part_z'][m] >= z_critical
+                   for m in names)
+        parts_text = ', '.join(f'{m} {both["part_gains"][m]:+.3f} (z {both["part_z"][m]:.1f})'
+                               for m in names)
+        alone_text = chosen['cause'] if chosen is not None else 'none'
+        if both['significant'] and each and (chosen is None or both['gain'] > chosen['gain']):
+            decision['steps'].append(
+                f'{cause}: gain {both["gain"]:+.3f}, z {both["z"]:.1f}; each effect adds'
+                f' beyond the other alone ({parts_text}): both')
+            chosen = both
+        else:
+            decision['steps'].append(
+                f'{cause}: gain {both["gain"]:+.3f}, z {both["z"]:.1f}; not significant, or'
+                f' not each effect adds beyond the other alone ({parts_text}): {alone_text}')
     ties = _ties(chosen, candidates, residuals, z_critical, bandwidth, decision['steps'])
     decision['ranking'] = _ranking(chosen, candidates, residuals, bandwidth)
     decision['ambiguous'] = bool(ties)
@@ -540,6 +588,24 @@ def _decide(candidates: list[dict[str, Any]], excess: bool,
     return best
 
 
+def _pair(candidates: list[dict[str, Any]]) -> tuple[dict[str, Any], dict[str, Any]] | None:
+    # The two candidates with their physical signatures present that chain (an input stage
+    # beside a material effect), the largest summed gain first; two input stages (a lag and
+    # a dead time) are told apart by two rates, not combined.
+    present = [c for c in candidates if c['signature'] == 'present' and c['cause'] in EFFECTS]
+    pairs = []
+    for k, a in enumerate(present):
+        for b in present[k + 1:]:
+            if EFFECTS[a['cause']].stage == EFFECTS[b['cause']].stage:
+                continue
+            try:
+                check_combination([a['cause'], b['cause']])
+            except ModelError:
+                continue
+            pairs.append((a, b))
+    return max(pairs, key=lambda p: p[0]['gain'] + p[1]['gain']) if pairs else None
+
+
 def _ties(best: dict[str, Any] | None, candidates: list[dict[str, Any]],
           residuals: dict[str, FloatArray], z_critical: float, bandwidth: int | None,
           steps: list[str]) -> list[dict[str, Any]]:
@@ -645,11 +711,17 @@ def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, A
     if cause == 'none':
         return f'{base}; no extension reduces it significantly ({listing}).'
     c = next(c for c in candidates if c['cause'] == cause)
-    detail = EFFECTS[cause].evidence(residual) if cause in EFFECTS else None
-    if detail is None:
+    parts = c.get('parts', [cause])
+    details = [EFFECTS[p].evidence(residual) for p in parts if p in EFFECTS]
+    detail = '; '.join(d for d in details if d is not None)
+    if not detail:
         detail = 'the record has no holds or bursts to check the physical signature'
+    each = ''
+    if len(parts) > 1:
+        each = ('; each adds beyond the other alone: ' + ', '.join(
+            f'{p} {100 * c["part_gains"][p]:.0f} %' for p in parts))
     return (f'{base}; the {cause} extension cuts it by {100 * c["gain"]:.0f} % (z ='
-            f' {c["z"]:.1f}; all: {listing}), and {detail}.')
+            f' {c["z"]:.1f}; all: {listing}{each}), and {detail}.')
 
 
 def _jsonable(value: Any) -> Any:

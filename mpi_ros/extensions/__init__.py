@@ -33,6 +33,7 @@ from typing import Any
 
 from . import creep, dead_time, rate_dependence, thermal_drift
 from .compensation import compensator_from_params, ExtendedCompensator
+from .composite import CompositeModel, fit_composite
 from .creep import creep_time_constants, CreepModel, fit_creep
 from .dead_time import DeadTimeModel, fit_dead_time
 from .effect import Effect, EffectModel, EffectParameter, EFFECTS, effects_present, \
@@ -43,13 +44,14 @@ from ..errors import ModelError
 from ..model import MPIModel
 
 __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeModel',
-           'ExtendedModel', 'fit_creep', 'fit_rate_dependence',
+           'CompositeModel', 'ExtendedModel', 'fit_composite', 'fit_creep', 'fit_rate_dependence',
            'fit_thermal_drift', 'fit_dead_time', 'creep_time_constants',
            'extended_model_from_params', 'EXTENSION_KEYS', 'ExtendedCompensator',
            'compensator_from_params', 'Effect', 'EffectModel', 'EffectParameter', 'EFFECTS',
            'register_effect', 'unregister_effect']
 
-ExtendedModel = CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
+ExtendedModel = (CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
+                 | CompositeModel)
 
 # The registry of effects: one line per effect module.
 register_effect(creep.EFFECT)
@@ -77,30 +79,29 @@ EXTENSION_KEYS: Mapping[str, tuple[str, ...]] = _ExtensionKeys()
 
 def extended_model_from_params(mapping: Mapping[str, Any]) -> MPIModel | EffectModel:
     """
-    Build the model a parameter set describes: Gamma alone or Gamma with one extension.
+    Build the model a parameter set describes: Gamma alone, with one effect, or several.
 
     Parameters
     ----------
     mapping : Mapping[str, Any]
-        Flat parameters (Gamma's ``model.*`` keys plus at most one extension's keys).
+        Flat parameters: Gamma's ``model.*`` keys plus the keys of any effects that chain
+        (input stages and at most one material effect; see
+        :mod:`mpi_ros.extensions.composite`).
 
     Returns
     -------
-    MPIModel or one of the extended models
+    MPIModel, one of the extended models, or CompositeModel
         Validated.
 
     Raises
     ------
     ModelError
-        When keys of more than one extension are present, or a value is invalid.
+        When the effects cannot be chained (two material effects), or a value is invalid.
 
     """
     present = effects_present(mapping)
-    if len(present) > 1:
-        names = ', '.join(effect.name for effect in present)
-        msg = (f'parameters hold keys of several model extensions ({names});'
-               ' a model has at most one extension, keep the keys of one')
-        raise ModelError(msg)
     if not present:
         return MPIModel.from_params(mapping)
+    if len(present) > 1:
+        return CompositeModel.from_params(mapping)
     return present[0].model_class.from_params(mapping)

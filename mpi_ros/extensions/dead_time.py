@@ -68,6 +68,11 @@ class DeadTimeModel:
         params[DEAD_TIME] = float(self.dead_time)
         return params
 
+    def input_signal(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """Return the current [A] the material sees (this input stage's output)."""
+        t, x = check_series(time, current)
+        return delay(t, x, self.dead_time)
+
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """
         Simulate the displacement [m] for a current record.
@@ -86,7 +91,7 @@ class DeadTimeModel:
 
         """
         t, x = check_series(time, current)
-        return self.model.simulate(delay(t, x, self.dead_time))
+        return self.model.simulate(self.input_signal(t, x))
 
 
 def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.ArrayLike,
@@ -160,4 +165,4 @@ EFFECT = Effect(
                         ' delay', 's', (0.0, 1.0e3), plausible_max=FAST_TIME_LIMIT),),
     model_class=DeadTimeModel, fit=fit_dead_time, parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'delay'),
-    evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot)
+    evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot, stage='input')

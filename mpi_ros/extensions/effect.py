@@ -137,6 +137,11 @@ class Effect:
     plot : callable or None
         ``plot(ax, time, current, measured, baseline, extended, start)`` draws the
         effect's signature plot on a matplotlib axes (for the report).
+    stage : {'material', 'input'}
+        Where the effect acts in the actuator's signal chain: ``'input'`` changes the
+        current the material sees (its model has ``input_signal(time, current)``);
+        ``'material'`` acts in or after the hysteresis.  Effects combine along the chain
+        (:mod:`mpi_ros.extensions.composite`): any input stages, at most one material effect.
 
     """
 
@@ -151,6 +156,13 @@ class Effect:
     evidence: Callable[[Mapping[str, Any]], 'str | None'] = field(
         default=lambda residual: None)
     plot: Callable[..., None] | None = None
+    stage: str = 'material'
+
+    def __post_init__(self) -> None:
+        """Check the stage."""
+        if self.stage not in ('material', 'input'):
+            msg = f'effect {self.name!r}: stage must be material or input, not {self.stage!r}'
+            raise ModelError(msg)
 
     @property
     def keys(self) -> tuple[str, ...]:

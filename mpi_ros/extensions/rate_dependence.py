@@ -73,6 +73,11 @@ class RateDependentModel:
         """Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses."""
         return RateDependenceInverse(self)
 
+    def input_signal(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """Return the current [A] the material sees (this input stage's output)."""
+        t, x = check_series(time, current)
+        return first_order_lag(t, x, self.time_constant)
+
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """
         Simulate the displacement [m] for a current record (time [s], current [A]).
@@ -91,7 +96,7 @@ class RateDependentModel:
 
         """
         t, x = check_series(time, current)
-        return self.model.simulate(first_order_lag(t, x, self.time_constant))
+        return self.model.simulate(self.input_signal(t, x))
 
 
 class RateDependenceInverse:
@@ -221,4 +226,4 @@ EFFECT = Effect(
     model_class=RateDependentModel, fit=fit_rate_dependence,
     parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'lag'),
-    evidence=lambda residual: burst_evidence(residual, 'lag'), plot=_plot)
+    evidence=lambda residual: burst_evidence(residual, 'lag'), plot=_plot, stage='input')

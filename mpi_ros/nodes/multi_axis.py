@@ -731,7 +731,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         values['output_layout'] = 'flat' if self._flat else 'samples_x_axes'
         for key, limits in zip(('output_min', 'output_max'), self._effective_limits()):
             values[key] = limits[0] if len(set(limits)) == 1 else ' '.join(map(str, limits))
-        causes = ['-' if model is None else getattr(model, 'cause', 'none')
+        causes = ['-' if model is None else getattr(model, 'cause', 'none').replace(' + ', '+')
                   for model in self._models]
         values['extension'] = ' '.join(causes)
         uncompensated = [str(axis) for axis, model in enumerate(self._models)

@@ -43,6 +43,8 @@ TIMEOUT = 30.0
 CREEP = {'model.creep.time_constants': [0.01, 0.1, 1.0],
          'model.creep.weights': [0.05, 0.05, 0.1]}
 RATE = {'model.rate_dependence.time_constant': 0.002}
+#: A second material effect: it does not chain with creep (a composite has at most one).
+THERMAL = {'model.thermal_drift.time_constant': 2.0, 'model.thermal_drift.weight': 0.05}
 #: The extension of each axis at start: creep, none, rate dependence.
 EXTENSIONS = (CREEP, {}, RATE)
 
@@ -278,6 +280,26 @@ def test_extension_keys_alone_change_one_axis_only(rig):
     assert_same(started.send(chunks_of(third, [4])), reference(cores, third))
 
 
+def test_an_input_stage_beside_a_running_creep_makes_a_composite(rig):
+    # Rate-dependence keys pushed to the axis that runs creep: both effects chain (the lag
+    # before the material, the creep in it); the axis compensates the composite exactly.
+    models = gammas()
+    started = rig(overrides_for(models))
+    cores = [core(m, e) for m, e in zip(models, EXTENSIONS)]
+    first = desired_block(models, 40, seed=13)
+    assert_same(started.send(chunks_of(first, [8])), reference(cores, first))
+    result = started.atomically(axis_parameters(0, RATE))
+    assert result.successful, result.reason
+    cores[0].install(extended_model_from_params(dict(models[0].to_params(),
+                                                     **dict(CREEP, **RATE))))
+    assert started.node.compensator.axes[0].model.cause == 'creep + rate_dependence'
+    _, values = started.diagnostics()
+    assert values['extension'] == 'creep+rate_dependence none rate_dependence'
+    assert len(values['axis0.slow_state'].split()) == 4        # the lagged current, 3 lags
+    second = desired_block(models, 60, seed=14)
+    assert_same(started.send(chunks_of(second, [1, 9])), reference(cores, second))
+
+
 def test_a_plain_push_and_a_null_switch_one_axis_extension_off(rig):
     models = gammas()
     started = rig(overrides_for(models))
@@ -311,10 +333,10 @@ def test_a_plain_push_and_a_null_switch_one_axis_extension_off(rig):
 
 REFUSED = {
     'two extensions on one axis': (
-        lambda: axis_parameters(1, dict(CREEP, **RATE)),
+        lambda: axis_parameters(1, dict(CREEP, **THERMAL)),
         'axis 1 (axis1.model.*): parameters hold keys of several model extensions'),
     'a second extension beside a running one': (
-        lambda: axis_parameters(0, RATE),
+        lambda: axis_parameters(0, THERMAL),
         'axis 0 (axis0.model.*): parameters hold keys of several model extensions'),
     'a bad extension beside a good axis': (
         lambda: (axis_parameters(2, {'model.rate_dependence.time_constant': 0.004})
@@ -381,11 +403,12 @@ def test_ros2_param_load_of_axis_extension_keys(rig, tmp_path):
     first = desired_block(models, 30, seed=12)
     assert_same(started.send(chunks_of(first, [6])), reference(cores, first))
 
-    # Two extensions on axis 1: the file's model keys are refused together.
+    # Two material effects (creep, thermal drift) on axis 1: the file's model keys are refused together.
     bad = _file(tmp_path, 'bad.yaml', {
         axis_key(1, 'model.creep.time_constants'): [0.02, 0.2],
         axis_key(1, 'model.creep.weights'): [0.05, 0.05],
-        axis_key(1, 'model.rate_dependence.time_constant'): 0.003,
+        axis_key(1, 'model.thermal_drift.time_constant'): 2.0,
+        axis_key(1, 'model.thermal_drift.weight'): 0.05,
         axis_key(0, 'model.creep.weights'): [0.01, 0.02, 0.03]})
     before = started.values()
     results = started.cli.load(bad)
