@@ -17,7 +17,8 @@ import numpy.typing as npt
 from scipy.optimize import minimize_scalar
 
 from ..errors import DataError, ModelError
-from ..identification import fit_model, scaled_design, select_order
+from ..identification import select_order
+from ..identification.procedure import fit_record, prepare_record
 from ..metrics import rms_range_error
 from ..model import MPIModel
 
@@ -201,11 +202,10 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
     """
     Identify Gamma on a (possibly transformed) current and return it with its error.
 
-    The design is :func:`mpi_ros.identification.identify`'s (operating point, detected
-    sign, constant term); the generalised error and the returned error cover the samples
-    from ``start`` on (see :func:`determined_start`), so trials on differently
-    transformed inputs are compared on the same samples; a trial input whose own burn-in is
-    later (a long lag that reaches its extremes late) is scored from there.
+    The fit is :func:`mpi_ros.identification.identify`'s (operating point, detected sign,
+    constant term, the start state estimated, ringing left out); the generalised error and
+    the returned error cover the samples from ``start`` on (see :func:`determined_start`),
+    so trials on differently transformed inputs are compared on the same samples.
 
     Parameters
     ----------
@@ -227,10 +227,10 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
 
     """
     n, l = order  # noqa: E741
-    rows = np.arange(current.size) >= start
-    model, design, _ = fit_model(current, displacement, n, l, epsilon=epsilon, rows=rows)
-    keep = slice(max(start, design.burn_in), None)
-    return model, rms_range_error(model.simulate(current)[keep], displacement[keep])
+    record = prepare_record(current, displacement, epsilon=epsilon)
+    fit = fit_record(record, n, l, burn_in=start or None)
+    keep = slice(max(start, fit.burn_in), None)
+    return fit.model, rms_range_error(fit.model.simulate(current)[keep], displacement[keep])
 
 
 def determined_start(time: FloatArray, current: FloatArray, displacement: FloatArray,
@@ -238,10 +238,10 @@ def determined_start(time: FloatArray, current: FloatArray, displacement: FloatA
     """
     Return the first sample the data determine, for the raw current and its transforms.
 
-    The burn-in of :func:`mpi_ros.identification.scaled_design` on the raw current (before
-    it, the plays' and the actuator's states are unknown; see
-    :mod:`mpi_ros.identification`), plus ``settle`` seconds for a delayed or lagged
-    version of it to have forgotten its own start.
+    The samples no start state explains in a fit of the raw current (usually none: the
+    start state is estimated, see :mod:`mpi_ros.identification.start_state`), plus
+    ``settle`` seconds for a delayed or lagged version of it to have forgotten its own
+    start.
 
     Parameters
     ----------
@@ -263,7 +263,7 @@ def determined_start(time: FloatArray, current: FloatArray, displacement: FloatA
 
     """
     n, l = order  # noqa: E741
-    start = scaled_design(current, displacement, n, l).burn_in
+    start = fit_record(prepare_record(current, displacement), n, l).burn_in
     if start >= time.size:
         return int(time.size)
     return int(np.searchsorted(time, time[start] + settle))
