@@ -2,7 +2,7 @@
 """
 ``mpi-ros diagnose``: the command-line front of :func:`mpi_ros.diagnosis.diagnose`.
 
-``mpi-ros diagnose DATA [--validate DATA2] [--window T0 T1] [data options]
+``mpi-ros diagnose DATA [DATA ...] [--validate DATA2] [--window T0 T1] [data options]
 [--order auto|N,L|N L] --json report.json --report DIR [--params-out extended.yaml]``
 
 The data options (``--input-topic``, ``--input-joint``, ``--input-index``,
@@ -27,7 +27,7 @@ from ..cli_options import (
     add_data_options, add_order_option, ArgumentParser, data_options, order_option)
 from ..errors import DataError, MPIError
 from ..progress import Progress
-from ..recordings import read_recording, Recording, write_csv_columns
+from ..recordings import join_recordings, read_recording, Recording, write_csv_columns
 
 __all__ = ['diagnose_main', 'build_parser']
 
@@ -37,8 +37,10 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p = ArgumentParser(prog=prog, description=(
         'Diagnose what the MPI model misses in measured data, name the cause, fit the'
         ' extended model and measure the gain on validation data.'))
-    p.add_argument('data', nargs='?',
-                   help='rosbag2 bag or CSV file (training data); optional with --excitation')
+    p.add_argument('data', nargs='*', metavar='DATA',
+                   help='rosbag2 bag or CSV file (training data); several: experiments of one'
+                        ' actuator (e.g. at several rates), joined with a time gap, each'
+                        ' with its own start state; optional with --excitation')
     p.add_argument('--validate', help='separate validation recording (default: split DATA)')
     p.add_argument('--window', nargs=2, type=float, metavar=('T0', 'T1'),
                    help='diagnose only DATA between T0 and T1 [s] after its first sample')
@@ -122,17 +124,20 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
         progress = Progress(quiet=args.quiet)
         order = order_option(args)
-        if args.data is None and args.excitation is None:
+        if not args.data and args.excitation is None:
             parser.error('give DATA to diagnose, or --excitation OUT.csv')
-        if args.data is not None and (args.json is None or args.report is None):
+        if args.data and (args.json is None or args.report is None):
             parser.error('--json and --report are required with DATA')
         data_options(args)                   # refuse bad data options before any work
         if args.excitation:
             _write_excitation(args)
             say(f'wrote {args.excitation}')
-            if args.data is None:
+            if not args.data:
                 return 0
-        data = _read(args.data, args, say)
+        data = join_recordings([_read(path, args, say) for path in args.data])
+        if len(args.data) > 1:
+            say(f'{len(args.data)} experiments joined, a time gap between them: {len(data)}'
+                ' samples')
         if args.window is not None:
             data = _window(data, args.window)
             say(f'window: {len(data)} samples')

@@ -30,11 +30,12 @@ from .files import atomic_write
 from .messages import MESSAGE_READERS, MessageReader, Selection, SelectionError
 from .options import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS
 from .reading import read_recording, read_signals
-from .recording import MIN_SAMPLES, Recording
+from .recording import join_recordings, MIN_SAMPLES, Recording
 
 __all__ = [
     'MIN_SAMPLES',
     'Recording',
+    'join_recordings',
     'BagRecorder',
     'DataOptions',
     'DataOption',

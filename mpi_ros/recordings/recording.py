@@ -9,6 +9,7 @@ input x (coil current [A]) and output s (displacement [m]); every reader of
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 import os
 from typing import Union
@@ -19,7 +20,7 @@ import numpy.typing as npt
 from .options import DataOptions
 from ..errors import DataError
 
-__all__ = ['MIN_SAMPLES', 'MAGNITUDE_LIMIT', 'Recording', 'PathLike', 'FloatArray',
+__all__ = ['MIN_SAMPLES', 'MAGNITUDE_LIMIT', 'Recording', 'join_recordings', 'PathLike', 'FloatArray',
            'check_magnitudes']
 
 PathLike = Union[str, 'os.PathLike[str]']
@@ -108,6 +109,56 @@ class Recording:
     def __len__(self) -> int:
         """Return the number of samples N."""
         return int(self.time.size)
+
+
+def join_recordings(recordings: Sequence[Recording], *, gap: float = 1.0) -> Recording:
+    """
+    Join separate experiments of one actuator into one record, a time gap between them.
+
+    Each following record's clock is shifted to start ``gap`` seconds (at least 1000 of its
+    sample intervals) after the previous record's last sample, so the identification sees a
+    time gap and fits each experiment with its own start state (its segments).
+
+    Parameters
+    ----------
+    recordings : sequence of Recording
+        The experiments, in order; at least one.
+    gap : float
+        Time [s] between one record's last sample and the next one's first.
+
+    Returns
+    -------
+    Recording
+        The joined record (the first one itself when there is only one).
+
+    Raises
+    ------
+    DataError
+        Without recordings, or when one has no time base (its samples have no clock to
+        separate the experiments with).
+
+    """
+    if not recordings:
+        msg = 'join_recordings needs at least one recording'
+        raise DataError(msg)
+    if len(recordings) == 1:
+        return recordings[0]
+    untimed = [r.source for r in recordings if not r.timed]
+    if untimed:
+        msg = (f'{", ".join(untimed)}: no time column; experiments are joined on their clocks,'
+               ' give each file its time column (--time-column)')
+        raise DataError(msg)
+    times = [recordings[0].time]
+    for rec in recordings[1:]:
+        steps = np.diff(rec.time)
+        typical = float(np.median(steps)) if steps.size else 0.0
+        start = float(times[-1][-1]) + max(gap, 1000.0 * typical)
+        times.append(rec.time - float(rec.time[0]) + start)
+    return Recording(np.concatenate(times),
+                     np.concatenate([r.current for r in recordings]),
+                     np.concatenate([r.displacement for r in recordings]),
+                     source=' + '.join(r.source for r in recordings),
+                     notes=tuple(n for r in recordings for n in r.notes))
 
 
 def check_magnitudes(recording: Recording, options: DataOptions | None = None) -> Recording:
