@@ -112,7 +112,8 @@ def main(argv=None):
             tie = (f'tied with {", ".join(r.decision["tied_with"])}'
                    if r.decision.get('ambiguous') else 'no')
             print(f'| {cause} | {seed} | {r.cause}{"" if ok else " (FAIL)"} | {r.gain:.2f} |'
-                  f' {each or "-"} | {tie} | {tuple(r.baseline["order"])} | {100 * r.baseline["rms_error"]:.2f} % |'
+                  f' {each or "-"} | {tie} | {tuple(r.baseline["order"])} |'
+                  f' {100 * r.baseline["rms_error"]:.2f} % |'
                   f' {1e6 * r.baseline["validation_output_offset"]:+.2f} | {cands} |'
                   f' {elapsed:.0f} |', flush=True)
     print(f'# {failures} failure(s)')

@@ -9,8 +9,9 @@ from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import DataError, ModelError, MPIWarning
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.extensions import compensator_from_params, CompositeModel, CreepModel, \
-    DeadTimeModel, EFFECTS, extended_model_from_params, fit_composite, ExtendedCompensator, fit_creep, fit_dead_time, \
-    fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
+    DeadTimeModel, EFFECTS, extended_model_from_params, ExtendedCompensator, fit_composite, \
+    fit_creep, fit_dead_time, fit_rate_dependence, fit_thermal_drift, RateDependentModel, \
+    ThermalDriftModel
 from mpi_ros.extensions._signals import delay, first_order_lag, lag_bank, \
     lag_feedback_inverse
 from mpi_ros.identification import identify

@@ -68,9 +68,9 @@ from .signatures import burst_signature, hold_segments, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError
 from ..extensions import EFFECTS, fit_composite
-from ..extensions.composite import check_combination, composite_cause
 from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
+from ..extensions.composite import check_combination, composite_cause
 from ..identification import burn_in, identify, output_sign
 from ..identification.start_state import estimate_start_state
 from ..metrics import range_error, rms_range_error
@@ -81,6 +81,10 @@ from ..recordings.recording import check_magnitudes, Recording
 __all__ = ['DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
 
 FloatArray = npt.NDArray[np.float64]
+
+#: Validation gain from which a named effect counts as clear; below it (but significant,
+#: with its signature) it is reported as "present, weak", with the reason.
+STRONG_GAIN = 0.2
 
 #: The built-in causes (the catalogue is the registry :data:`mpi_ros.extensions.EFFECTS`,
 #: which may hold more).
@@ -303,8 +307,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                         else 'nothing')
         if tv.size - start < 100:
             msg = ('too little to score: the validation record leaves only'
-                   f' {tv.size - start} samples (from sample {start}: {left_out}); record a longer validation'
-                   ' (e.g. mpi-ros diagnose --excitation)')
+                   f' {tv.size - start} samples (from sample {start}: {left_out}); record a'
+                   ' longer validation (e.g. mpi-ros diagnose --excitation)')
             raise DataError(msg)
         series['start'] = start
         data['validation_burn_in'] = start
@@ -467,7 +471,24 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                     'nonlinearity_error': chosen['nonlinearity_error'],
                     'parameters': chosen['parameters']}
     extended.setdefault('parameters', {})
+    # A named effect whose gain stays below the bar a user can rely on is present but weak:
+    # significant and physically supported, yet small against what else the plain model
+    # misses (or the noise).
+    decision['strength_bar'] = STRONG_GAIN
+    decision['strength'] = ('none' if chosen is None else
+                            'clear' if gain >= STRONG_GAIN else 'present, weak')
     evidence = _evidence(cause, baseline, candidates, residual, sigma, yv[val], data)
+    if decision['strength'] == 'present, weak':
+        span = float(np.ptp(yv[val]))
+        decision['weak_reason'] = (
+            f'{cause} is present, weak: its extension cuts the validation error by only'
+            f' {100 * gain:.0f} % (below {100 * STRONG_GAIN:.0f} %), although the cut is'
+            f' significant and the physical signature is {chosen["signature"] if chosen else ""};'
+            f' the plain model misses {100 * baseline["rms_error"]:.2f} % of the range, the'
+            f' noise floor is {100 * sigma / span:.2f} %: most of the error is not this effect'
+            ' (a longer record, or an excitation that shows it more, e.g. longer holds for'
+            ' slow effects, measures it better)')
+        evidence += ' ' + decision['weak_reason'][0].upper() + decision['weak_reason'][1:] + '.'
     if decision['ambiguous']:
         evidence += (f' Ambiguous: {", ".join(decision["tied_with"])} explain(s) the validation'
                      f' data as well, within the noise (ranked by gain; the signature'

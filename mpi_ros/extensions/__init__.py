@@ -40,7 +40,6 @@ from .effect import Effect, EffectModel, EffectParameter, EFFECTS, effects_prese
     register_effect, unregister_effect
 from .rate_dependence import fit_rate_dependence, RateDependentModel
 from .thermal_drift import fit_thermal_drift, ThermalDriftModel
-from ..errors import ModelError
 from ..model import MPIModel
 
 __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeModel',

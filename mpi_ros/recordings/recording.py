@@ -20,8 +20,8 @@ import numpy.typing as npt
 from .options import DataOptions
 from ..errors import DataError
 
-__all__ = ['MIN_SAMPLES', 'MAGNITUDE_LIMIT', 'Recording', 'join_recordings', 'PathLike', 'FloatArray',
-           'check_magnitudes']
+__all__ = ['MIN_SAMPLES', 'MAGNITUDE_LIMIT', 'Recording', 'join_recordings', 'PathLike',
+           'FloatArray', 'check_magnitudes']
 
 PathLike = Union[str, 'os.PathLike[str]']
 FloatArray = npt.NDArray[np.float64]

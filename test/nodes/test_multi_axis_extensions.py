@@ -403,7 +403,8 @@ def test_ros2_param_load_of_axis_extension_keys(rig, tmp_path):
     first = desired_block(models, 30, seed=12)
     assert_same(started.send(chunks_of(first, [6])), reference(cores, first))
 
-    # Two material effects (creep, thermal drift) on axis 1: the file's model keys are refused together.
+    # Two material effects (creep, thermal drift) on axis 1: the file's model keys are refused
+    # together.
     bad = _file(tmp_path, 'bad.yaml', {
         axis_key(1, 'model.creep.time_constants'): [0.02, 0.2],
         axis_key(1, 'model.creep.weights'): [0.05, 0.05],
