@@ -300,18 +300,17 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     # With an effect (time column needed) the compensator's streaming inverse (with a dead
     # time: Gamma only, as the node does).
     import numpy as np
-    from .compensation import gamma_of, operating_range
-    from .model import MPIModel
+    from .compensation import operating_range
     from .ranges import outside
-    plain = isinstance(model, MPIModel)
-    if not plain:
+    plain = not model.timed
+    if model.timed:
         _check_time_column(model, time, time_column, args)
     if limits is None:
         _progress(f'note: {_UNKNOWN_RANGE.format(params=args.params)}: no range check and no'
                   ' clamping; pass --output-min and --output-max to clamp')
     else:
         lo, hi, source = limits
-        reach = operating_range(gamma_of(model), lo, hi)
+        reach = operating_range(model.gamma, lo, hi)
         out = outside(values, *reach)
         if out.count:
             where = (f', the range the model reaches with currents from {lo:.4g} to {hi:.4g}'
@@ -319,7 +318,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
             _progress(f'warning: {out.describe("desired displacements", where, "m")}')
     if limits is None or args.no_clamp:
         if plain:
-            result = model.inverse().simulate(values)
+            result = model.gamma.inverse().simulate(values)
         else:
             wide = 1e12 * (1.0 + float(np.max(np.abs(values))))
             result = _streaming(model, time, values, -wide, wide)
@@ -370,11 +369,9 @@ def _check_time_column(model: Any, time: Any, time_column: str | None,
 
 def _simulate(model: Any, time: Any, time_column: str | None, values: Any,
               args: argparse.Namespace) -> Any:
-    from .model import MPIModel
-    if isinstance(model, MPIModel):
-        return model.simulate(values)
-    _check_time_column(model, time, time_column, args)
-    return model.simulate(time, values)
+    if model.timed:
+        _check_time_column(model, time, time_column, args)
+    return model.response(time, values)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:

@@ -25,7 +25,7 @@ operator pair.  H's plays and their initial states live in the shifted input
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar, Protocol
 
 import numba
 import numpy as np
@@ -38,7 +38,7 @@ from .inverse import invert_hysteresis, invert_superposition
 from .play import play_clamp
 from .superposition import PISuperpositionOperator
 
-__all__ = ['MPIModel', 'MPIStream']
+__all__ = ['ActuatorModel', 'MPIModel', 'MPIStream']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -87,6 +87,45 @@ def _mpi_batch(x: FloatArray, r_h: FloatArray, w_h: FloatArray, z: FloatArray,
     return out
 
 
+class ActuatorModel(Protocol):
+    """
+    What every model of the actuator offers: Gamma alone or Gamma with effects.
+
+    :class:`MPIModel` (the paper's Gamma) and the extended models of
+    :mod:`mpi_ros.extensions` (one effect, or a composite of several) implement it, so a
+    caller never asks which kind of model it holds (the style of python-control's
+    ``InputOutputSystem``).
+
+    Attributes
+    ----------
+    cause : str
+        ``'none'`` for Gamma alone, else the effect's name (``'creep + rate_dependence'``
+        for a composite).
+    timed : bool
+        Whether the response needs the sample times (an effect with dynamics).
+
+    """
+
+    cause: str
+    timed: bool
+
+    @property
+    def gamma(self) -> 'MPIModel':
+        """Return the forward Gamma (operating point and start state included)."""
+
+    def response(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
+
+    def inverse_step(self) -> Any:
+        """Return the exact per-step inverse of the effects, or None (Gamma's own suffices)."""
+
+    def to_params(self) -> dict[str, Any]:
+        """Return the flat parameter form (``from_params`` of its class reads it)."""
+
+    def with_gamma(self, gamma: 'MPIModel') -> 'ActuatorModel':
+        """Return the same model around another Gamma (e.g. another start state)."""
+
+
 @dataclass(frozen=True, eq=False)
 class MPIModel:
     """
@@ -131,6 +170,9 @@ class MPIModel:
     input_offset: float = 0.0
     output_offset: float = 0.0
     output_sign: int = 1
+    #: :class:`ActuatorModel`: Gamma alone has no effect and needs no time base.
+    cause: ClassVar[str] = 'none'
+    timed: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         """Check the operating point (finite offsets, sign +1 or -1)."""
@@ -238,6 +280,24 @@ class MPIModel:
     def l(self) -> int:  # noqa: E743 - the paper's symbol
         """Order ``l`` of the superposition operator (up to 2l+1 dead-zone operators)."""
         return self.superposition.order
+
+    # -- ActuatorModel --------------------------------------------------------------------
+    @property
+    def gamma(self) -> 'MPIModel':
+        """Return the forward Gamma: this model, or the forward model of an inverse one."""
+        return self.inverse() if self.is_inverse else self
+
+    def response(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
+        """Return :meth:`simulate` of ``current`` (Gamma is rate independent: no time)."""
+        return self.simulate(current)
+
+    def inverse_step(self) -> None:
+        """Return None: Gamma's inverse is the compensator's own (laws (12)-(14))."""
+        return None
+
+    def with_gamma(self, gamma: 'MPIModel') -> 'MPIModel':
+        """Return ``gamma`` (Gamma alone is its Gamma)."""
+        return gamma
 
     def inverse(self) -> 'MPIModel':
         """

@@ -16,7 +16,7 @@ from mpi_ros.compensation import Compensator
 from mpi_ros.diagnosis import diagnose
 from mpi_ros.excitation import identification_excitation
 from mpi_ros.extensions import (Effect, EffectParameter, EFFECTS, extended_model_from_params,
-                                register_effect, unregister_effect)
+                                ExtendedModelBase, register_effect, unregister_effect)
 from mpi_ros.extensions._common import fit_gamma, search_fit
 from mpi_ros.recordings import Recording
 import numpy as np
@@ -28,7 +28,7 @@ GAIN = 'model.drive_gain.gain'
 
 
 @dataclass(frozen=True, eq=False)
-class DriveGainModel:
+class DriveGainModel(ExtendedModelBase):
 
     model: MPIModel
     gain: float

@@ -74,7 +74,6 @@ from ..extensions.composite import check_combination, composite_cause
 from ..identification import burn_in, identify, output_sign
 from ..identification.start_state import estimate_start_state
 from ..metrics import range_error, rms_range_error
-from ..model import MPIModel
 from ..params import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
@@ -322,13 +321,11 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         # The model's simulation of the validation record, from the start state that fits
         # a separate record best (the split's validation continues the training record).
         if not estimate_start:
-            return (np.asarray(model.simulate(xv), dtype=np.float64)
-                    if isinstance(model, MPIModel) else model.simulate(tv, xv))
+            return np.asarray(model.response(tv, xv), dtype=np.float64)
         rows = np.arange(tv.size) >= start
         fitted, _, _ = estimate_start_state(model, xv, yv, time=tv, rows=rows,
                                             offset_free=True)
-        return (np.asarray(fitted.simulate(xv), dtype=np.float64)
-                if isinstance(fitted, MPIModel) else fitted.simulate(tv, xv))
+        return np.asarray(fitted.response(tv, xv), dtype=np.float64)
     # Only the validation record's output offset (its sensor zero) is re-estimated, for the
     # baseline, the straight line and every candidate alike; nothing else is refitted.
     reestimate = validation is not None

@@ -37,7 +37,7 @@ from .composite import CompositeModel, fit_composite
 from .creep import creep_time_constants, CreepModel, fit_creep
 from .dead_time import DeadTimeModel, fit_dead_time
 from .effect import Effect, EffectModel, EffectParameter, EFFECTS, effects_present, \
-    register_effect, unregister_effect
+    ExtendedModelBase, register_effect, unregister_effect
 from .rate_dependence import fit_rate_dependence, RateDependentModel
 from .thermal_drift import fit_thermal_drift, ThermalDriftModel
 from ..model import MPIModel
@@ -47,6 +47,7 @@ __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeMod
            'fit_thermal_drift', 'fit_dead_time', 'creep_time_constants',
            'extended_model_from_params', 'EXTENSION_KEYS', 'ExtendedCompensator',
            'compensator_from_params', 'Effect', 'EffectModel', 'EffectParameter', 'EFFECTS',
+           'ExtendedModelBase',
            'register_effect', 'unregister_effect']
 
 ExtendedModel = (CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel

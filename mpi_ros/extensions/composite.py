@@ -31,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import check_series, Order
-from .effect import EFFECTS, effects_present
+from .effect import EFFECTS, effects_present, ExtendedModelBase
 from ..errors import ModelError
 from ..model import MPIModel
 
@@ -86,7 +86,7 @@ def check_combination(names: Sequence[str]) -> tuple[list[str], str | None]:
 
 
 @dataclass(frozen=True, eq=False)
-class CompositeModel:
+class CompositeModel(ExtendedModelBase):
     """
     Gamma with input stages and at most one material effect: ``s = M[I_k[... I_1[x]]]``.
 
@@ -188,12 +188,12 @@ class CompositeModel:
     @property
     def not_inverted(self) -> tuple[str, ...]:
         """Return the effects the compensator leaves out (no causal inverse: dead time)."""
-        return tuple(p.cause for p in self.parts if getattr(p, 'inverse_step', None) is None)
+        return tuple(p.cause for p in self.parts if p.inverse_step() is None)
 
     def inverse_step(self) -> 'CompositeInverse':
         """Return the exact per-step inverse of the invertible parts (a dead time is left out)."""
-        steps = [self._own(p).inverse_step() for p in self.parts
-                 if getattr(p, 'inverse_step', None) is not None]
+        steps = [step for step in (self._own(p).inverse_step() for p in self.parts)
+                 if step is not None]
         material = self.material
         core = (steps.pop() if material is not None and material.cause not in self.not_inverted
                 else None)

@@ -48,7 +48,7 @@ import numpy.typing as npt
 from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
     vector_parameter
 from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
-from .effect import Effect, EffectParameter, SLOW_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, SLOW_TIME_LIMIT
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
 from ..model import _superposition_value, MPIModel
@@ -67,7 +67,7 @@ _STEP_TOLERANCE = 1e-4
 
 
 @dataclass(frozen=True, eq=False)
-class CreepModel:
+class CreepModel(ExtendedModelBase):
     """
     MPI model with creep: ``s = y0 + sign (G + sum_j w_Cj C_j[G])``, ``G = S[H[x - x0]]``.
 

@@ -23,7 +23,7 @@ from ._common import burst_evidence, burst_verdict, check_series, determined_sta
     fit_gamma, lag_search_limits, Order, rate_cross_correlation, resolve_order, \
     scalar_parameter, search_fit
 from ._signals import delay
-from .effect import Effect, EffectParameter, FAST_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT
 from ..identification import select_order
 from ..model import MPIModel
 
@@ -35,7 +35,7 @@ DEAD_TIME = 'model.dead_time'
 
 
 @dataclass(frozen=True, eq=False)
-class DeadTimeModel:
+class DeadTimeModel(ExtendedModelBase):
     """
     MPI model behind a pure delay: ``s(t) = Gamma[x](t - L)``.
 

@@ -22,8 +22,8 @@ list of names.  Adding an effect is one new module and one registry line (docs/d
 """
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from typing import Any, Protocol
+from dataclasses import dataclass, field, replace
+from typing import Any, cast, ClassVar, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -31,8 +31,8 @@ import numpy.typing as npt
 from ..errors import ModelError
 from ..model import MPIModel
 
-__all__ = ['Effect', 'EffectModel', 'EffectParameter', 'EFFECTS', 'register_effect',
-           'unregister_effect', 'effect_keys', 'effect_off_values', 'effects_present',
+__all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFFECTS',
+           'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values', 'effects_present',
            'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT']
 
 #: Longest dead time or rate lag [s] plausible for a smart-material actuator: amplifier,
@@ -71,6 +71,41 @@ class EffectModel(Protocol):
     def simulate(self, time: npt.ArrayLike,
                  current: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Return the output [m] for a current [A] sampled at ``time`` [s]."""
+
+
+class ExtendedModelBase:
+    """
+    The :class:`~mpi_ros.model.ActuatorModel` interface of an extended model.
+
+    An effect's model class (a frozen dataclass whose field ``model`` is its Gamma) derives
+    from it and defines ``simulate(time, current)``; an effect that can be inverted causally
+    also overrides :meth:`inverse_step`.
+    """
+
+    model: MPIModel
+    #: The response of an effect depends on the sample times.
+    timed: ClassVar[bool] = True
+
+    @property
+    def gamma(self) -> MPIModel:
+        """Return the Gamma the effect extends."""
+        return self.model
+
+    def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Return the output [m] for a current [A] sampled at ``time`` [s]."""
+        raise NotImplementedError
+
+    def response(self, time: npt.ArrayLike, current: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Return :meth:`simulate` (the interface's name for it)."""
+        return self.simulate(time, current)
+
+    def inverse_step(self) -> Any:
+        """Return None: the effect has no causal inverse (a dead time needs the future)."""
+        return None
+
+    def with_gamma(self, gamma: MPIModel) -> Any:
+        """Return the same model around another Gamma (e.g. another start state)."""
+        return replace(cast(Any, self), model=gamma)
 
 
 @dataclass(frozen=True)
@@ -200,6 +235,13 @@ def register_effect(effect: Effect) -> Effect:
     """
     if effect.name in EFFECTS:
         msg = f'an effect named {effect.name!r} is registered already'
+        raise ModelError(msg)
+    missing = [name for name in ('gamma', 'response', 'inverse_step', 'with_gamma', 'timed')
+               if not hasattr(effect.model_class, name)]
+    if missing:
+        msg = (f'effect {effect.name!r}: its model class {effect.model_class.__name__} lacks'
+               f' {", ".join(missing)} of the model interface (mpi_ros.model.ActuatorModel);'
+               ' derive it from mpi_ros.extensions.ExtendedModelBase')
         raise ModelError(msg)
     taken = set(effect_keys())
     clash = [key for key in effect.keys if key in taken]

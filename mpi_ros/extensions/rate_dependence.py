@@ -23,7 +23,7 @@ from ._common import burst_evidence, burst_verdict, check_series, determined_sta
     fit_gamma, lag_search_limits, Order, residual_axes, resolve_order, scalar_parameter, \
     search_fit
 from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter, FAST_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT
 from ..identification import select_order
 from ..model import MPIModel
 
@@ -36,7 +36,7 @@ RATE_TIME_CONSTANT = 'model.rate_dependence.time_constant'
 
 
 @dataclass(frozen=True, eq=False)
-class RateDependentModel:
+class RateDependentModel(ExtendedModelBase):
     """
     MPI model behind a first-order input lag: ``s = Gamma[L_tau[x]]``.
 

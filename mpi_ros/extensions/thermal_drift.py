@@ -29,7 +29,7 @@ import numpy.typing as npt
 from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
     scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter, SLOW_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, SLOW_TIME_LIMIT
 from ..identification import identify_weights
 from ..model import MPIModel
 
@@ -43,7 +43,7 @@ THERMAL_WEIGHT = 'model.thermal_drift.weight'
 
 
 @dataclass(frozen=True, eq=False)
-class ThermalDriftModel:
+class ThermalDriftModel(ExtendedModelBase):
     """
     MPI model with a thermal drift: ``s = y0 + sign S[H[x - x0] + w_T L_tau_T[x^2]]``.
 

@@ -335,12 +335,9 @@ def with_initial_states(model: Any, states: FloatArray) -> Any:
     """
     from dataclasses import replace as replace_field
     from ..hysteresis import PIHysteresisOperator
-    from ..model import MPIModel
-    if isinstance(model, MPIModel):
-        h = model.hysteresis
-        return replace_field(model, hysteresis=PIHysteresisOperator(h.thresholds, h.weights,
-                                                                    states))
-    return replace_field(model, model=with_initial_states(model.model, states))
+    h = model.gamma.hysteresis
+    return model.with_gamma(replace_field(
+        model.gamma, hysteresis=PIHysteresisOperator(h.thresholds, h.weights, states)))
 
 
 def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArray, *,
@@ -377,8 +374,7 @@ def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArr
         The first sample whose plays no longer depend on the start state.
 
     """
-    from ..model import MPIModel
-    gamma = model if isinstance(model, MPIModel) else model.model
+    gamma = model.gamma
     r = np.asarray(gamma.hysteresis.thresholds, dtype=np.float64)
     u = np.asarray(current, dtype=np.float64) - gamma.input_offset
     y = np.asarray(displacement, dtype=np.float64)
@@ -390,12 +386,10 @@ def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArr
     best: tuple[float, StartState, Any] | None = None
     for cand in [*start_candidates(u), *turning_point_candidates(u)]:
         trial = with_initial_states(model, cand.states(float(u[0]), r, ends))
-        if isinstance(trial, MPIModel):
-            sim = trial.simulate(current[part])
-        elif time is None:
-            raise ValueError('an extended model is simulated with its time base')
-        else:
-            sim = trial.simulate(time[part], current[part])
+        if trial.timed and time is None:
+            msg = f'a {trial.cause} model is simulated with its time base: pass time'
+            raise ValueError(msg)
+        sim = trial.response(None if time is None else time[part], current[part])
         residual = (sim - y[part])[counted]
         if offset_free and residual.size:
             residual = residual - float(np.mean(residual))
