@@ -32,8 +32,8 @@ from ..errors import ModelError
 from ..model import MPIModel
 
 __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFFECTS',
-           'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values', 'effects_present',
-           'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT']
+           'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values',
+           'effects_present', 'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT']
 
 #: Longest dead time or rate lag [s] plausible for a smart-material actuator: amplifier,
 #: sensor and eddy-current delays are microseconds to milliseconds.  A fitted value above it
