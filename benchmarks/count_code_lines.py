@@ -41,7 +41,7 @@ def _docstring_lines(tree: ast.AST) -> Set[int]:
 
 
 def code_lines(source: str) -> int:
-    """
+    r"""
     Count the code lines of one Python source.
 
     Parameters

@@ -63,7 +63,7 @@ def test_disabled_compensator_passes_best_linear_map():
 def test_output_is_always_finite_and_inside_limits(seed):
     rng = np.random.default_rng(seed)
     comp = Compensator(random_model(rng, output_scale=1e-5), output_min=0.2,
-                                  output_max=1.8)
+                       output_max=1.8)
     specials = [np.nan, np.inf, -np.inf, 1e300, -1e300, 5e-308, 1e-3, -1e-3, 'text', None]
     values = list(rng.normal(0.0, 3e-5, 2000)) + specials * 20
     rng.shuffle(values)

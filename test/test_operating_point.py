@@ -126,7 +126,7 @@ def test_invariant_to_zero_bias_sign_and_scale(offset, bias, sign, log_x_scale, 
     desired = desired + float(np.min(yv))
     plain = Compensator(ref.model, output_min=LOWEST, output_max=HIGHEST)
     moved = Compensator(new.model, output_min=LOWEST * x_scale + point[0],
-                                   output_max=HIGHEST * x_scale + point[0])
+                        output_max=HIGHEST * x_scale + point[0])
     commands = np.array([plain.command(d) for d in desired])
     moved_commands = np.array([moved.command(point[1] + sign * y_scale * d)
                                for d in desired])

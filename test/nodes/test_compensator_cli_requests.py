@@ -135,7 +135,7 @@ def test_load_of_a_valid_model_file_answers_with_that_model(spun, tmp_path):
     """Acceptance: the running compensator's commands are the core's with the loaded model."""
     node, cli = spun(limits() + as_parameters(MODEL_A))
     core = Compensator(MPIModel.from_params(MODEL_A), output_min=OUTPUT_MIN,
-                                  output_max=OUTPUT_MAX)
+                       output_max=OUTPUT_MAX)
     assert core_commands(node, DESIRED_A) == core_commands(core, DESIRED_A)
     model_file = tmp_path / 'model.yaml'
     write_params_yaml(model_file, MODEL_B_OP)

@@ -139,7 +139,7 @@ def test_operating_point_commands_are_the_shifted_origin_ones(make_node):
     desired = 2.0e-5 + 3.0e-5 * np.sin(np.linspace(0.0, 12.0, 400))  # beyond the range
     commands = [node.command(1.0e-4 - float(value)) for value in desired]
     origin = Compensator(MPIModel.from_params(MODEL_A), output_min=OUTPUT_MIN - 0.4,
-                                    output_max=OUTPUT_MAX - 0.4)
+                         output_max=OUTPUT_MAX - 0.4)
     expected = [0.4 + origin.command(float(value)) for value in desired]
     np.testing.assert_allclose(commands, expected, rtol=0, atol=1e-12)
     assert node.counters['clamped'] > 0
