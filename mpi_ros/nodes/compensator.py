@@ -2,11 +2,11 @@
 """
 Compensator node: desired displacement in, current command out, through the inverse (27).
 
-(Slightly over 500 lines, most of them this docstring: the single-axis model-update rule
-with its null handling and extensions, and the Float64 message path.  What it shares with
-the multi-axis node - the parameter callbacks' frame, grouped set_parameters, topics, loss
-accounting, counters, diagnostics - is in :mod:`mpi_ros.nodes.compensator_base`; the model
-logic itself is in :mod:`mpi_ros.compensation`.)
+The node holds the Float64 message path and its model's bookkeeping.  The model-update
+rule below (null handling, whole-model completion, validation, the bumpless swap) is
+:mod:`mpi_ros.compensation.updates`, on plain dicts; the parameter callbacks that convert
+to and from it, grouped set_parameters, topics, loss accounting, counters and diagnostics
+are shared with the multi-axis node in :mod:`mpi_ros.nodes.compensator_base`.
 
 Topics (relative names, std_msgs/msg/Float64, SI units)
     ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
@@ -33,8 +33,8 @@ Model life cycle
 
 Model updates (one rule for every path)
     A request is laid over the current values and the *whole* resulting model is
-    validated (``extended_model_from_params`` and its inverse); if it is valid it is
-    applied in one swap, otherwise every model key of the request is rejected with a
+    validated (``extended_model_from_params`` and its inverse, built once per request:
+    :func:`mpi_ros.compensation.updates.prepare`); if it is valid it is applied in one swap, otherwise every model key of the request is rejected with a
     reason naming the key and the running model and its parameters stay untouched.
     The model keys of one request always succeed or fail together:
 
@@ -69,21 +69,21 @@ Extended models (:mod:`mpi_ros.extensions`)
     The ``model.creep.*``, ``model.rate_dependence.time_constant``,
     ``model.thermal_drift.*`` and ``model.dead_time`` keys add one extension to Gamma;
     the candidate is built with ``extended_model_from_params`` (a bad key is rejected with
-    a reason naming it). Creep, rate dependence and thermal drift run through an
-    ``ExtendedCompensator``, fed with each message's arrival time on the steady clock
-    (``message_time``; queued messages served together get close times); a dead time
-    cannot be inverted, so Gamma alone is compensated and a warning is logged. An
-    extension is off while its keys are unset or 0 / empty. Pushing a plain model (all
-    five core keys, no extension key) switches an extension off. Extension keys alone
-    (no core key) change the extension of the running Gamma. A swap within the same kind of
-    compensator uses its ``swap_model``; a change of kind builds a new compensator that
-    takes over the turning points of the applied current (play state replayed through
-    the new H, (14)), the last command and the counters; its lag states start settled at
+    a reason naming it). Creep, rate dependence and thermal drift plug their exact
+    per-step inverse into the one :class:`~mpi_ros.compensation.Compensator`, fed with
+    each message's arrival time on the steady clock (``message_time``; queued messages
+    served together get close times); a dead time cannot be inverted, so Gamma alone is
+    compensated and a warning is logged. An extension is off while its keys are unset or
+    0 / empty. Pushing a plain model (all five core keys, no extension key) switches an
+    extension off. Extension keys alone (no core key) change the extension of the running
+    Gamma. Every new model, of any kind, is installed into the running compensator
+    (:meth:`~mpi_ros.compensation.Compensator.install`): the turning points of the applied
+    current are replayed through the new H ((14)), the last command and the counters go
+    on; an effect of the same kind keeps its lag states, a new one starts them settled at
     the last command.
     The multi-axis node (``axes`` > 1) applies these rules to each axis's
     ``axis<k>.model.*`` keys (:mod:`mpi_ros.nodes.multi_axis`, which also says which times
-    the samples of an array chunk get); the shared helpers are in
-    :mod:`mpi_ros.nodes.compensator_base`.
+    the samples of an array chunk get), calling the same rule once per axis prefix.
 
 A ``--params-file`` with an invalid model, or with output limits that are not
 ordered, makes the node refuse to start (exit status 1) rather than run a model

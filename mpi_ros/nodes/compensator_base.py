@@ -24,17 +24,17 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
   activates at start-up;
 - the message counters, the once-a-second log of losses and bad inputs, and the frame of
   the diagnostics message (rate window, loss problems, common values);
-- the model-key rules both nodes apply to a model (the single-axis node's ``model.*`` keys,
-  each axis's ``axis<k>.model.*`` keys): when an extension key is "off"
-  (:func:`is_off`), the flat parameters of the model a set of values describes
-  (:func:`model_params`), what a YAML ``null`` means at run time (:func:`resolve_null`),
-  the keys a request with all five keys of Gamma resets (:func:`whole_model_completion`),
-  and the parameters ``sample_period`` and ``message_time`` of the extensions' lags.
+- the conversion between rclpy's ``Parameter`` and the dicts of the model-update rule
+  (:mod:`mpi_ros.compensation.updates`: null handling and whole-model completion in the
+  pre-set callback, :func:`~mpi_ros.compensation.updates.prepare` per model prefix in the
+  on-set callback - ``''`` for the single-axis node, ``axis<k>.`` for each axis -,
+  :func:`~mpi_ros.compensation.updates.apply` in the post-set callback), and the
+  parameters ``sample_period`` and ``message_time`` of the extensions' lags.
 
 Each node keeps what differs: its message type and its drain loop (decode, command,
 encode, publish: the per-message path stays in the node so that it costs no extra Python
-call per message), its parameter specs and pre-set completion, its model candidate and
-installation, what configure loads and cleanup drops, and its diagnostics status.
+call per message), its parameter specs and model prefixes, its core's installation,
+what configure loads and cleanup drops, and its diagnostics status.
 
 Lifecycle states (what each publishes on the loop's output topic)
     ``unconfigured``: no loop topics, no core, nothing published; parameter pushes are
@@ -152,8 +152,8 @@ class CompensatorNodeBase(LifecycleNode):
     A node subclass sets ``self._specs`` and ``self._groups`` before it declares its
     parameters, then calls :meth:`_declared`, sets up its own state, and calls
     :meth:`_open_topics` with its drain loop last (which runs ``autostart``).  It fills the
-    hooks below (``_load``, ``_unload``, ``_complete_request``, ``_model_candidate``,
-    ``_install_prepared``, ``_rejection``, ``_core_counters``, ``_node_counters``,
+    hooks below (``_load``, ``_unload``, ``_running``, ``_install_prepared``,
+    ``_rejection``, ``_core_counters``, ``_node_counters``,
     ``_status``, ``_status_values``, ``_status_name``).
 
     Parameters
