@@ -34,8 +34,9 @@ Model life cycle
 Model updates (one rule for every path)
     A request is laid over the current values and the *whole* resulting model is
     validated (``extended_model_from_params`` and its inverse, built once per request:
-    :func:`mpi_ros.compensation.updates.prepare`); if it is valid it is applied in one swap, otherwise every model key of the request is rejected with a
-    reason naming the key and the running model and its parameters stay untouched.
+    :func:`mpi_ros.compensation.updates.prepare`); if it is valid it is applied in one
+    swap, otherwise every model key of the request is rejected with a reason naming the
+    key and the running model and its parameters stay untouched.
     The model keys of one request always succeed or fail together:
 
     - ``set_parameters_atomically`` (the identifier's push): the request as it is.

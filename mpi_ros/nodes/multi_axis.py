@@ -71,8 +71,9 @@ Time stamps of a chunk (``message_time``)
     it, or evenly spread over the time since the previous message's arrival ``t_prev``
     when that is shorter than K sample periods (a burst of queued messages), so that the
     times always increase: spacing ``min(sample_period, (t - t_prev) / K)``
-    (:func:`mpi_ros.compensation.multi_axis.chunk_times`).  K = 1 gives the single-axis node's time, the arrival.  The
-    clock is read only while some axis has an effect with lags.
+    (:func:`mpi_ros.compensation.multi_axis.chunk_times`).  K = 1 gives the single-axis
+    node's time, the arrival.  The clock is read only while some axis has an effect with
+    lags.
 
 Model updates
     The single-axis rule, per axis: a request is laid over the running values, and every
