@@ -58,12 +58,12 @@ import time
 from typing import Any, Iterator
 
 from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.compensation import gamma_of
+from mpi_ros.compensation import Compensator, gamma_of
 from mpi_ros.diagnosis import diagnose
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import MPIError
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
-from mpi_ros.extensions import compensator_from_params, EFFECTS
+from mpi_ros.extensions import EFFECTS, extended_model_from_params
 from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error
 from mpi_ros.params import write_params_yaml
@@ -167,11 +167,9 @@ def offline_records(effect, seed):
 
 def offline_track(effect, seed, params, times, desired, rate):
     """Track ``desired`` with a compensator of ``params`` in front of a fresh plant."""
-    import warnings
-    with warnings.catch_warnings():
-        warnings.simplefilter('ignore')          # dead time: compensated as Gamma alone
-        comp = compensator_from_params(params, output_min=OUTPUT_MIN, output_max=OUTPUT_MAX,
-                                       sample_period=1.0 / rate)
+    # A dead time is compensated as Gamma alone (Compensator.kind says so).
+    comp = Compensator(extended_model_from_params(params), output_min=OUTPUT_MIN,
+                       output_max=OUTPUT_MAX, sample_period=1.0 / rate)
     plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=NOISE, **STRENGTHS[effect]),
                                      seed=seed + 2)
     measured = np.empty(desired.size)

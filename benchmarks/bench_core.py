@@ -21,7 +21,7 @@ import platform
 import time
 
 from mpi_ros import identify
-from mpi_ros.compensation import FeedforwardCompensator, MultiAxisCompensator
+from mpi_ros.compensation import Compensator, MultiAxisCompensator
 from mpi_ros.extensions._signals import first_order_lag
 import numpy as np
 
@@ -88,7 +88,7 @@ def main() -> None:
         laps[k] = clock() - t0
     print(f'streaming Gamma^-1 step: median {np.median(laps) / 1e3:.2f} us, '
           f'p99 {np.percentile(laps, 99) / 1e3:.2f} us (target median <= 5 us)')
-    comp = FeedforwardCompensator(model, output_min=0.2, output_max=1.8)
+    comp = Compensator(model, output_min=0.2, output_max=1.8)
     for k, v in enumerate(desired.tolist()):
         t0 = clock()
         comp.command(v)
@@ -100,7 +100,7 @@ def main() -> None:
 
 def _blocks(model, desired: np.ndarray, repeats: int) -> None:
     """Print the block loop's cost: chunks, samples x axes blocks, one-sample blocks."""
-    comp = FeedforwardCompensator(model, output_min=0.2, output_max=1.8)
+    comp = Compensator(model, output_min=0.2, output_max=1.8)
     comp.command_batch(desired[:10])
     times = []
     for _ in range(repeats):

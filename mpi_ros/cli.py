@@ -49,12 +49,6 @@ def _finite(value: Any) -> Any:
     return value
 
 
-def _read_data(path: str, args: argparse.Namespace) -> Any:
-    from .cli_options import data_options
-    from .recordings import read_recording
-    return read_recording(path, data_options(args))
-
-
 def _check_output(path: str | None, option: str) -> None:
     """Fail before any work when an output file cannot be created."""
     if path is None:

@@ -2,7 +2,7 @@
 """Feed-forward compensator core: exact inverse, clamping, bad input, bumpless swaps."""
 
 from mpi_ros import MPIModel
-from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.compensation import Compensator
 from mpi_ros.errors import ModelError
 from mpi_ros.hysteresis import PIHysteresisOperator
 from mpi_ros.memory import TurningPointMemory
@@ -44,7 +44,7 @@ def test_memory_replay_equals_full_history(seed):
 
 def test_compensator_inverts_model_exactly_inside_limits():
     model = MPIModel.from_params(PARAMS)
-    comp = FeedforwardCompensator(model, output_min=0.0, output_max=1.8)
+    comp = Compensator(model, output_min=0.0, output_max=1.8)
     x = _path(np.random.default_rng(0), lo=0.05, hi=1.75)
     commands = np.array([comp.command(s) for s in model.simulate(x)])
     np.testing.assert_allclose(commands, x, atol=1e-12)
@@ -53,7 +53,7 @@ def test_compensator_inverts_model_exactly_inside_limits():
 
 def test_disabled_compensator_passes_best_linear_map():
     model = MPIModel.from_params(PARAMS)
-    comp = FeedforwardCompensator(model, output_min=0.2, output_max=1.8, enabled=False)
+    comp = Compensator(model, output_min=0.2, output_max=1.8, enabled=False)
     lin = comp.linear_map
     assert comp.command(2e-5) == pytest.approx(lin.gain * 2e-5 + lin.offset)
     assert lin.gain > 0
@@ -62,8 +62,8 @@ def test_disabled_compensator_passes_best_linear_map():
 @pytest.mark.parametrize('seed', range(5))
 def test_output_is_always_finite_and_inside_limits(seed):
     rng = np.random.default_rng(seed)
-    comp = FeedforwardCompensator(random_model(rng, output_scale=1e-5), output_min=0.2,
-                                  output_max=1.8)
+    comp = Compensator(random_model(rng, output_scale=1e-5), output_min=0.2,
+                       output_max=1.8)
     specials = [np.nan, np.inf, -np.inf, 1e300, -1e300, 5e-308, 1e-3, -1e-3, 'text', None]
     values = list(rng.normal(0.0, 3e-5, 2000)) + specials * 20
     rng.shuffle(values)
@@ -76,8 +76,8 @@ def test_output_is_always_finite_and_inside_limits(seed):
 
 def test_recovers_after_bad_input():
     model = MPIModel.from_params(PARAMS)
-    ref = FeedforwardCompensator(model, output_min=0.0, output_max=1.8)
-    comp = FeedforwardCompensator(model, output_min=0.0, output_max=1.8)
+    ref = Compensator(model, output_min=0.0, output_max=1.8)
+    comp = Compensator(model, output_min=0.0, output_max=1.8)
     s = model.simulate(_path(np.random.default_rng(3), lo=0.05, hi=1.75))
     for v in s[:300]:
         ref.command(v)
@@ -90,7 +90,7 @@ def test_recovers_after_bad_input():
 
 def test_clamping_keeps_inverse_in_step_with_applied_current():
     model = MPIModel.from_params(PARAMS)
-    comp = FeedforwardCompensator(model, output_min=0.3, output_max=1.5)
+    comp = Compensator(model, output_min=0.3, output_max=1.5)
     rng = np.random.default_rng(4)
     desired = model.simulate(_path(rng, lo=0.0, hi=1.8))     # goes beyond the limits
     applied = np.array([comp.command(v) for v in desired])
@@ -105,11 +105,11 @@ def test_bumpless_swap_starts_new_model_at_the_operating_point():
     old = MPIModel.from_params(PARAMS)
     new_params = dict(PARAMS, **{'model.hysteresis.weights': [1.1, 0.25, 0.25, 0.05]})
     new = MPIModel.from_params(new_params)
-    comp = FeedforwardCompensator(old, output_min=0.0, output_max=1.8)
+    comp = Compensator(old, output_min=0.0, output_max=1.8)
     x = _path(rng, lo=0.05, hi=1.75)
     desired = old.simulate(x)
     applied = [comp.command(v) for v in desired[:400]]
-    comp.swap_model(new)
+    comp.install(new)
     assert comp.version == 2
     after = [comp.command(v) for v in desired[400:]]
     # What the new model itself implies: its inverse driven from the state the applied
@@ -127,12 +127,12 @@ def _inverse_state(model, z_h):
 
 def test_swap_to_same_model_is_seamless():
     model = MPIModel.from_params(PARAMS)
-    ref = FeedforwardCompensator(model, output_min=0.0, output_max=1.8)
-    comp = FeedforwardCompensator(model, output_min=0.0, output_max=1.8)
+    ref = Compensator(model, output_min=0.0, output_max=1.8)
+    comp = Compensator(model, output_min=0.0, output_max=1.8)
     desired = model.simulate(_path(np.random.default_rng(6), lo=0.05, hi=1.75))
     out_ref = [ref.command(v) for v in desired]
     out = [comp.command(v) for v in desired[:333]]
-    comp.swap_model(model)
+    comp.install(model)
     out += [comp.command(v) for v in desired[333:]]
     np.testing.assert_allclose(out, out_ref, atol=1e-12)
 
@@ -140,12 +140,12 @@ def test_swap_to_same_model_is_seamless():
 @pytest.mark.parametrize('lo, hi', [(1.0, 1.0), (2.0, 1.0), (np.nan, 1.0), (0.0, np.inf)])
 def test_bad_limits_rejected(lo, hi):
     with pytest.raises(ModelError, match='output.min must be finite and below output.max'):
-        FeedforwardCompensator(MPIModel.from_params(PARAMS), output_min=lo, output_max=hi)
+        Compensator(MPIModel.from_params(PARAMS), output_min=lo, output_max=hi)
 
 
 @pytest.mark.parametrize('desired', [1e308, -1e308, 1.7976931348623157e308, 1e200, -5e305])
 def test_extreme_finite_input_gives_clamped_finite_command(desired):
-    comp = FeedforwardCompensator(MPIModel.from_params(PARAMS), output_min=0.2, output_max=1.8)
+    comp = Compensator(MPIModel.from_params(PARAMS), output_min=0.2, output_max=1.8)
     current = comp.command(desired)
     assert np.isfinite(current) and current == (1.8 if desired > 0 else 0.2)
     assert np.all(np.isfinite(comp.state))
@@ -185,8 +185,8 @@ def test_command_batch_equals_command_per_sample():
     # The compiled chunk path gives the per-sample results, counters, memory and state.
     rng = np.random.default_rng(5)
     model = random_model(rng, n=8, l=4)
-    one = FeedforwardCompensator(model, output_min=-1.0, output_max=2.0)
-    chunked = FeedforwardCompensator(model, output_min=-1.0, output_max=2.0)
+    one = Compensator(model, output_min=-1.0, output_max=2.0)
+    chunked = Compensator(model, output_min=-1.0, output_max=2.0)
     lo, hi = one.displacement_range
     desired = lo + (hi - lo) * (np.cumsum(rng.normal(0.0, 0.15, 600)) % 1.6 - 0.3)
     desired[[10, 200]] = np.nan
@@ -218,7 +218,7 @@ def test_multi_axis_block_equals_single_axis_compensators():
     rng = np.random.default_rng(21)
     models = [random_model(rng, n=6, l=3) for _ in range(4)]
     multi = MultiAxisCompensator(models, output_min=-1.0, output_max=[1.5, 2.0, 2.5, 3.0])
-    singles = [FeedforwardCompensator(m, output_min=-1.0, output_max=hi)
+    singles = [Compensator(m, output_min=-1.0, output_max=hi)
                for m, hi in zip(models, [1.5, 2.0, 2.5, 3.0])]
     ranges = np.array([c.displacement_range for c in singles])
     block = ranges[:, 0] + (ranges[:, 1] - ranges[:, 0]) * rng.uniform(0.0, 1.0, (50, 4))

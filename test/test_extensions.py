@@ -4,14 +4,13 @@
 import warnings
 
 from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.compensation import Compensator, FeedforwardCompensator
+from mpi_ros.compensation import Compensator
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
-from mpi_ros.errors import DataError, ModelError, MPIWarning
+from mpi_ros.errors import DataError, ModelError
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
-from mpi_ros.extensions import compensator_from_params, CompositeModel, CreepModel, \
-    DeadTimeModel, EFFECTS, extended_model_from_params, ExtendedCompensator, fit_composite, \
-    fit_creep, fit_dead_time, fit_rate_dependence, fit_thermal_drift, RateDependentModel, \
-    ThermalDriftModel
+from mpi_ros.extensions import CompositeModel, CreepModel, DeadTimeModel, EFFECTS, \
+    extended_model_from_params, fit_composite, fit_creep, fit_dead_time, \
+    fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
 from mpi_ros.extensions._signals import delay, first_order_lag, lag_bank, \
     lag_feedback_inverse
 from mpi_ros.identification import identify
@@ -141,7 +140,7 @@ def test_extended_compensator_inverts_its_model(seed):
     rng = np.random.default_rng(seed)
     t, x = _signal(rng)
     for model, tolerance in zip(_models(rng)[:3], (EXACT, EXACT, THERMAL)):
-        comp = ExtendedCompensator(model, output_min=-10.0, output_max=10.0)
+        comp = Compensator(model, output_min=-10.0, output_max=10.0)
         commands = [comp.command(s, time=tk) for s, tk in zip(model.simulate(t, x), t)]
         np.testing.assert_allclose(commands, x, atol=tolerance, rtol=0.0)
         assert comp.counters['clamped'] == 0
@@ -149,7 +148,7 @@ def test_extended_compensator_inverts_its_model(seed):
 
 def test_extended_compensator_is_safe():
     creep = _models(np.random.default_rng(2))[0]
-    comp = ExtendedCompensator(creep, output_min=0.2, output_max=1.0)
+    comp = Compensator(creep, output_min=0.2, output_max=1.0)
     for value in (float('nan'), 1.0, -1.0, 'x', float('inf')):
         current = comp.command(value)
         assert np.isfinite(current) and 0.2 <= current <= 1.0
@@ -157,10 +156,11 @@ def test_extended_compensator_is_safe():
     comp.command(0.0, time=1.0)
     comp.command(0.0, time=0.5)
     assert comp.counters['bad_time'] == 1
-    comp.swap_model(CreepModel(creep.model, creep.time_constants, 2 * creep.weights))
+    comp.install(CreepModel(creep.model, creep.time_constants, 2 * creep.weights))
     assert comp.version == 2
-    with pytest.raises(ModelError, match='swap_model needs a CreepModel'):
-        comp.swap_model(_models(np.random.default_rng(2))[1])
+    # One class serves every kind: install() changes the kind (swap_model refused it).
+    comp.install(_models(np.random.default_rng(2))[1])
+    assert comp.version == 3 and comp.kind == 'rate_dependence'
     comp.enabled = False
     lin = comp.linear_map
     assert comp.command(0.0) == pytest.approx(min(max(lin.offset, 0.2), 1.0))
@@ -168,20 +168,22 @@ def test_extended_compensator_is_safe():
         comp.set_limits(1.0, 0.0)
 
 
-def test_compensator_from_params_picks_the_class():
+def test_compensator_of_params_picks_the_step():
+    # The one Compensator of the model extended_model_from_params builds (the removed
+    # compensator_from_params picked a class): a plain model runs the compiled step, an
+    # invertible effect its per-step inverse, a dead time Gamma alone.
     creep, rate, thermal, dead = _models(np.random.default_rng(3))
     limits = {'output_min': 0.0, 'output_max': 2.0}
-    assert isinstance(compensator_from_params(creep.model.to_params(), **limits),
-                      FeedforwardCompensator)
+    plain = Compensator(extended_model_from_params(creep.model.to_params()), **limits)
+    assert not plain.has_effect and plain.kind == 'none'
     for model in (creep, rate, thermal):
-        assert isinstance(compensator_from_params(model.to_params(), **limits),
-                          ExtendedCompensator)
-    with pytest.warns(MPIWarning, match='cannot be inverted causally'):
-        comp = compensator_from_params(dead.to_params(), **limits)
-    assert isinstance(comp, FeedforwardCompensator)
+        comp = Compensator(extended_model_from_params(model.to_params()), **limits)
+        assert comp.has_effect and comp.kind == model.cause
+    comp = Compensator(extended_model_from_params(dead.to_params()), **limits)
+    assert not comp.has_effect and comp.kind == 'dead_time (not compensated)'
     with warnings.catch_warnings():
         warnings.simplefilter('error')
-        compensator_from_params(rate.to_params(), **limits)
+        Compensator(extended_model_from_params(rate.to_params()), **limits)
 
 
 @pytest.mark.parametrize('effect, fit', [({'creep_gain': 0.06}, fit_creep),
@@ -198,9 +200,9 @@ def test_closed_loop_control_error_extended_beats_plain(effect, fit):
     tv, xv = diagnostic_excitation(sample_rate=1000.0, seed=4)
     desired = base.model.simulate(xv)
     errors = []
-    for comp in (FeedforwardCompensator(base.model, output_min=0.0, output_max=2.0),
-                 ExtendedCompensator(extended, output_min=0.0, output_max=2.0)):
-        stamp = isinstance(comp, ExtendedCompensator)
+    for comp in (Compensator(base.model, output_min=0.0, output_max=2.0),
+                 Compensator(extended, output_min=0.0, output_max=2.0)):
+        stamp = comp.has_effect
         commands = [comp.command(s, **({'time': tk} if stamp else {}))
                     for s, tk in zip(desired, tv)]
         measured = MagnetostrictiveActuator(cfg).simulate(tv, commands)
@@ -219,7 +221,7 @@ def test_extended_compensator_survives_extreme_finite_input():
         'model.creep.time_constants': [0.1, 1.0, 10.0],
         'model.creep.weights': [0.02, 0.02, 0.02],
     }
-    comp = compensator_from_params(params, output_min=0.2, output_max=1.8)
+    comp = Compensator(extended_model_from_params(params), output_min=0.2, output_max=1.8)
     for desired in (1e308, -1e308, 1.7976931348623157e308, 5e-5, float('nan')):
         current = comp.command(desired)
         assert np.isfinite(current) and 0.2 <= current <= 1.8
@@ -321,7 +323,7 @@ def test_creep_lags_follow_the_applied_displacement():
     rng = np.random.default_rng(4)
     t, x = _signal(rng)
     creep = _models(rng)[0]
-    comp = ExtendedCompensator(creep, output_min=0.6, output_max=1.4)
+    comp = Compensator(creep, output_min=0.6, output_max=1.4)
     commands = np.array([comp.command(s, time=tk)
                          for s, tk in zip(creep.simulate(t, x), t)])
     assert comp.counters['clamped'] > 100
@@ -341,11 +343,11 @@ def test_creep_swap_keeps_the_creep_to_come():
     moved = CreepModel(creep.model.with_operating_point(
         output_offset=creep.model.output_offset + d), creep.time_constants, creep.weights)
     half = t.size // 2
-    steady = ExtendedCompensator(creep, output_min=-10.0, output_max=10.0)
-    swapped = ExtendedCompensator(creep, output_min=-10.0, output_max=10.0)
+    steady = Compensator(creep, output_min=-10.0, output_max=10.0)
+    swapped = Compensator(creep, output_min=-10.0, output_max=10.0)
     expected = [steady.command(s, time=tk) for s, tk in zip(desired, t)]
     commands = [swapped.command(s, time=tk) for s, tk in zip(desired[:half], t[:half])]
-    swapped.swap_model(moved)
+    swapped.install(moved)
     commands += [swapped.command(s + d, time=tk) for s, tk in zip(desired[half:], t[half:])]
     np.testing.assert_allclose(commands, expected, rtol=0.0, atol=1e-9)
     np.testing.assert_allclose(commands, x, rtol=0.0, atol=EXACT)
@@ -375,8 +377,8 @@ def test_extension_wins_on_a_tracking_trajectory(effect, fit, order):
     times = np.arange(desired.size) / 200.0
     rms = []
     for model in (plain, extended):
-        comp = compensator_from_params(model.to_params(), output_min=0.2, output_max=1.8,
-                                       sample_period=0.005)
+        comp = Compensator(extended_model_from_params(model.to_params()), output_min=0.2,
+                           output_max=1.8, sample_period=0.005)
         plant = MagnetostrictiveActuator(cfg, seed=3)
         measured = np.array([plant.step(tk, comp.command(sk, time=tk))
                              for sk, tk in zip(desired, times)])

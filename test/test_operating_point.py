@@ -12,7 +12,7 @@ import functools
 from hypothesis import given, HealthCheck, settings, strategies as st
 from mpi_ros import IdentificationError, identify
 from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.compensation import Compensator
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.identification import burn_in, identify_weights
 import numpy as np
@@ -124,9 +124,9 @@ def test_invariant_to_zero_bias_sign_and_scale(offset, bias, sign, log_x_scale, 
     _, desired = tracking_trajectory(10.0, sample_rate=100.0, low=0.15 * np.ptp(yv),
                                      high=0.85 * np.ptp(yv))
     desired = desired + float(np.min(yv))
-    plain = FeedforwardCompensator(ref.model, output_min=LOWEST, output_max=HIGHEST)
-    moved = FeedforwardCompensator(new.model, output_min=LOWEST * x_scale + point[0],
-                                   output_max=HIGHEST * x_scale + point[0])
+    plain = Compensator(ref.model, output_min=LOWEST, output_max=HIGHEST)
+    moved = Compensator(new.model, output_min=LOWEST * x_scale + point[0],
+                        output_max=HIGHEST * x_scale + point[0])
     commands = np.array([plain.command(d) for d in desired])
     moved_commands = np.array([moved.command(point[1] + sign * y_scale * d)
                                for d in desired])

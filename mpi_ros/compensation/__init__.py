@@ -20,15 +20,13 @@ step) or an extended model whose effect plugs in its exact per-step inverse
 (:class:`InverseStep`, e.g. :class:`mpi_ros.extensions.creep.CreepInverse`).  It owns the
 limits, the screening, the counters, the turning-point memory and the bumpless handover
 between models of any kind (:meth:`Compensator.install`); a node only translates
-messages and parameters.  :class:`FeedforwardCompensator` and
-:class:`ExtendedCompensator` are its plain and extended constructors.
+messages and parameters; the rule by which a node's parameters update the model is in
+:mod:`mpi_ros.compensation.updates`.
 """
 
-from .compensator import (Compensator, ExtendedCompensator, FeedforwardCompensator, gamma_of,
-                          inverse_step_of, InverseStep, kind_of)
+from .compensator import Compensator, gamma_of, inverse_step_of, InverseStep, kind_of
 from .multi_axis import MultiAxisCompensator
 from .screening import best_linear_map, LinearMap, operating_range, screen_desired
 
-__all__ = ['Compensator', 'ExtendedCompensator', 'FeedforwardCompensator', 'InverseStep',
-           'MultiAxisCompensator', 'gamma_of', 'inverse_step_of', 'kind_of', 'LinearMap',
-           'best_linear_map', 'operating_range', 'screen_desired']
+__all__ = ['Compensator', 'InverseStep', 'MultiAxisCompensator', 'gamma_of', 'inverse_step_of',
+           'kind_of', 'LinearMap', 'best_linear_map', 'operating_range', 'screen_desired']

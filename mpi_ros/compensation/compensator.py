@@ -21,8 +21,8 @@ from ..errors import ModelError
 from ..memory import TurningPointMemory
 from ..model import _hysteresis_step, _superposition_value, MPIModel
 
-__all__ = ['Compensator', 'ExtendedCompensator', 'FeedforwardCompensator', 'InverseStep',
-           'Pack', 'gamma_of', 'inverse_step_of', 'kind_of', 'loop_block', 'pack']
+__all__ = ['Compensator', 'InverseStep', 'Pack', 'gamma_of', 'inverse_step_of', 'kind_of',
+           'loop_block', 'pack']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -114,6 +114,8 @@ class Compensator:
     memory : TurningPointMemory, optional
         Where the applied current's turning points are kept (a row of a multi-axis
         block); a new memory by default.
+    inverse : MPIModel, optional
+        Gamma^-1 of ``model`` when already built; None: built here.
 
     Attributes
     ----------
@@ -127,7 +129,8 @@ class Compensator:
 
     def __init__(self, model: Any, *, output_min: float, output_max: float,
                  enabled: bool = True, sample_period: float = 1e-3,
-                 memory: TurningPointMemory | None = None) -> None:
+                 memory: TurningPointMemory | None = None,
+                 inverse: MPIModel | None = None) -> None:
         self._check_limits(output_min, output_max)
         _check_sample_period(sample_period)
         self.output_min = float(output_min)
@@ -144,7 +147,7 @@ class Compensator:
         self._started = False
         self._step: InverseStep | None = None
         self._own_pack: Pack | None = None
-        self._install(model, replay=False)
+        self._install(model, replay=False, inverse=inverse)
         self.version = 1
 
     @staticmethod
@@ -162,13 +165,14 @@ class Compensator:
             self.before_change()
         self._own_pack = None
 
-    def _install(self, model: Any, *, replay: bool) -> None:
+    def _install(self, model: Any, *, replay: bool, inverse: MPIModel | None) -> None:
         self._changing()
         gamma = gamma_of(model)
         step = inverse_step_of(model)
         if step is not None and not step.carry(self._step):
             step.start(self.last_command)
-        inverse = gamma.inverse()
+        if inverse is None:
+            inverse = gamma.inverse()                  # (12)-(14), (22)-(25)
         h, s_inv, h_inv = gamma.hysteresis, inverse.superposition, inverse.hysteresis
         z_h = np.array(h.initial_states, dtype=np.float64)
         if replay and len(self.memory):
@@ -192,7 +196,7 @@ class Compensator:
         self.displacement_range = (lo, hi)
         self.linear_map = linear
 
-    def install(self, model: Any) -> None:
+    def install(self, model: Any, *, inverse: MPIModel | None = None) -> None:
         """
         Switch to a new model of any kind, bumplessly.
 
@@ -205,9 +209,12 @@ class Compensator:
         ----------
         model : MPIModel or extended model
             The new (validated) forward model.
+        inverse : MPIModel, optional
+            Its Gamma^-1 when already built (:func:`mpi_ros.compensation.updates.prepare`);
+            None: built here.
 
         """
-        self._install(model, replay=True)
+        self._install(model, replay=True, inverse=inverse)
         self.version += 1
 
     @property
@@ -391,87 +398,6 @@ class Compensator:
             self._last_time = last
             return self.sample_period
         return t - last
-
-
-class FeedforwardCompensator(Compensator):
-    """
-    The :class:`Compensator` of a plain MPI model (Fig. 10 of the paper).
-
-    Parameters
-    ----------
-    model : MPIModel
-        The forward model Gamma.
-    output_min, output_max : float
-        Safe current range [A]; every output lies inside it.
-    enabled : bool
-        False: output the best linear map instead of Gamma^-1 (for comparison).
-
-    """
-
-    def __init__(self, model: MPIModel, *, output_min: float, output_max: float,
-                 enabled: bool = True) -> None:
-        super().__init__(model, output_min=output_min, output_max=output_max,
-                         enabled=enabled)
-
-    def swap_model(self, model: MPIModel) -> None:
-        """
-        Switch to a new plain model bumplessly (see :meth:`Compensator.install`).
-
-        Parameters
-        ----------
-        model : MPIModel
-            The new (validated) forward model.
-
-        """
-        self.install(model)
-
-
-class ExtendedCompensator(Compensator):
-    """
-    The :class:`Compensator` of a creep, rate-dependence or thermal-drift model.
-
-    Parameters
-    ----------
-    model : extended model
-        A model whose effect has an exact per-step inverse (``inverse_step()``).
-    output_min, output_max : float
-        Safe current range [A]; every output lies inside it.
-    enabled : bool
-        False: output the best linear map of Gamma instead (for comparison).
-    sample_period : float
-        Interval [s] assumed between two commands when :meth:`command` gets no ``time``.
-
-    """
-
-    def __init__(self, model: Any, *, output_min: float, output_max: float,
-                 enabled: bool = True, sample_period: float = 1e-3) -> None:
-        if inverse_step_of(model) is None:
-            msg = (f'ExtendedCompensator needs a creep, rate_dependence or thermal_drift model;'
-                   f' found {type(model).__name__}; use compensator_from_params')
-            raise ModelError(msg)
-        super().__init__(model, output_min=output_min, output_max=output_max,
-                         enabled=enabled, sample_period=sample_period)
-
-    def swap_model(self, model: Any) -> None:
-        """
-        Switch to a new extended model of the same kind, bumplessly.
-
-        Parameters
-        ----------
-        model : extended model
-            The new model; of the same extension as the current one.
-
-        Raises
-        ------
-        ModelError
-            When the extension differs (use :meth:`Compensator.install`).
-
-        """
-        if type(model) is not type(self.model):
-            msg = (f'swap_model needs a {type(self.model).__name__}; found'
-                   f' {type(model).__name__}; use install() to change the kind of model')
-            raise ModelError(msg)
-        self.install(model)
 
 
 #: The packed arrays of :func:`pack`: coefficients, states, index, table.

@@ -18,10 +18,11 @@ from .compensator import (
     _check_sample_period, _COMPILED, _LAST, Compensator, COMPILED_COUNTERS, loop_block, pack,
 )
 from .kernels import _compensate_axes, TABLE_COLUMNS
-from ..errors import DataError, ModelError
+from ..errors import DataError, ModelError, ParameterRejected
 from ..memory import TurningPointMemory
+from ..model import MPIModel
 
-__all__ = ['MultiAxisCompensator']
+__all__ = ['MultiAxisCompensator', 'chunk_times', 'joint_names']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -55,23 +56,27 @@ class MultiAxisCompensator:
         Nominal command interval [s] (effects with lags only).
     memory_capacity : int
         Turning points kept per axis (see :class:`~mpi_ros.memory.TurningPointMemory`).
+    inverses : sequence of MPIModel or None, optional
+        Gamma^-1 of each axis's model where already built (None: built here).
 
     """
 
     def __init__(self, models: Sequence[Any], *, output_min: float | Sequence[float],
                  output_max: float | Sequence[float], enabled: bool = True,
-                 sample_period: float = 1e-3, memory_capacity: int = 4096) -> None:
+                 sample_period: float = 1e-3, memory_capacity: int = 4096,
+                 inverses: Sequence[MPIModel | None] | None = None) -> None:
         if len(models) == 0:
             msg = 'a multi-axis compensator needs at least one axis model'
             raise ModelError(msg)
         count = len(models)
         lows = _per_axis(output_min, count, 'output.min')
         highs = _per_axis(output_max, count, 'output.max')
+        built = list(inverses) if inverses is not None else [None] * count
         self._memory = np.zeros((count, memory_capacity + 1))
         self._memory_state = np.zeros((count, 2), dtype=np.int64)
         self._axes = [
             Compensator(model, output_min=lo, output_max=hi, enabled=enabled,
-                        sample_period=sample_period,
+                        sample_period=sample_period, inverse=built[k],
                         memory=TurningPointMemory(memory_capacity, points=self._memory[k],
                                                   state=self._memory_state[k]))
             for k, (model, lo, hi) in enumerate(zip(models, lows, highs))]
@@ -243,6 +248,93 @@ class MultiAxisCompensator:
             if pack[2][a, _COMPILED]:
                 axis.last_command = float(table[a, _LAST])
         self._counts[:] = 0
+
+
+def joint_names(names: Any, axes: int) -> tuple[str, ...]:
+    """
+    Check the ``joints`` parameter against the axis count.
+
+    Parameters
+    ----------
+    names : list of str or None
+        The parameter's value (None or empty: no names).
+    axes : int
+        Number of axes.
+
+    Returns
+    -------
+    tuple of str
+        The names, one per axis; empty when none are given.
+
+    Raises
+    ------
+    ParameterRejected
+        When the count differs from ``axes``, a name is empty or repeated.
+
+    Examples
+    --------
+    >>> joint_names(['a', 'b'], 2)
+    ('a', 'b')
+    >>> joint_names(None, 3)
+    ()
+
+    """
+    given = tuple(names or ())
+    if not given:
+        return ()
+    if len(given) != axes:
+        msg = (f'joints names {len(given)} joints ({", ".join(given)}) but axes is {axes}; '
+               f'give one name per axis (axes:={len(given)}, or as many joints as axes)')
+        raise ParameterRejected(msg)
+    empty = [str(k) for k, name in enumerate(given) if not name.strip()]
+    if empty:
+        msg = f'joints: the name of axis {", ".join(empty)} is empty; name every joint'
+        raise ParameterRejected(msg)
+    repeated = sorted({name for name in given if given.count(name) > 1})
+    if repeated:
+        msg = f'joints names {", ".join(repeated)} more than once; each joint once'
+        raise ParameterRejected(msg)
+    return given
+
+
+def chunk_times(arrival: float, previous: float | None, samples: int,
+                sample_period: float) -> FloatArray:
+    """
+    Return the time stamps of the samples of a chunk that arrived at one time.
+
+    The last sample is at ``arrival``; the earlier ones are ``sample_period`` apart before
+    it, or closer, ``(arrival - previous) / samples`` apart, when the chunk came sooner
+    than ``samples`` sample periods after the previous one, so that the first sample still
+    comes after ``previous`` (``message_time: arrival`` of the multi-axis node).
+
+    Parameters
+    ----------
+    arrival : float
+        When the chunk arrived [s] (steady clock).
+    previous : float or None
+        When the previous chunk arrived [s]; None for the first one.
+    samples : int
+        Samples in the chunk, K >= 1.
+    sample_period : float
+        Nominal interval between two samples [s], > 0.
+
+    Returns
+    -------
+    ndarray of float, shape (K,)
+        Time stamps [s], increasing, the last one ``arrival``.
+
+    Examples
+    --------
+    >>> chunk_times(10.0, 9.0, 4, 0.1).tolist()
+    [9.7, 9.8, 9.9, 10.0]
+    >>> chunk_times(10.0, 9.9, 4, 0.1).tolist()
+    [9.925, 9.95, 9.975, 10.0]
+
+    """
+    spacing = sample_period
+    if previous is not None and arrival - previous < samples * sample_period:
+        spacing = (arrival - previous) / samples
+    return arrival - spacing * np.arange(samples - 1, -1, -1, dtype=np.float64)
 
 
 def _per_axis(value: float | Sequence[float], count: int, name: str) -> list[float]:

@@ -3,9 +3,10 @@
 What the compensator does around the inverse.
 
 Screening of the desired values, the model's operating range over the safe current range,
-and the best linear map (the uncompensated baseline).
+the best linear map (the uncompensated baseline), and the counters of bad inputs.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 import math
 
@@ -14,7 +15,8 @@ import numpy.typing as npt
 
 from ..model import MPIModel
 
-__all__ = ['screen_desired', 'LinearMap', 'operating_range', 'best_linear_map']
+__all__ = ['screen_desired', 'LinearMap', 'operating_range', 'best_linear_map', 'FAULT_KEYS',
+           'new_faults', 'describe_faults']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -22,6 +24,10 @@ FloatArray = npt.NDArray[np.float64]
 #: clamped command is the same, and the inverse's arithmetic stays finite).  The compiled
 #: block loop (:func:`~mpi_ros.compensation.kernels._compensate_axes`) uses it too.
 SATURATION_RANGES = 10.0
+#: Counters of bad inputs (a node's diagnostics period with any of them is WARN).
+FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
+_FAULT_WORDS = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
+                'clamped': 'clamped'}
 
 
 def screen_desired(desired: object, counters: dict[str, int],
@@ -137,3 +143,45 @@ def best_linear_map(model: MPIModel, current_min: float, current_max: float) -> 
     x, keep = _major_loop(current_min, current_max)
     gain, offset = np.polyfit(model.simulate(x)[keep], x[keep], 1)
     return LinearMap(float(gain), float(offset))
+
+
+def new_faults(counters: Mapping[str, int], before: Mapping[str, int]) -> dict[str, int]:
+    """
+    Return how many inputs of each fault kind came since ``before``.
+
+    Parameters
+    ----------
+    counters, before : mapping of str to int
+        Counters now and at the start of the period (missing keys count 0).
+
+    Returns
+    -------
+    dict of str to int
+        One count per :data:`FAULT_KEYS` entry, never negative.
+
+    """
+    return {key: max(counters.get(key, 0) - before.get(key, 0), 0) for key in FAULT_KEYS}
+
+
+def describe_faults(faults: Mapping[str, int]) -> str:
+    """
+    Describe fault counts in words.
+
+    Parameters
+    ----------
+    faults : mapping of str to int
+        Counts by :data:`FAULT_KEYS` entry.
+
+    Returns
+    -------
+    str
+        e.g. ``3 non-finite, 2 clamped inputs``.
+
+    Examples
+    --------
+    >>> describe_faults({'nonfinite_input': 3, 'out_of_range': 0, 'clamped': 2})
+    '3 non-finite, 2 clamped inputs'
+
+    """
+    parts = [f'{faults[key]} {_FAULT_WORDS[key]}' for key in FAULT_KEYS if faults[key]]
+    return f'{", ".join(parts) or "no bad"} inputs'

@@ -25,14 +25,12 @@ fit, exact per-step inverse, diagnosis signature, evidence, report plot); they a
 through one registry, :data:`EFFECTS`, filled below (one line per effect).  Every model has
 ``simulate(time, current)``, ``to_params()``, ``from_params(mapping)`` and a ``cause``
 name; :func:`extended_model_from_params` picks the class from the keys present.
-:func:`compensator_from_params` builds the compensator for a parameter set.
 """
 
 from collections.abc import Iterator, Mapping
 from typing import Any
 
 from . import creep, dead_time, rate_dependence, thermal_drift
-from .compensation import compensator_from_params, ExtendedCompensator
 from .composite import CompositeModel, fit_composite
 from .creep import creep_time_constants, CreepModel, fit_creep
 from .dead_time import DeadTimeModel, fit_dead_time
@@ -45,10 +43,9 @@ from ..model import MPIModel
 __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeModel',
            'CompositeModel', 'ExtendedModel', 'fit_composite', 'fit_creep', 'fit_rate_dependence',
            'fit_thermal_drift', 'fit_dead_time', 'creep_time_constants',
-           'extended_model_from_params', 'EXTENSION_KEYS', 'ExtendedCompensator',
-           'compensator_from_params', 'Effect', 'EffectModel', 'EffectParameter', 'EFFECTS',
-           'ExtendedModelBase',
-           'register_effect', 'unregister_effect']
+           'extended_model_from_params', 'EXTENSION_KEYS', 'Effect', 'EffectModel',
+           'EffectParameter', 'EFFECTS', 'ExtendedModelBase', 'register_effect',
+           'unregister_effect']
 
 ExtendedModel = (CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
                  | CompositeModel)

@@ -48,8 +48,9 @@ class EffectModel(Protocol):
     """
     The extended model of an effect: Gamma plus the effect, with its parameter form.
 
-    An effect that can be inverted causally also has ``inverse_step()`` (see
-    :func:`mpi_ros.extensions.compensation.inverse_step_of`).
+    An effect that can be inverted causally also has ``inverse_step()``, the exact
+    per-step inverse :class:`~mpi_ros.compensation.Compensator` plugs in (see
+    :func:`mpi_ros.compensation.inverse_step_of`).
 
     """
 

@@ -2,11 +2,11 @@
 """
 Compensator node: desired displacement in, current command out, through the inverse (27).
 
-(Slightly over 500 lines, most of them this docstring: the single-axis model-update rule
-with its null handling and extensions, and the Float64 message path.  What it shares with
-the multi-axis node - the parameter callbacks' frame, grouped set_parameters, topics, loss
-accounting, counters, diagnostics - is in :mod:`mpi_ros.nodes.compensator_base`; the model
-logic itself is in :mod:`mpi_ros.compensation`.)
+The node holds the Float64 message path and its model's bookkeeping.  The model-update
+rule below (null handling, whole-model completion, validation, the bumpless swap) is
+:mod:`mpi_ros.compensation.updates`, on plain dicts; the parameter callbacks that convert
+to and from it, grouped set_parameters, topics, loss accounting, counters and diagnostics
+are shared with the multi-axis node in :mod:`mpi_ros.nodes.compensator_base`.
 
 Topics (relative names, std_msgs/msg/Float64, SI units)
     ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
@@ -33,9 +33,10 @@ Model life cycle
 
 Model updates (one rule for every path)
     A request is laid over the current values and the *whole* resulting model is
-    validated (``extended_model_from_params`` and its inverse); if it is valid it is
-    applied in one swap, otherwise every model key of the request is rejected with a
-    reason naming the key and the running model and its parameters stay untouched.
+    validated (``extended_model_from_params`` and its inverse, built once per request:
+    :func:`mpi_ros.compensation.updates.prepare`); if it is valid it is applied in one
+    swap, otherwise every model key of the request is rejected with a reason naming the
+    key and the running model and its parameters stay untouched.
     The model keys of one request always succeed or fail together:
 
     - ``set_parameters_atomically`` (the identifier's push): the request as it is.
@@ -69,21 +70,21 @@ Extended models (:mod:`mpi_ros.extensions`)
     The ``model.creep.*``, ``model.rate_dependence.time_constant``,
     ``model.thermal_drift.*`` and ``model.dead_time`` keys add one extension to Gamma;
     the candidate is built with ``extended_model_from_params`` (a bad key is rejected with
-    a reason naming it). Creep, rate dependence and thermal drift run through an
-    ``ExtendedCompensator``, fed with each message's arrival time on the steady clock
-    (``message_time``; queued messages served together get close times); a dead time
-    cannot be inverted, so Gamma alone is compensated and a warning is logged. An
-    extension is off while its keys are unset or 0 / empty. Pushing a plain model (all
-    five core keys, no extension key) switches an extension off. Extension keys alone
-    (no core key) change the extension of the running Gamma. A swap within the same kind of
-    compensator uses its ``swap_model``; a change of kind builds a new compensator that
-    takes over the turning points of the applied current (play state replayed through
-    the new H, (14)), the last command and the counters; its lag states start settled at
+    a reason naming it). Creep, rate dependence and thermal drift plug their exact
+    per-step inverse into the one :class:`~mpi_ros.compensation.Compensator`, fed with
+    each message's arrival time on the steady clock (``message_time``; queued messages
+    served together get close times); a dead time cannot be inverted, so Gamma alone is
+    compensated and a warning is logged. An extension is off while its keys are unset or
+    0 / empty. Pushing a plain model (all five core keys, no extension key) switches an
+    extension off. Extension keys alone (no core key) change the extension of the running
+    Gamma. Every new model, of any kind, is installed into the running compensator
+    (:meth:`~mpi_ros.compensation.Compensator.install`): the turning points of the applied
+    current are replayed through the new H ((14)), the last command and the counters go
+    on; an effect of the same kind keeps its lag states, a new one starts them settled at
     the last command.
     The multi-axis node (``axes`` > 1) applies these rules to each axis's
     ``axis<k>.model.*`` keys (:mod:`mpi_ros.nodes.multi_axis`, which also says which times
-    the samples of an array chunk get); the shared helpers are in
-    :mod:`mpi_ros.nodes.compensator_base`.
+    the samples of an array chunk get), calling the same rule once per axis prefix.
 
 A ``--params-file`` with an invalid model, or with output limits that are not
 ordered, makes the node refuse to start (exit status 1) rather than run a model
@@ -96,39 +97,56 @@ from typing import Any, Dict, List, Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
 from .compensator_base import (
     AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
-    ENABLED, is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params, new_faults,
-    ordered_limits, resolve_null, SAMPLE_PERIOD, whole_model_completion,
+    ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
 )
 from .multi_axis import MultiAxisCompensatorNode
 from .parameters import (
-    declare_parameters, EXTENSION_PARAMETERS, is_null, loop_qos_parameters, MODEL_KEYS,
-    MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
-    specs_by_name,
+    declare_parameters, extension_parameters, loop_qos_parameters, MODEL_PARAMETERS,
+    parameter_values, ParameterSpec, specs_by_name,
 )
 from .spinning import run_node_main
-from ..compensation import Compensator, gamma_of
-from ..extensions import extended_model_from_params
-
-__all__ = ['CompensatorNode', 'PARAMETERS', 'main', 'make_node']
-
-Type = Parameter.Type
-
-PARAMETERS = MODEL_PARAMETERS + EXTENSION_PARAMETERS + LIMIT_PARAMETERS + (
-    ENABLED,
-    SAMPLE_PERIOD,
-    MESSAGE_TIME,
-    DIAGNOSTICS_PERIOD,
-    *loop_qos_parameters('desired_displacement and current_command'),
-    AXES,
-    AUTOSTART,
+from ..compensation import Compensator
+from ..compensation.updates import (
+    apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
 
-_SPECS = specs_by_name(PARAMETERS)
+__all__ = ['CompensatorNode', 'main', 'make_node', 'parameters']
+
+
+def parameters() -> Tuple[ParameterSpec, ...]:
+    """
+    Return the node's parameter specs, the effect keys read from the registry now.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        Gamma and the operating point, every registered effect's keys, the limits and
+        the node's switches (also as the module attribute ``PARAMETERS``).
+
+    """
+    return MODEL_PARAMETERS + extension_parameters() + LIMIT_PARAMETERS + (
+        ENABLED,
+        SAMPLE_PERIOD,
+        MESSAGE_TIME,
+        DIAGNOSTICS_PERIOD,
+        *loop_qos_parameters('desired_displacement and current_command'),
+        AXES,
+        AUTOSTART,
+    )
+
+
+def __getattr__(name: str) -> Any:
+    """Give ``PARAMETERS`` as :func:`parameters` returns it when asked (not at import)."""
+    if name == 'PARAMETERS':
+        return parameters()
+    msg = f'module {__name__!r} has no attribute {name!r}'
+    raise AttributeError(msg)
+
+
 #: Most desired displacements served in one subscription callback.
 _DRAIN_LIMIT = DRAIN_LIMIT
 #: CDR of a Float64: 4-byte encapsulation header (byte 1: 1 = little-endian), the double.
@@ -137,10 +155,6 @@ _BIG = struct.Struct('>d').unpack_from
 _PACK = struct.Struct('<H2xd').pack
 #: The encapsulation header CDR_LE as the little-endian unsigned short _PACK writes first.
 _CDR_LE = 0x0100
-_EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
-_ALL_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + _EXTENSION_KEYS
-#: Keys set together within one set_parameters request (set_parameters_in_groups).
-_GROUPS = (_ALL_MODEL_KEYS, LIMIT_KEYS)
 
 
 class CompensatorNode(CompensatorNodeBase):
@@ -164,13 +178,15 @@ class CompensatorNode(CompensatorNodeBase):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        self._specs = _SPECS
-        self._groups = _GROUPS
+        specs = parameters()
+        self._specs = specs_by_name(specs)
+        # Keys set together within one set_parameters request (set_parameters_in_groups).
+        self._groups = (model_keys(), LIMIT_KEYS)
         self._compensator: Optional[Compensator] = None
         self._extended = False
         self._model_kind = 'none'
         self._model_version = 0
-        declare_parameters(self, PARAMETERS)
+        declare_parameters(self, specs)
         self._declared()
         # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
         # Time object per message) or None: sample_period apart.
@@ -260,115 +276,50 @@ class CompensatorNode(CompensatorNodeBase):
         loss.served(served)
 
     # -- parameters ---------------------------------------------------------------------
-    def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
-        """Pre-set: resolve null and empty lists; five core keys describe the whole model."""
-        completed = []
-        for parameter in parameters:
-            spec = _SPECS.get(parameter.name)
-            if spec is not None:
-                parameter = normalized(spec, parameter)
-            if spec is not None and is_null(spec, parameter):
-                current = self.get_parameter_or(
-                    parameter.name, Parameter(parameter.name, Type.NOT_SET, None))
-                instead = resolve_null(spec.name, parameter, current)
-                if instead is None:
-                    continue
-                parameter = instead
-            completed.append(parameter)
-        names = {parameter.name for parameter in completed}
-        return completed + whole_model_completion(self, names)
+    def _running(self, prefix: str) -> bool:
+        return self._compensator is not None
 
-    def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
-        """Word a refusal: the keys of the request, why, and that the model stays."""
-        model_names = [p.name for p in parameters if p.name in _ALL_MODEL_KEYS]
-        if not model_names:
-            return str(err)
-        if len(model_names) <= 2:
-            changed = ', '.join(model_names)
-        else:
-            changed = f'model update ({len(model_names)} model.* keys)'
-        if self._compensator is None:
-            stays = 'the node stays unconfigured'
-        else:
-            stays = f'the running model (version {self._model_version}) stays'
-        return (f'{changed} rejected, the whole model was checked: {err}. Nothing was '
-                f'applied; {stays}. Keys that must change together (e.g. a new order) go '
-                'in one request: ros2 param load FILE, or set_parameters_atomically')
+    def _rejection(self, names: List[str], err: Exception) -> str:
+        version = None if self._compensator is None else self._model_version
+        return refusal(names, err, version=version)
 
-    def _model_candidate(self, names: Any, parameters: List[Parameter]) -> Dict[str, Any]:
-        """Build the whole model the request gives (or nothing), checked and inverted."""
-        model_names = names.intersection(_ALL_MODEL_KEYS)
-        if not model_names:
-            return {}
-        values = parameter_values(self, list(_SPECS), parameters)
-        current = parameter_values(self, list(model_names))
-        # Unconfigured, a request that changes nothing (a dump of this node loaded back)
-        # is accepted: there is no model to check it against, and nothing to apply.
-        if self._compensator is None and all(
-                values[key] == current[key] for key in model_names):
-            return {}
-        params = model_params(values)
-        if params is None:
-            missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
-            msg = (f'the node has no model yet, and a model needs all five keys of '
-                   f'Gamma; missing: {missing}')
-            raise ParameterRejected(msg)
-        model = extended_model_from_params(params)
-        gamma_of(model).inverse()  # (12)-(14), (22)-(25) must exist before the swap
-        return {'model': model}
-
-    def _install_prepared(self, prepared: Dict[str, Any]) -> None:
+    def _install_prepared(self, prepared: List[Prepared]) -> None:
+        update = prepared[0]
+        model = apply(update, self._compensator)
         # Lifecycle state unconfigured: the parameters hold it; configure loads it.
-        if 'model' in prepared and self._configured:
-            self._install_model(prepared['model'])
+        if update.model is not None and self._configured:
+            self._installed(model, update.inverse)
 
     def _load(self) -> None:
-        self._configure_from_declared()
-
-    def _unload(self) -> None:
-        self._extended = False
-        self._model_kind = 'none'
-
-    def _configure_from_declared(self) -> None:
-        values = parameter_values(self, list(_SPECS))
-        ordered_limits(values['output.min'], values['output.max'])
-        given = [key for key in MODEL_KEYS if values[key] is not None]
-        if not given:
-            extensions = [key for key in _EXTENSION_KEYS if not is_off(values[key])]
-            if extensions:
-                msg = (f'{extensions[0]}: a model extension needs the five model.* keys of '
-                       'Gamma; add them to the parameters')
-                raise ParameterRejected(msg)
+        values = parameter_values(self, list(self._specs))
+        limits_of(values)
+        model = load(values)
+        if model is None:
             self.get_logger().info(
                 'no model given: unconfigured, publishing nothing until a model arrives '
                 '(all five model.* keys of Gamma in one request: ros2 param load, or '
                 'set_parameters_atomically)')
             return
-        if len(given) != len(MODEL_KEYS):
-            missing = ', '.join(key for key in MODEL_KEYS if values[key] is None)
-            msg = f'incomplete model in the parameters: missing {missing}'
-            raise ParameterRejected(msg)
-        params = model_params(values)
-        if params is None:
-            msg = 'incomplete model in the parameters'
-            raise ParameterRejected(msg)
-        self._install_model(extended_model_from_params(params))
+        self._installed(model)
 
-    def _install_model(self, model: Any) -> None:
-        """Apply a validated model of any kind: the core compensator swaps it in bumplessly."""
-        self._warn_if_not_compensated(model)
-        if self._compensator is None:
-            self._compensator = Compensator(
+    def _unload(self) -> None:
+        self._extended = False
+        self._model_kind = 'none'
+
+    def _installed(self, model: Any, inverse: Any = None) -> None:
+        """Count a model swapped in; build the core when there was none (``model`` given)."""
+        compensator = self._compensator
+        if compensator is None:
+            compensator = self._compensator = Compensator(
                 model, output_min=self.get_parameter('output.min').value,
                 output_max=self.get_parameter('output.max').value,
                 enabled=self.get_parameter('enabled').value,
-                sample_period=self.get_parameter('sample_period').value)
-        else:
-            self._compensator.install(model)
+                sample_period=self.get_parameter('sample_period').value, inverse=inverse)
+        self._warn_if_not_compensated(compensator.model)
         self._set_live()
-        self._extended = self._compensator.has_effect
+        self._extended = compensator.has_effect
         self._model_version += 1
-        self._model_kind = self._compensator.kind
+        self._model_kind = compensator.kind
         self.get_logger().info(
             f'model version {self._model_version} applied ({self._model_kind})')
 

@@ -24,17 +24,17 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
   activates at start-up;
 - the message counters, the once-a-second log of losses and bad inputs, and the frame of
   the diagnostics message (rate window, loss problems, common values);
-- the model-key rules both nodes apply to a model (the single-axis node's ``model.*`` keys,
-  each axis's ``axis<k>.model.*`` keys): when an extension key is "off"
-  (:func:`is_off`), the flat parameters of the model a set of values describes
-  (:func:`model_params`), what a YAML ``null`` means at run time (:func:`resolve_null`),
-  the keys a request with all five keys of Gamma resets (:func:`whole_model_completion`),
-  and the parameters ``sample_period`` and ``message_time`` of the extensions' lags.
+- the conversion between rclpy's ``Parameter`` and the dicts of the model-update rule
+  (:mod:`mpi_ros.compensation.updates`: null handling and whole-model completion in the
+  pre-set callback, :func:`~mpi_ros.compensation.updates.prepare` per model prefix in the
+  on-set callback - ``''`` for the single-axis node, ``axis<k>.`` for each axis -,
+  :func:`~mpi_ros.compensation.updates.apply` in the post-set callback), and the
+  parameters ``sample_period`` and ``message_time`` of the extensions' lags.
 
 Each node keeps what differs: its message type and its drain loop (decode, command,
 encode, publish: the per-message path stays in the node so that it costs no extra Python
-call per message), its parameter specs and pre-set completion, its model candidate and
-installation, what configure loads and cleanup drops, and its diagnostics status.
+call per message), its parameter specs and model prefixes, its core's installation,
+what configure loads and cleanup drops, and its diagnostics status.
 
 Lifecycle states (what each publishes on the loop's output topic)
     ``unconfigured``: no loop topics, no core, nothing published; parameter pushes are
@@ -50,28 +50,26 @@ Lifecycle states (what each publishes on the loop's output topic)
 import math
 import time
 import traceback
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
-from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.task import Future
 
 from .loss import LossMonitor
 from .parameters import (
-    check_parameters, EXTENSION_OFF, EXTENSION_PARAMETERS, harden_parameter_services,
-    MODEL_KEYS, OPERATING_POINT_KEYS, parameter_values, ParameterRejected, ParameterSpec,
-    set_parameters_in_groups,
+    check_parameters, harden_parameter_services, is_null, normalized, parameter_values,
+    ParameterRejected, ParameterSpec, plain_value, set_parameters_in_groups,
 )
 from .qos import loop_qos
-from ..compensation import inverse_step_of
+from ..compensation.screening import describe_faults, FAULT_KEYS, new_faults
+from ..compensation.updates import (
+    complete, LIMIT_KEYS, model_keys, PLAIN_KEYS, prepare, Prepared, uncompensated,
+)
 from ..errors import MPIError
-from ..extensions import EXTENSION_KEYS
-from ..model import MPIModel
-from ..params import OPERATING_POINT_DEFAULTS
 
 __all__ = [
     'AUTOSTART',
@@ -80,18 +78,11 @@ __all__ = [
     'DIAGNOSTICS_PERIOD',
     'DRAIN_LIMIT',
     'ENABLED',
-    'FAULT_KEYS',
-    'LIMIT_KEYS',
     'LIMIT_PARAMETERS',
     'MESSAGE_TIME',
     'SAMPLE_PERIOD',
     'describe_faults',
-    'is_off',
-    'model_params',
     'new_faults',
-    'ordered_limits',
-    'resolve_null',
-    'whole_model_completion',
 ]
 
 Type = Parameter.Type
@@ -148,21 +139,10 @@ MESSAGE_TIME = ParameterSpec(
     'fixed rate)',
     choices=('arrival', 'nominal'), read_only=True)
 
-#: The single-axis names of the extension keys (from the effect registry).
-_EXTENSION_KEYS = tuple(spec.name for spec in EXTENSION_PARAMETERS)
-
 #: Most messages served in one subscription callback (a flood still lets a stop through).
 DRAIN_LIMIT = 1000
-#: The two output limits, set together within one set_parameters request.
-LIMIT_KEYS = ('output.min', 'output.max')
-#: Counters of bad inputs: a diagnostics period with any of them is WARN, and they are logged.
-FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
 #: At most one log line about bad inputs per this period [s]; checked every second.
 _FAULT_LOG_PERIOD_S = 5.0
-#: Keys whose new value is handed to the post-set callback as it is.
-_PLAIN_KEYS = ('enabled', 'sample_period', 'diagnostics_period')
-_FAULT_WORDS = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
-                'clamped': 'clamped'}
 
 
 class CompensatorNodeBase(LifecycleNode):
@@ -172,8 +152,8 @@ class CompensatorNodeBase(LifecycleNode):
     A node subclass sets ``self._specs`` and ``self._groups`` before it declares its
     parameters, then calls :meth:`_declared`, sets up its own state, and calls
     :meth:`_open_topics` with its drain loop last (which runs ``autostart``).  It fills the
-    hooks below (``_load``, ``_unload``, ``_complete_request``, ``_model_candidate``,
-    ``_install_prepared``, ``_rejection``, ``_core_counters``, ``_node_counters``,
+    hooks below (``_load``, ``_unload``, ``_running``, ``_install_prepared``,
+    ``_rejection``, ``_core_counters``, ``_node_counters``,
     ``_status``, ``_status_values``, ``_status_name``).
 
     Parameters
@@ -194,7 +174,8 @@ class CompensatorNodeBase(LifecycleNode):
     def __init__(self, node_name: str, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         self._declaring = True
-        self._prepared: Optional[Dict[str, Any]] = None
+        self._prepared: List[Prepared] = []
+        self._prefixes: Tuple[str, ...] = ('',)
         self._specs: Mapping[str, ParameterSpec] = {}
         self._groups: Tuple[Tuple[str, ...], ...] = ()
         self._compensator: Any = None
@@ -478,6 +459,28 @@ class CompensatorNodeBase(LifecycleNode):
         return set_parameters_in_groups(self, parameter_list, groups=self._groups,
                                         specs=self._specs)
 
+    def _current(self, prefix: str) -> Dict[str, Any]:
+        """Return the current values of one model's keys and of the limits it uses."""
+        names = [prefix + key for key in model_keys() + LIMIT_KEYS] + (
+            list(LIMIT_KEYS) if prefix else [])
+        return parameter_values(self, names)
+
+    def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
+        """Pre-set: normalise values, resolve null, complete whole models (updates.complete)."""
+        specs = self._specs
+        given = [normalized(specs[p.name], p) if p.name in specs else p for p in parameters]
+        if self._declaring:
+            return given
+        request = {p.name: None if p.name in specs and is_null(specs[p.name], p)
+                   else plain_value(p.value) for p in given}
+        completed = request
+        for prefix in self._prefixes:
+            completed = complete(self._current(prefix), completed, prefix)
+        original = {p.name: p for p in given}
+        return [original[name] if name in request and value is request[name]
+                else Parameter(name, specs[name].type_, value)
+                for name, value in completed.items()]
+
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         """Check only: type, range, whole model(s) and limits; keep the candidate for apply."""
         try:
@@ -488,65 +491,37 @@ class CompensatorNodeBase(LifecycleNode):
             check_parameters(self._specs, checked, allow_unset=self._declaring)
             if self._declaring:
                 # One key at a time, the others not declared yet: cross-key checks
-                # run once all keys are declared (the node's _configure_from_declared).
+                # run once all keys are declared (the node's _load).
                 return SetParametersResult(successful=True)
-            self._prepared = self._candidate(parameters)
+            request = {p.name: plain_value(p.value) for p in parameters}
+            self._prepared = [
+                prepare(self._current(prefix), request, prefix, running=self._running(prefix))
+                for prefix in self._prefixes if _touches(request, prefix)]
         except (ParameterRejected, MPIError) as err:
-            self._prepared = None
+            self._prepared = []
             self._rejected_updates += 1
-            reason = self._rejection(parameters, err)
+            reason = self._rejection([p.name for p in parameters], err)
             self._last_rejection = reason
             self.get_logger().warning(f'rejected parameter update: {reason}')
             return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
 
-    def _candidate(self, parameters: List[Parameter]) -> Dict[str, Any]:
-        """Build what the request would apply; raise ParameterRejected if it is invalid."""
-        names = {parameter.name for parameter in parameters}
-        prepared = self._model_candidate(names, parameters)
-        limits = self._limits_candidate(names, parameters)
-        if limits is not None:
-            prepared['limits'] = limits
-        for name in _PLAIN_KEYS:
-            if name in names:
-                prepared[name] = parameter_values(self, [name], parameters)[name]
-        return prepared
-
-    def _limits_candidate(self, names: Any, parameters: List[Parameter]) -> Any:
-        """Return the checked node-wide limits of the request, None when it sets none."""
-        if names.isdisjoint(LIMIT_KEYS):
-            return None
-        values = parameter_values(self, list(LIMIT_KEYS), parameters)
-        return ordered_limits(values['output.min'], values['output.max'])
-
     def _apply_parameters(self, parameters: List[Parameter]) -> None:
         """Swap in what the validator prepared (post-set: the values are stored)."""
-        prepared, self._prepared = self._prepared, None
-        if self._declaring or not prepared:
+        prepared, self._prepared = self._prepared, []
+        if self._declaring or not any(prepared):
             return
-        compensator = self._compensator
-        if compensator is not None:
-            if 'limits' in prepared:
-                self._set_limits(prepared['limits'])
-            for name in ('enabled', 'sample_period'):
-                if name in prepared:
-                    setattr(compensator, name, prepared[name])
         self._install_prepared(prepared)
-        if 'diagnostics_period' in prepared:
+        period = prepared[0].switches.get('diagnostics_period')
+        if period is not None:
             self.destroy_timer(self._timer)
-            self._timer = self.create_timer(
-                prepared['diagnostics_period'], self._publish_diagnostics)
-
-    def _set_limits(self, limits: Any) -> None:
-        """Give the running core the prepared limits (node-wide: a (min, max) pair)."""
-        self._compensator.set_limits(*limits)
+            self._timer = self.create_timer(period, self._publish_diagnostics)
 
     def _warn_if_not_compensated(self, model: Any, where: str = '') -> None:
         """Warn when a model's effect (a dead time) cannot be inverted: Gamma alone is used."""
-        if inverse_step_of(model) is None and not isinstance(model, MPIModel):
-            self.get_logger().warning(
-                f'{where}{model.cause} cannot be inverted causally: compensating Gamma only; '
-                'the displacement lags the desired one by it')
+        warning = uncompensated(model)
+        if warning is not None:
+            self.get_logger().warning(where + warning)
 
     # -- hooks of the nodes -------------------------------------------------------------
     def _load(self) -> None:
@@ -557,20 +532,16 @@ class CompensatorNodeBase(LifecycleNode):
         """Cleanup: drop what :meth:`_load` built (the base drops the core itself)."""
         raise NotImplementedError
 
-    def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
-        """Pre-set: normalise the request and complete a whole model (node specific)."""
+    def _running(self, prefix: str) -> bool:
+        """Tell whether a model of this prefix runs."""
         raise NotImplementedError
 
-    def _model_candidate(self, names: Any, parameters: List[Parameter]) -> Dict[str, Any]:
-        """Return the prepared model(s) of the request (raise ParameterRejected if invalid)."""
+    def _install_prepared(self, prepared: List[Prepared]) -> None:
+        """Swap the prepared updates in (post-set; :func:`mpi_ros.compensation.updates.apply`)."""
         raise NotImplementedError
 
-    def _install_prepared(self, prepared: Dict[str, Any]) -> None:
-        """Install the prepared model(s) (post-set, after limits and switches)."""
-        raise NotImplementedError
-
-    def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
-        """Word a refusal: what was refused, why, and that the running model stays."""
+    def _rejection(self, names: List[str], err: Exception) -> str:
+        """Word a refusal (:func:`mpi_ros.compensation.updates.refusal`)."""
         raise NotImplementedError
 
     def _core_counters(self) -> Dict[str, int]:
@@ -685,223 +656,10 @@ class CompensatorNodeBase(LifecycleNode):
         return array
 
 
-def ordered_limits(output_min: float, output_max: float, *,
-                   names: Sequence[str] = LIMIT_KEYS) -> Tuple[float, float]:
-    """
-    Check a safe current range: both finite, the first below the second.
-
-    Parameters
-    ----------
-    output_min, output_max : float
-        Lowest and highest current command [A].
-    names : sequence of str
-        The two parameter names, as the user writes them (for the message).
-
-    Returns
-    -------
-    tuple of float
-        ``(output_min, output_max)``.
-
-    Raises
-    ------
-    ParameterRejected
-        Naming both parameters, their values and what to do.
-
-    """
-    low, high = names
-    if not (math.isfinite(output_min) and math.isfinite(output_max)):
-        msg = f'{low} and {high} must be finite; found {output_min}, {output_max}'
-        raise ParameterRejected(msg)
-    if not output_min < output_max:
-        msg = (f'{low} must be below {high}; found {low}={output_min} A and '
-               f'{high}={output_max} A; set both together with '
-               'set_parameters_atomically when moving the range')
-        raise ParameterRejected(msg)
-    return (output_min, output_max)
-
-
-def new_faults(counters: Mapping[str, int], before: Mapping[str, int]) -> Dict[str, int]:
-    """
-    Return how many inputs of each fault kind came since ``before``.
-
-    Parameters
-    ----------
-    counters, before : mapping of str to int
-        Counters now and at the start of the period (missing keys count 0).
-
-    Returns
-    -------
-    dict of str to int
-        One count per :data:`FAULT_KEYS` entry, never negative.
-
-    """
-    return {key: max(counters.get(key, 0) - before.get(key, 0), 0) for key in FAULT_KEYS}
-
-
-def describe_faults(faults: Mapping[str, int]) -> str:
-    """
-    Describe fault counts in words.
-
-    Parameters
-    ----------
-    faults : mapping of str to int
-        Counts by :data:`FAULT_KEYS` entry.
-
-    Returns
-    -------
-    str
-        e.g. ``3 non-finite, 2 clamped inputs``.
-
-    Examples
-    --------
-    >>> describe_faults({'nonfinite_input': 3, 'out_of_range': 0, 'clamped': 2})
-    '3 non-finite, 2 clamped inputs'
-
-    """
-    parts = [f'{faults[key]} {_FAULT_WORDS[key]}' for key in FAULT_KEYS if faults[key]]
-    return f'{", ".join(parts) or "no bad"} inputs'
-
-
-def is_off(value: Any) -> bool:
-    """
-    Tell whether an extension key's value is unset or its "off" value (0, empty).
-
-    Parameters
-    ----------
-    value : float, list of float or None
-        The key's value.
-
-    Returns
-    -------
-    bool
-        True for None, 0.0 and an empty list.
-
-    Examples
-    --------
-    >>> is_off(None), is_off(0.0), is_off([]), is_off([0.1])
-    (True, True, True, False)
-
-    """
-    if value is None:
-        return True
-    if isinstance(value, (int, float)):
-        return value == 0.0
-    return len(value) == 0
-
-
-def model_params(values: Mapping[str, Any], prefix: str = '') -> Optional[Dict[str, Any]]:
-    """
-    Return the flat parameters of the model that a set of key values describes.
-
-    Parameters
-    ----------
-    values : mapping of str to value
-        Values (None: unset) of the model keys named ``prefix + key``: Gamma's five, the
-        operating point's and every extension key.
-    prefix : str
-        ``''`` for the single-axis node, ``'axis<k>.'`` for an axis.
-
-    Returns
-    -------
-    dict or None
-        ``{key: value}`` with the single-axis keys: Gamma, the operating point and the
-        keys of every extension that is not off (for
-        :func:`mpi_ros.extensions.extended_model_from_params`); None when a key of Gamma
-        is unset.
-
-    """
-    if any(values[prefix + key] is None for key in MODEL_KEYS):
-        return None
-    params = {key: values[prefix + key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}
-    for keys in EXTENSION_KEYS.values():
-        if not all(is_off(values[prefix + key]) for key in keys):
-            params.update({key: values[prefix + key] for key in keys
-                           if values[prefix + key] is not None})
-    return params
-
-
-def resolve_null(key: str, parameter: Parameter, current: Parameter) -> Optional[Parameter]:
-    """
-    Resolve a YAML ``null`` for a model key in a run-time request.
-
-    A null for a key that is unset already is left out; for an extension key it becomes
-    the key's "off" value, for an operating-point key its default; a null for a key of
-    Gamma is returned unchanged for the validator to refuse (a running model cannot be
-    removed).
-
-    Parameters
-    ----------
-    key : str
-        The single-axis name of the key (``model.creep.weights``, also for
-        ``axis2.model.creep.weights``).
-    parameter : rclpy.parameter.Parameter
-        The incoming value, already checked to be null (:func:`is_null`).
-    current : rclpy.parameter.Parameter
-        The key's current value.
-
-    Returns
-    -------
-    rclpy.parameter.Parameter or None
-        The parameter to set instead, or None to leave it out.
-
-    """
-    if current.type_ == Type.NOT_SET:
-        return None
-    if key in EXTENSION_OFF:
-        off = EXTENSION_OFF[key]
-        if isinstance(off, list):
-            return Parameter(parameter.name, Type.DOUBLE_ARRAY, list(off))
-        return Parameter(parameter.name, Type.DOUBLE, off)
-    if key in OPERATING_POINT_DEFAULTS:
-        default = OPERATING_POINT_DEFAULTS[key]
-        kind = Type.INTEGER if isinstance(default, int) else Type.DOUBLE
-        return Parameter(parameter.name, kind, default)
-    return parameter
-
-
-def whole_model_completion(node: Node, names: Any, prefix: str = '') -> List[Parameter]:
-    """
-    Return the keys a request resets when it carries all five keys of Gamma.
-
-    Such a request describes the whole model: every operating-point key it leaves out
-    goes back to its default and every extension key it leaves out is switched off
-    (keys already there are not repeated).
-
-    Parameters
-    ----------
-    node : rclpy.node.Node
-        The node (its current values).
-    names : set of str
-        The names of the request.
-    prefix : str
-        ``''`` for the single-axis node, ``'axis<k>.'`` for an axis.
-
-    Returns
-    -------
-    list of rclpy.parameter.Parameter
-        The parameters to add to the request; empty unless all five keys of Gamma
-        (under ``prefix``) are in ``names``.
-
-    """
-    if not names.issuperset(prefix + key for key in MODEL_KEYS):
-        return []
-    added = []
-    for key in OPERATING_POINT_KEYS:
-        name, default = prefix + key, OPERATING_POINT_DEFAULTS[key]
-        if name in names or node.get_parameter(name).value == default:
-            continue
-        kind = Type.INTEGER if isinstance(default, int) else Type.DOUBLE
-        added.append(Parameter(name, kind, default))
-    for key in _EXTENSION_KEYS:
-        name = prefix + key
-        if name in names or is_off(node.get_parameter(name).value):
-            continue
-        off = EXTENSION_OFF[key]
-        if isinstance(off, list):
-            added.append(Parameter(name, Type.DOUBLE_ARRAY, list(off)))
-        else:
-            added.append(Parameter(name, Type.DOUBLE, off))
-    return added
+def _touches(request: Mapping[str, Any], prefix: str) -> bool:
+    """Tell whether a request concerns the model of ``prefix`` (its keys, limits, switches)."""
+    return any(name.startswith(prefix) or name in LIMIT_KEYS or name in PLAIN_KEYS
+               for name in request)
 
 
 def _same(current: Parameter, incoming: Parameter) -> bool:

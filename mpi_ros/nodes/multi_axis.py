@@ -71,8 +71,9 @@ Time stamps of a chunk (``message_time``)
     it, or evenly spread over the time since the previous message's arrival ``t_prev``
     when that is shorter than K sample periods (a burst of queued messages), so that the
     times always increase: spacing ``min(sample_period, (t - t_prev) / K)``
-    (:func:`chunk_times`).  K = 1 gives the single-axis node's time, the arrival.  The
-    clock is read only while some axis has an effect with lags.
+    (:func:`mpi_ros.compensation.multi_axis.chunk_times`).  K = 1 gives the single-axis
+    node's time, the arrival.  The clock is read only while some axis has an effect with
+    lags.
 
 Model updates
     The single-axis rule, per axis: a request is laid over the running values, and every
@@ -91,7 +92,6 @@ Model updates
 """
 
 from dataclasses import replace
-import re
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
@@ -106,17 +106,18 @@ from .arrays import (
 )
 from .compensator_base import (
     AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
-    ENABLED, FAULT_KEYS, is_off, LIMIT_KEYS, LIMIT_PARAMETERS, MESSAGE_TIME, model_params,
-    new_faults, ordered_limits, resolve_null, SAMPLE_PERIOD, whole_model_completion,
+    ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
 )
 from .parameters import (
-    declare_parameters, EXTENSION_PARAMETERS, is_null, loop_qos_parameters, MODEL_KEYS,
-    MODEL_PARAMETERS, normalized, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
-    ParameterSpec, specs_by_name,
+    declare_parameters, extension_parameters, loop_qos_parameters, MODEL_PARAMETERS,
+    parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
 )
-from ..compensation import gamma_of, kind_of, MultiAxisCompensator
-from ..errors import MPIError
-from ..extensions import extended_model_from_params
+from ..compensation import kind_of, MultiAxisCompensator
+from ..compensation.multi_axis import chunk_times, joint_names
+from ..compensation.screening import FAULT_KEYS
+from ..compensation.updates import (
+    apply, axis_key, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
+)
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
@@ -159,41 +160,8 @@ _NAME_ORDERS = 64
 #: The node-wide parameters (the single-axis node's, less its model keys).
 _COMMON = LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_PERIOD) + (
     loop_qos_parameters('desired_displacements and current_commands')) + (AUTOSTART,)
-#: One axis's model keys, single-axis names: Gamma's five first, the operating point, the
-#: extension keys of the effect registry.
-_AXIS_MODEL_KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + tuple(
-    spec.name for spec in EXTENSION_PARAMETERS)
 #: The core's counters on /diagnostics, summed over the axes (bad_time: effect axes' lags).
 _CORE_COUNTERS = FAULT_KEYS + ('bad_time',)
-#: Where the extension keys start in _AXIS_MODEL_KEYS.
-_FIRST_EXTENSION = len(MODEL_KEYS + OPERATING_POINT_KEYS)
-#: A single-axis model key at the start of a word, as core error messages name it.
-_MODEL_KEY = re.compile(r'(?<![\w.])(?=model\.\w)')
-
-
-def axis_key(axis: int, key: str) -> str:
-    """
-    Return the parameter name of a model key for one axis.
-
-    Parameters
-    ----------
-    axis : int
-        Axis index, from 0.
-    key : str
-        Single-axis key, e.g. ``model.hysteresis.weights``.
-
-    Returns
-    -------
-    str
-        e.g. ``axis2.model.hysteresis.weights``.
-
-    Examples
-    --------
-    >>> axis_key(2, 'model.hysteresis.weights')
-    'axis2.model.hysteresis.weights'
-
-    """
-    return f'axis{axis}.{key}'
 
 
 def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
@@ -208,100 +176,14 @@ def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
     Returns
     -------
     tuple of ParameterSpec
-        ``MODEL_PARAMETERS`` (Gamma and the operating point) and ``EXTENSION_PARAMETERS``
-        (the effect registry's keys, unset) once per axis, renamed.
+        ``MODEL_PARAMETERS`` (Gamma and the operating point) and the effect registry's keys
+        (unset, read from the registry now) once per axis, renamed.
 
     """
+    specs = MODEL_PARAMETERS + extension_parameters()
     return tuple(replace(spec, name=axis_key(k, spec.name),
                          description=f'Axis {k}: {spec.description}')
-                 for k in range(axes) for spec in MODEL_PARAMETERS + EXTENSION_PARAMETERS)
-
-
-def joint_names(names: Any, axes: int) -> Tuple[str, ...]:
-    """
-    Check the ``joints`` parameter against the axis count.
-
-    Parameters
-    ----------
-    names : list of str or None
-        The parameter's value (None or empty: no names).
-    axes : int
-        Number of axes.
-
-    Returns
-    -------
-    tuple of str
-        The names, one per axis; empty when none are given.
-
-    Raises
-    ------
-    ParameterRejected
-        When the count differs from ``axes``, a name is empty or repeated.
-
-    Examples
-    --------
-    >>> joint_names(['a', 'b'], 2)
-    ('a', 'b')
-    >>> joint_names(None, 3)
-    ()
-
-    """
-    given = tuple(names or ())
-    if not given:
-        return ()
-    if len(given) != axes:
-        msg = (f'joints names {len(given)} joints ({", ".join(given)}) but axes is {axes}; '
-               f'give one name per axis (axes:={len(given)}, or as many joints as axes)')
-        raise ParameterRejected(msg)
-    empty = [str(k) for k, name in enumerate(given) if not name.strip()]
-    if empty:
-        msg = f'joints: the name of axis {", ".join(empty)} is empty; name every joint'
-        raise ParameterRejected(msg)
-    repeated = sorted({name for name in given if given.count(name) > 1})
-    if repeated:
-        msg = f'joints names {", ".join(repeated)} more than once; each joint once'
-        raise ParameterRejected(msg)
-    return given
-
-
-def chunk_times(arrival: float, previous: Optional[float], samples: int,
-                sample_period: float) -> np.ndarray:
-    """
-    Return the time stamps of the samples of a chunk that arrived at one time.
-
-    The last sample is at ``arrival``; the earlier ones are ``sample_period`` apart before
-    it, or closer, ``(arrival - previous) / samples`` apart, when the chunk came sooner
-    than ``samples`` sample periods after the previous one, so that the first sample still
-    comes after ``previous`` (``message_time: arrival`` of the multi-axis node).
-
-    Parameters
-    ----------
-    arrival : float
-        When the chunk arrived [s] (steady clock).
-    previous : float or None
-        When the previous chunk arrived [s]; None for the first one.
-    samples : int
-        Samples in the chunk, K >= 1.
-    sample_period : float
-        Nominal interval between two samples [s], > 0.
-
-    Returns
-    -------
-    ndarray of float, shape (K,)
-        Time stamps [s], increasing, the last one ``arrival``.
-
-    Examples
-    --------
-    >>> chunk_times(10.0, 9.0, 4, 0.1).tolist()
-    [9.7, 9.8, 9.9, 10.0]
-    >>> chunk_times(10.0, 9.9, 4, 0.1).tolist()
-    [9.925, 9.95, 9.975, 10.0]
-
-    """
-    spacing = sample_period
-    if previous is not None and arrival - previous < samples * sample_period:
-        spacing = (arrival - previous) / samples
-    return arrival - spacing * np.arange(samples - 1, -1, -1, dtype=np.float64)
+                 for k in range(axes) for spec in specs)
 
 
 class MultiAxisCompensatorNode(CompensatorNodeBase):
@@ -329,18 +211,14 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self.axes = int(self.get_parameter('axes').value)
         per_axis = axis_parameters(self.axes) + _axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
-        self._model_keys = [[axis_key(k, key) for key in _AXIS_MODEL_KEYS]
-                            for k in range(self.axes)]
-        #: axis<k>.model.* name -> (k, single-axis key).
-        self._axis_of = {axis_key(k, key): (k, key)
-                         for k in range(self.axes) for key in _AXIS_MODEL_KEYS}
+        self._prefixes = tuple(axis_key(k, '') for k in range(self.axes))
         self._limit_keys = [(axis_key(k, 'output.min'), axis_key(k, 'output.max'))
                             for k in range(self.axes)]
         self._all_limit_keys = LIMIT_KEYS + tuple(
             key for keys in self._limit_keys for key in keys)
         # Models and limits of one set_parameters request succeed or fail together.
-        self._groups = (tuple(key for keys in self._model_keys for key in keys)
-                        + self._all_limit_keys,)
+        self._groups = (tuple(prefix + key for prefix in self._prefixes
+                              for key in model_keys()) + self._all_limit_keys,)
         declare_parameters(self, per_axis + _COMMON + _WIRING)
         self._declared()
         self.joints = joint_names(self.get_parameter('joints').value, self.axes)
@@ -352,6 +230,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             raise ParameterRejected(msg)
 
         self._models: List[Any] = [None] * self.axes
+        self._inverses: List[Any] = [None] * self.axes
         self._compensator: Optional[MultiAxisCompensator] = None
         self._model_versions = [0] * self.axes
         # message_time: arrival reads the steady clock (CLOCK_MONOTONIC) per message while
@@ -528,105 +407,43 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return compensator.command(block, times)
 
     # -- parameters ---------------------------------------------------------------------
-    def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
-        """Pre-set: normalise values and resolve null; Gamma's five keys: the whole model."""
-        completed = [normalized(self._specs[p.name], p) if p.name in self._specs else p
-                     for p in parameters]
-        if self._declaring:
-            return completed
-        resolved = []
-        for parameter in completed:
-            name = parameter.name
-            if name in self._axis_of and is_null(self._specs[name], parameter):
-                current = self.get_parameter_or(name, Parameter(name, Type.NOT_SET, None))
-                instead = resolve_null(self._axis_of[name][1], parameter, current)
-                if instead is None:
-                    continue
-                parameter = instead
-            resolved.append(parameter)
-        names = {p.name for p in resolved}
-        for axis in range(self.axes):
-            resolved += whole_model_completion(self, names, axis_key(axis, ''))
-        return resolved
+    def _running(self, prefix: str) -> bool:
+        return self._models[self._prefixes.index(prefix)] is not None
 
-    def _rejection(self, parameters: List[Parameter], err: Exception) -> str:
-        return (f'{err}. Nothing was applied; the running models stay. Keys that must '
-                'change together go in one request (ros2 param load FILE, or '
-                'set_parameters_atomically)')
+    def _rejection(self, names: List[str], err: Exception) -> str:
+        return refusal(names, err, version=None, axes=True)
 
-    def _model_candidate(self, names: Any, parameters: List[Parameter]) -> Dict[str, Any]:
-        """Build every touched axis's whole model, checked and inverted."""
+    def _install_prepared(self, prepared: List[Prepared]) -> None:
+        compensator = self._compensator
+        axes = compensator.axes if compensator is not None else None
         models = {}
-        for axis, keys in enumerate(self._model_keys):
-            touched = names.intersection(keys)
-            if not touched:
-                continue
-            values = parameter_values(self, keys, parameters)
-            # An axis without a model and a request that changes none of its keys (a dump
-            # of this node loaded back) is accepted: there is nothing to check or apply.
-            if self._models[axis] is None and all(
-                    values[key] == parameter_values(self, [key])[key] for key in touched):
-                continue
-            models[axis] = self._axis_model(axis, values, sorted(touched))
-        return {'models': models}
-
-    def _axis_model(self, axis: int, values: Dict[str, Any], given: List[str]) -> Any:
-        """Build one axis's whole model (plain or extended) from its key values, inverted."""
-        prefix = axis_key(axis, '')
-        params = model_params(values, prefix)
-        if params is None:
-            missing = [axis_key(axis, key) for key in MODEL_KEYS
-                       if values[axis_key(axis, key)] is None]
-            msg = (f'axis {axis} has no model yet, so {_listed(given)} cannot apply: a model '
-                   f'needs all five keys of Gamma; missing: {", ".join(missing)}; give them '
-                   'in the same request')
-            raise ParameterRejected(msg)
-        try:
-            model = extended_model_from_params(params)
-            gamma_of(model).inverse()   # (12)-(14), (22)-(25) must exist before the swap
-        except MPIError as err:
-            named = _MODEL_KEY.sub(prefix, str(err))
-            msg = f'axis {axis} ({prefix}model.*): {named}'
-            raise ParameterRejected(msg) from err
-        return model
-
-    def _install_prepared(self, prepared: Dict[str, Any]) -> None:
+        for update in prepared:
+            axis = self._prefixes.index(update.prefix)
+            apply(update, axes[axis] if axes is not None else None)
+            if update.model is not None:
+                models[axis] = update.model
+                self._inverses[axis] = update.inverse
         # Lifecycle state unconfigured: the parameters hold them; configure loads them.
         if self._configured:
-            self._install(prepared['models'])
+            self._install(models, installed=compensator is not None)
 
     def _load(self) -> None:
-        self._configure_from_declared()
+        values = parameter_values(self, list(self._specs))
+        for prefix in self._prefixes:
+            limits_of(values, prefix)
+        models = {axis: load(values, prefix) for axis, prefix in enumerate(self._prefixes)}
+        self._install({axis: model for axis, model in models.items() if model is not None})
+        if self._compensator is None:
+            self.get_logger().info(
+                f'{self.axes} axes, {self._models.count(None)} without a model: publishing '
+                'nothing until every axis has one (axis<k>.model.* keys, e.g. pushed by the '
+                'identifier)')
 
     def _unload(self) -> None:
         self._models = [None] * self.axes
+        self._inverses = [None] * self.axes
         self._timed = False
         self._last_arrival = None
-
-    def _limits_candidate(self, names: Any, parameters: List[Parameter]) -> Any:
-        """Return {axis: (min, max)} of every axis whose range the request touches."""
-        if names.isdisjoint(self._all_limit_keys):
-            return None
-        axes = range(self.axes) if not names.isdisjoint(LIMIT_KEYS) else [
-            axis for axis, keys in enumerate(self._limit_keys) if not names.isdisjoint(keys)]
-        return self._axis_limits(parameter_values(self, self._all_limit_keys, parameters),
-                                 axes)
-
-    def _axis_limits(self, values: Dict[str, Any], axes: Any) -> Dict[int, Tuple[float, float]]:
-        """Check the node-wide range and each axis's own (or inherited) range."""
-        ordered_limits(values['output.min'], values['output.max'])
-        limits = {}
-        for axis in axes:
-            names = tuple(key if values[key] is not None else common
-                          for key, common in zip(self._limit_keys[axis], LIMIT_KEYS))
-            limits[axis] = ordered_limits(values[names[0]], values[names[1]], names=names)
-        return limits
-
-    def _set_limits(self, limits: Any) -> None:
-        compensator = self._compensator
-        if compensator is not None:
-            for axis, (low, high) in limits.items():
-                compensator.set_limits(low, high, axis=axis)
 
     def _effective_limits(self) -> Tuple[List[float], List[float]]:
         """Return each axis's applied range [A]: its own keys, else the node-wide ones."""
@@ -635,22 +452,23 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                        for key, common in zip(keys, LIMIT_KEYS)) for keys in self._limit_keys]
         return [pair[0] for pair in pairs], [pair[1] for pair in pairs]
 
-    def _install(self, models: Dict[int, Any]) -> None:
-        """Apply validated axis models: install into running axes, or build the core."""
+    def _install(self, models: Dict[int, Any], *, installed: bool = False) -> None:
+        """Note validated axis models (``installed``: swapped into the core already)."""
         if not models:
             return
         for axis, model in models.items():
             self._warn_if_not_compensated(model, f'axis {axis}: ')
             self._models[axis] = model
             self._model_versions[axis] += 1
-            if self._compensator is not None:
+            if self._compensator is not None and not installed:
                 self._compensator.install(axis, model)
         if self._compensator is None and all(m is not None for m in self._models):
             lows, highs = self._effective_limits()
             self._compensator = MultiAxisCompensator(
                 self._models, output_min=lows, output_max=highs,
                 enabled=self.get_parameter('enabled').value,
-                sample_period=self.get_parameter('sample_period').value)
+                sample_period=self.get_parameter('sample_period').value,
+                inverses=self._inverses)
         self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
@@ -659,23 +477,6 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         state = 'compensating' if compensator is not None else (
             f'{sum(m is None for m in self._models)} axes still without a model')
         self.get_logger().info(f'model applied to axis {axes} ({state})')
-
-    def _configure_from_declared(self) -> None:
-        values = parameter_values(self, list(self._specs))
-        self._axis_limits(values, range(self.axes))
-        models = {}
-        for axis, keys in enumerate(self._model_keys):
-            given = [key for key in keys[:len(MODEL_KEYS)] if values[key] is not None]
-            extensions = [key for key in keys[_FIRST_EXTENSION:] if not is_off(values[key])]
-            if given or extensions:
-                models[axis] = self._axis_model(axis, {key: values[key] for key in keys},
-                                                given + extensions)
-        self._install(models)
-        if self._compensator is None:
-            self.get_logger().info(
-                f'{self.axes} axes, {self.axes - len(models)} without a model: publishing '
-                'nothing until every axis has one (axis<k>.model.* keys, e.g. pushed by the '
-                'identifier)')
 
     # -- diagnostics --------------------------------------------------------------------
     def _core_counters(self) -> Dict[str, int]:
@@ -744,13 +545,6 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                     values[axis_key(axis, 'slow_state')] = ' '.join(
                         f'{v:.6g}' for v in compensator.slow_state)
         return values
-
-
-def _listed(names: List[str]) -> str:
-    """Name the given keys: up to two by name, else how many."""
-    if len(names) <= 2:
-        return ', '.join(names)
-    return f'{len(names)} keys ({names[0]}, ...)'
 
 
 def _axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:

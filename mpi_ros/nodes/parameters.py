@@ -29,14 +29,11 @@ import yaml
 from .qos import RELIABILITY
 from ..errors import ParameterRejected
 from ..extensions import EFFECTS
-from ..extensions.effect import effect_off_values
 from ..params import (INPUT_OFFSET, MODEL_KEYS, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS,
                       OUTPUT_OFFSET, OUTPUT_SIGN)
 
 __all__ = [
     'harden_parameter_services',
-    'EXTENSION_OFF',
-    'EXTENSION_PARAMETERS',
     'extension_parameters',
     'MODEL_KEYS',
     'MODEL_PARAMETERS',
@@ -52,6 +49,7 @@ __all__ = [
     'loop_qos_parameters',
     'normalized',
     'parameter_values',
+    'plain_value',
     'set_parameters_in_groups',
     'specs_by_name',
 ]
@@ -208,8 +206,10 @@ def extension_parameters() -> Tuple[ParameterSpec, ...]:
     """
     Return the node parameters of every registered effect (declared unset).
 
-    Read from the registry :data:`mpi_ros.extensions.EFFECTS`: each effect module states
-    its keys, types, units, ranges and "off" values once.
+    Read from the registry :data:`mpi_ros.extensions.EFFECTS` when called (a node calls it
+    when it declares its parameters): each effect module states its keys, types, units,
+    ranges and "off" values once.  An effect is off while all its keys are unset or hold
+    their "off" values.
 
     Returns
     -------
@@ -221,14 +221,6 @@ def extension_parameters() -> Tuple[ParameterSpec, ...]:
     return tuple(ParameterSpec(p.key, types[p.kind], None, p.description, p.unit,
                                value_range=p.value_range)
                  for effect in EFFECTS.values() for p in effect.parameters)
-
-
-#: Keys of the model extensions (:mod:`mpi_ros.extensions`), each declared unset.  An
-#: extension is off while all its keys are unset or hold the value in :data:`EXTENSION_OFF`.
-EXTENSION_PARAMETERS = extension_parameters()
-
-#: The value that switches each extension key off (written by a complete model push).
-EXTENSION_OFF: Mapping[str, Any] = effect_off_values()
 
 
 def loop_qos_parameters(topics: str) -> Tuple[ParameterSpec, ParameterSpec]:
@@ -476,12 +468,12 @@ def parameter_values(node: Node, names: Sequence[str],
     for name in names:
         if node.has_parameter(name):
             current = node.get_parameter_or(name, Parameter(name, Type.NOT_SET, None))
-            values[name] = _plain(current.value)
+            values[name] = plain_value(current.value)
         else:
             values[name] = None
     for parameter in incoming:
         if parameter.name in values:
-            values[parameter.name] = _plain(parameter.value)
+            values[parameter.name] = plain_value(parameter.value)
     return values
 
 
@@ -516,8 +508,8 @@ def _yaml_list(text: str) -> Optional[List[Any]]:
     return value if isinstance(value, list) else None
 
 
-def _plain(value: Any) -> Any:
-    """Turn rclpy's array values (array.array, tuples) into lists."""
+def plain_value(value: Any) -> Any:
+    """Turn rclpy's array values (array.array, tuples) into lists (the dicts of the core)."""
     if value is None or isinstance(value, (bool, int, float, str)):
         return value
     return list(value)

@@ -44,14 +44,13 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
+from ..pipeline import STOP_SIGNALS
+
 __all__ = ['STOP_SIGNALS', 'StopSignals', 'events_executor', 'run_node_main', 'shutdown',
            'spin']
 
 #: Longest time one spin_once waits for work [s]; bounds the reaction to shutdown.
 SPIN_PERIOD_S = 0.1
-
-#: The signals that stop a node: Ctrl-C (SIGINT) and ``kill`` / ``ros2 launch`` (SIGTERM).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 class StopSignals:

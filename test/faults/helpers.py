@@ -9,7 +9,7 @@ the module's own ``ROS_DOMAIN_ID`` with local-only discovery (``ros_env`` of
 
 import time
 
-from mpi_ros.compensation import FeedforwardCompensator, operating_range
+from mpi_ros.compensation import Compensator, operating_range
 from mpi_ros.harness import NodeProcess
 from mpi_ros.model import MPIModel
 import numpy as np
@@ -144,7 +144,7 @@ def get_parameters(driver, names, node='/compensator'):
 def mirror(params):
     """Return the core compensator the node builds from the same model and limits."""
     model = params if isinstance(params, MPIModel) else MPIModel.from_params(params)
-    return FeedforwardCompensator(model, output_min=LIMITS[0], output_max=LIMITS[1])
+    return Compensator(model, output_min=LIMITS[0], output_max=LIMITS[1])
 
 
 def desired_values(params, size, seed):

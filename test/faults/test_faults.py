@@ -4,7 +4,7 @@ Faults over DDS: start order, missing target, killed and restarted nodes, a kill
 
 Every node is a separate process on this module's own ``ROS_DOMAIN_ID`` (local-only
 discovery); the test process drives the compensator in lock step and compares every
-command with the core :class:`~mpi_ros.compensation.FeedforwardCompensator` (exactly, to
+command with the core :class:`~mpi_ros.compensation.Compensator` (exactly, to
 1e-12 A), so "unaffected" and "same model" are checked command by command.
 """
 
@@ -172,7 +172,7 @@ def test_identifier_killed_around_the_push_leaves_old_or_new_model(nodes, driver
         held = get_parameters(driver, KEYS)
         assert held in (models[current], models[target]), 'a mix of two models'
         if held == models[target]:
-            core.swap_model(MPIModel.from_params(models[target]))
+            core.install(MPIModel.from_params(models[target]))
             current = target
             outcomes.append('new')
         else:

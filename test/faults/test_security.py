@@ -187,7 +187,7 @@ def test_no_parameter_service_accepts_an_unsafe_change(nodes, driver, bags):
         assert get_parameters(driver, list(params)) == params
         model_version += 1
         assert _model_version(driver) == model_version
-        core.swap_model(MPIModel.from_params(params))
+        core.install(MPIModel.from_params(params))
         commands = commands_for(driver, values[k:k + 20])
         np.testing.assert_allclose(commands, [core.command(v) for v in values[k:k + 20]],
                                    rtol=0, atol=1e-12)

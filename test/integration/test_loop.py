@@ -8,7 +8,7 @@ started and stopped here, by PID.
 """
 
 from mpi_ros import identify, MPIModel
-from mpi_ros.compensation import FeedforwardCompensator, operating_range
+from mpi_ros.compensation import Compensator, operating_range
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.harness import LoopDriver, NodeProcess
 from mpi_ros.inverse import invert_hysteresis_initial_states
@@ -128,7 +128,7 @@ def test_push_reject_and_bumpless_swap(loop):
         'model.hysteresis.weights': [1.1, 0.25, 0.25, 0.05]}))
     _start_loop(driver, start)
     _push(driver, old)
-    mirror = FeedforwardCompensator(old, output_min=LIMITS[0], output_max=LIMITS[1])
+    mirror = Compensator(old, output_min=LIMITS[0], output_max=LIMITS[1])
     desired, _ = _trajectory(old, duration=3.0)
     _track(driver, desired[:1])
     mirror.command(desired[0])
@@ -148,7 +148,7 @@ def test_push_reject_and_bumpless_swap(loop):
     # (c) a good new model is swapped in bumplessly (as the core's swap, proven exact).
     applied = np.array(driver.commands)          # every command since the loop started
     _push(driver, new)
-    mirror.swap_model(new)
+    mirror.install(new)
     for v in desired[400:]:
         driver.exchange(driver.desired_pub, v)
     expected = [mirror.command(v) for v in desired[400:]]

@@ -17,7 +17,7 @@ The compensator is spun in a background executor and reached through its real se
 import threading
 import time
 
-from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.compensation import Compensator
 from mpi_ros.model import MPIModel
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.parameters import MODEL_KEYS, OPERATING_POINT_KEYS
@@ -134,8 +134,8 @@ def core_commands(compensator, desired):
 def test_load_of_a_valid_model_file_answers_with_that_model(spun, tmp_path):
     """Acceptance: the running compensator's commands are the core's with the loaded model."""
     node, cli = spun(limits() + as_parameters(MODEL_A))
-    core = FeedforwardCompensator(MPIModel.from_params(MODEL_A), output_min=OUTPUT_MIN,
-                                  output_max=OUTPUT_MAX)
+    core = Compensator(MPIModel.from_params(MODEL_A), output_min=OUTPUT_MIN,
+                       output_max=OUTPUT_MAX)
     assert core_commands(node, DESIRED_A) == core_commands(core, DESIRED_A)
     model_file = tmp_path / 'model.yaml'
     write_params_yaml(model_file, MODEL_B_OP)
@@ -144,7 +144,7 @@ def test_load_of_a_valid_model_file_answers_with_that_model(spun, tmp_path):
     assert set(results) == set(MODEL_B_OP)
     assert all(result.successful for result in results.values()), results
     assert node.model_version == 2  # the eight keys applied in one swap
-    core.swap_model(MPIModel.from_params(MODEL_B_OP))
+    core.install(MPIModel.from_params(MODEL_B_OP))
     commands = core_commands(node, DESIRED_B)
     assert commands == core_commands(core, DESIRED_B)
     assert OUTPUT_MIN < min(commands) < max(commands) < OUTPUT_MAX  # not clamped

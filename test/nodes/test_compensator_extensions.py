@@ -9,7 +9,8 @@ through ``Node.set_parameters_atomically``, the function rclpy's parameter servi
 import math
 import time
 
-from mpi_ros.extensions import compensator_from_params, ExtendedCompensator
+from mpi_ros.compensation import Compensator
+from mpi_ros.extensions import extended_model_from_params
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.parameters import MODEL_KEYS
 from mpi_ros.nodes.spinning import events_executor
@@ -68,9 +69,9 @@ def run(node, desired=DESIRED, stamps=STAMPS):
 
 
 def core(params):
-    comp = compensator_from_params(params, output_min=OUTPUT_MIN, output_max=OUTPUT_MAX,
-                                   sample_period=1e-3)
-    if isinstance(comp, ExtendedCompensator):
+    comp = Compensator(extended_model_from_params(params), output_min=OUTPUT_MIN,
+                       output_max=OUTPUT_MAX, sample_period=1e-3)
+    if comp.has_effect:
         return np.array([comp.command(float(d), time=float(t))
                          for d, t in zip(DESIRED, STAMPS)])
     return np.array([comp.command(float(d)) for d in DESIRED])
@@ -86,7 +87,7 @@ def test_extended_set_is_accepted_and_used(make_node, extension):
     commands = run(node)
     assert np.all(np.isfinite(commands))
     assert np.all((commands >= OUTPUT_MIN) & (commands <= OUTPUT_MAX))
-    # The node computes what the core's ExtendedCompensator computes from the same
+    # The node computes what the core's Compensator computes from the same
     # inputs and times (the node's swap replays the same start, so exactly equal) ...
     np.testing.assert_allclose(commands, core(dict(MODEL_A, **extension)), rtol=0, atol=1e-12)
     # ... which is not the plain compensator's answer.
@@ -106,8 +107,8 @@ def test_extended_compensator_with_an_operating_point(make_node, extension):
     assert node.compensator.has_effect      # the effect's per-step inverse is in use
     desired = 1.0e-4 - DESIRED
     commands = run(node, desired)
-    reference = compensator_from_params(params, output_min=OUTPUT_MIN, output_max=OUTPUT_MAX,
-                                        sample_period=1e-3)
+    reference = Compensator(extended_model_from_params(params), output_min=OUTPUT_MIN,
+                            output_max=OUTPUT_MAX, sample_period=1e-3)
     expected = [reference.command(float(d), time=float(t)) for d, t in zip(desired, STAMPS)]
     np.testing.assert_allclose(commands, expected, rtol=0, atol=1e-12)
     assert np.all((commands >= OUTPUT_MIN) & (commands <= OUTPUT_MAX))
@@ -201,7 +202,7 @@ def test_plain_creep_plain_switching(make_node):
     desired = float(DESIRED[200])
     reference = node.compensator.state.copy()
 
-    # plain -> creep: an ExtendedCompensator taking over the operating point.
+    # plain -> creep: the creep's per-step inverse taking over the operating point.
     assert node.set_parameters_atomically(typed(dict(MODEL_A, **CREEP))).successful
     assert node.compensator.has_effect      # the effect's per-step inverse is in use
     np.testing.assert_allclose(node.compensator.state, reference, atol=1e-12)
@@ -218,7 +219,7 @@ def test_plain_creep_plain_switching(make_node):
     run(plain_reference, DESIRED[:200], STAMPS[:200])
     assert node.command(desired) == pytest.approx(plain_reference.command(desired), abs=1e-12)
 
-    # plain -> creep -> creep (same kind): swap_model, bumpless.
+    # plain -> creep -> creep (same kind): install, bumpless.
     assert node.set_parameters_atomically(typed(dict(MODEL_A, **CREEP))).successful
     commands = run(node, DESIRED[201:300], STAMPS[201:300])
     compensator = node.compensator

@@ -11,7 +11,7 @@ import math
 import threading
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from mpi_ros.compensation import FeedforwardCompensator
+from mpi_ros.compensation import Compensator
 from mpi_ros.errors import ModelError
 from mpi_ros.model import MPIModel
 from mpi_ros.nodes.compensator import CompensatorNode
@@ -138,8 +138,8 @@ def test_operating_point_commands_are_the_shifted_origin_ones(make_node):
     assert node.compensator.model.to_params() == MODEL_A_OP
     desired = 2.0e-5 + 3.0e-5 * np.sin(np.linspace(0.0, 12.0, 400))  # beyond the range
     commands = [node.command(1.0e-4 - float(value)) for value in desired]
-    origin = FeedforwardCompensator(MPIModel.from_params(MODEL_A), output_min=OUTPUT_MIN - 0.4,
-                                    output_max=OUTPUT_MAX - 0.4)
+    origin = Compensator(MPIModel.from_params(MODEL_A), output_min=OUTPUT_MIN - 0.4,
+                         output_max=OUTPUT_MAX - 0.4)
     expected = [0.4 + origin.command(float(value)) for value in desired]
     np.testing.assert_allclose(commands, expected, rtol=0, atol=1e-12)
     assert node.counters['clamped'] > 0
