@@ -245,12 +245,8 @@ def determined_start(time: FloatArray, current: FloatArray, displacement: FloatA
 
     Parameters
     ----------
-    time : ndarray of float, shape (N,)
-        Sample times [s].
-    current : ndarray of float, shape (N,)
-        Coil current [A].
-    displacement : ndarray of float, shape (N,)
-        Measured displacement [m].
+    time, current, displacement : array_like of float, shape (N,)
+        The record: sample times [s], coil current [A], displacement [m].
     order : (int, int)
         ``(n, l)`` of Gamma.
     settle : float

@@ -162,22 +162,7 @@ class CompositeModel(ExtendedModelBase):
         return x
 
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
-        """
-        Simulate the displacement [m] for a current record.
-
-        Parameters
-        ----------
-        time : array_like of float, shape (N,)
-            Sample times [s].
-        current : array_like of float, shape (N,)
-            Coil current [A].
-
-        Returns
-        -------
-        ndarray of float, shape (N,)
-            Displacement [m].
-
-        """
+        """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
         t, x = check_series(time, current)
         seen = self.input_signal(t, x)
         material = self.material

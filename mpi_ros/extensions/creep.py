@@ -145,22 +145,7 @@ class CreepModel(ExtendedModelBase):
         return CreepInverse(self)
 
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
-        """
-        Simulate the displacement for a current record.
-
-        Parameters
-        ----------
-        time : array_like of float, shape (N,)
-            Sample times [s].
-        current : array_like of float, shape (N,)
-            Coil current [A].
-
-        Returns
-        -------
-        ndarray of float, shape (N,)
-            Displacement [m].
-
-        """
+        """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
         t, x = check_series(time, current)
         g = self._displacement(x)
         out: FloatArray = self.model.output_offset + self.model.output_sign * (
@@ -293,12 +278,8 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
 
     Parameters
     ----------
-    time : array_like of float, shape (N,)
-        Sample times [s].
-    current : array_like of float, shape (N,)
-        Coil current [A].
-    displacement : array_like of float, shape (N,)
-        Displacement [m].
+    time, current, displacement : array_like of float, shape (N,)
+        The record: sample times [s], coil current [A], displacement [m].
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record, then again on the

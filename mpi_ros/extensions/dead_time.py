@@ -74,22 +74,7 @@ class DeadTimeModel(ExtendedModelBase):
         return delay(t, x, self.dead_time)
 
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
-        """
-        Simulate the displacement [m] for a current record.
-
-        Parameters
-        ----------
-        time : array_like of float, shape (N,)
-            Sample times [s].
-        current : array_like of float, shape (N,)
-            Coil current [A].
-
-        Returns
-        -------
-        ndarray of float, shape (N,)
-            Displacement [m].
-
-        """
+        """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
         t, x = check_series(time, current)
         return self.model.simulate(self.input_signal(t, x))
 
@@ -106,12 +91,8 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
 
     Parameters
     ----------
-    time : array_like of float, shape (N,)
-        Sample times [s].
-    current : array_like of float, shape (N,)
-        Coil current [A].
-    displacement : array_like of float, shape (N,)
-        Displacement [m].
+    time, current, displacement : array_like of float, shape (N,)
+        The record: sample times [s], coil current [A], displacement [m].
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record, then again on the

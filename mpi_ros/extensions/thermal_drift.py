@@ -94,22 +94,7 @@ class ThermalDriftModel(ExtendedModelBase):
         return ThermalDriftInverse(self)
 
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
-        """
-        Simulate the displacement [m] for a current record.
-
-        Parameters
-        ----------
-        time : array_like of float, shape (N,)
-            Sample times [s].
-        current : array_like of float, shape (N,)
-            Coil current [A].
-
-        Returns
-        -------
-        ndarray of float, shape (N,)
-            Displacement [m].
-
-        """
+        """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
         t, x = check_series(time, current)
         h, _ = self.model.hysteresis_output(x)
         return self.model.output(h + self.weight * self.thermal_state(t, x))
@@ -197,12 +182,8 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
 
     Parameters
     ----------
-    time : array_like of float, shape (N,)
-        Sample times [s].
-    current : array_like of float, shape (N,)
-        Coil current [A].
-    displacement : array_like of float, shape (N,)
-        Displacement [m].
+    time, current, displacement : array_like of float, shape (N,)
+        The record: sample times [s], coil current [A], displacement [m].
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record (the drift enters
