@@ -77,7 +77,7 @@ from ..metrics import range_error, rms_range_error
 from ..params import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
-__all__ = ['DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
+__all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -244,28 +244,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     if unknown:
         msg = f'unknown cause(s) {unknown}; the catalogue is {", ".join(catalogue)}'
         raise DataError(msg)
-    t, x, y = _arrays(recording, 'recording')
-    if validation is None:
-        if not 0.1 <= split <= 0.9:
-            msg = f'split must be in [0.1, 0.9]; found {split!r}'
-            raise DataError(msg)
-        n_train = int(round(split * t.size))
-        tt, xt, yt = t[:n_train], x[:n_train], y[:n_train]
-        tv, xv, yv, start = t, x, y, n_train
-        data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
-                'split': split, 'training_samples': n_train,
-                'validation': f'samples {n_train}..{t.size - 1} of the same record'}
-    else:
-        tt, xt, yt = t, x, y
-        tv, xv, yv = _arrays(validation, 'validation')
-        start = 0
-        data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
-                'validation': getattr(validation, 'source', '') or 'separate recording',
-                'validation_samples': int(tv.size)}
-    if tt.size < 200 or tv.size - start < 100:
-        msg = (f'too few samples to diagnose: {tt.size} for training and {tv.size - start}'
-               ' for validation; record at least a few loops (>= 300 samples)')
-        raise DataError(msg)
+    t, (tt, xt, yt), (tv, xv, yv), start, data = _records(recording, validation, split)
     # The sensor may fall as the actuator extends: the class check (a rising map) and the
     # model (model.output_sign) use the sign detected on the training data.
     sign, _ = output_sign(xt, yt)
@@ -290,31 +269,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     data['training_burn_in'] = base.burn_in
     estimate_start = False
     if validation is not None:
-        # A separate experiment starts from its own state.  Scored once its input has
-        # covered its range (the plays' and the effects' slow states then follow from the
-        # data) when that leaves at least half of it; else from its first sample (after the
-        # ringing of a step just before it), every model with the start state that explains
-        # the samples before its plays are determined (its weights kept).
-        covered = burn_in(xv, 0.99 * float(np.ptp(xv)), to_turning_point=True)
-        if covered <= 0.5 * tv.size:
-            start, left_out = covered, ('the samples before the input covered its range'
-                                        ' (the start state of the plays and effects)')
-        else:
-            start = _leading_ringing(tv, xv, yv, sign)
-            estimate_start = True
-            left_out = ('the ringing after a step just before the record' if start
-                        else 'nothing')
-        if tv.size - start < 100:
-            msg = ('too little to score: the validation record leaves only'
-                   f' {tv.size - start} samples (from sample {start}: {left_out}); record a'
-                   ' longer validation (e.g. mpi-ros diagnose --excitation)')
-            raise DataError(msg)
+        start, estimate_start = _scored_part(tv, xv, yv, sign, data)
         series['start'] = start
-        data['validation_burn_in'] = start
-        data['validation_scored'] = {
-            'from_sample': start, 'samples': int(tv.size - start), 'left_out': left_out,
-            'start_state': ('estimated for each model (its weights kept)' if estimate_start
-                            else 'set by the data before the scored part')}
     val = slice(start, None)
 
     def on_validation(model: Any) -> FloatArray:
@@ -366,45 +322,14 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         {**asdict(bursts), 'law': bursts.law,
          'log_ratio': [[v.real, v.imag] for v in bursts.log_ratio]}
         if bursts is not None else None)
-    candidates = []
-    sims = {}
-    residuals: dict[str, FloatArray] = {}
-
-    def score(cause: str, model: Any, parameter_count: int) -> dict[str, Any]:
-        # A candidate model on the validation data, against the baseline.
-        sim = on_validation(model)
-        shift = _zero_shift(sim[val], yv[val], reestimate)
-        sim = sim + shift
-        sims[cause] = sim
-        rc = yv[val] - sim[val]
-        residuals[cause] = rc
-        errs = _errors(sim[val], yv[val])
-        # A baseline without error leaves nothing to gain (and no ratio to form).
-        gain = (1.0 - errs['rms_error'] / baseline['rms_error']
-                if baseline['rms_error'] > 0.0 else 0.0)
-        z, lags = _dm_statistic(r0, rc, bandwidth)
-        params = {k: v for k, v in model.to_params().items()
-                  if not k.startswith(('model.hysteresis', 'model.superposition'))
-                  and k not in OPERATING_POINT_KEYS}
-        determined = slice(base.burn_in, None)
-        train = rms_range_error(model.simulate(tt, xt)[determined], yt[determined])
-        say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
-            f' z {z:.1f}')
-        return {'cause': cause, **errs, 'gain': gain, 'z': z, 'bandwidth': lags,
-                'training_rms_error': train, 'validation_output_offset': shift,
-                'parameter_count': parameter_count, 'parameters': params, 'model': model}
-
-    for cause in causes:
-        say(f'fitting candidate {cause}')
-        model = EFFECTS[cause].fit(tt, xt, yt, order=(n, l))
-        candidates.append(score(cause, model, EFFECTS[cause].parameter_count(
-            model.to_params())))
+    scorer = _Scorer(on_validation, (tt, xt, yt), base.burn_in, yv, val, r0, baseline,
+                     bandwidth, reestimate, say)
+    candidates = _fit_candidates(scorer, causes, (n, l))
     excess = math.sqrt(float(np.mean(r0 ** 2))) > noise_factor * sigma
     level = alpha / len(catalogue)               # Bonferroni over the catalogue
-    verdicts = {cause: EFFECTS[cause].signature(residual, level) for cause in causes}
     for c in candidates:
-        c['signature'] = verdicts[c['cause']]
-        c['significant'] = bool(excess and c['gain'] >= min_gain and c['z'] >= z_critical)
+        c.signature = EFFECTS[c.cause].signature(residual, level)
+        c.significant = bool(excess and c.gain >= min_gain and c.z >= z_critical)
     decision: dict[str, Any]
     decision = {'min_gain': min_gain, 'z_critical': z_critical, 'alpha': alpha,
                 'signature_level': level, 'bandwidth': bandwidth,
@@ -413,95 +338,295 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     chosen = _decide(candidates, excess, decision['steps'])
     pair = _pair(candidates) if excess else None
     if pair is not None:
-        # Two effects with their physical signatures, at different places of the chain
-        # (an input stage and a material effect): fit both at once.  Each alone can miss
-        # on the validation data (the other effect biases its fit), so the pair is tried
-        # whenever both signatures are present.
-        names = sorted(c['cause'] for c in pair)
-        cause = composite_cause(names)
-        say(f'fitting candidate {cause} (both signatures present)')
-        fitted = {c['cause']: c['model'] for c in pair}
-        model = fit_composite(tt, xt, yt, names, order=(n, l), fits=fitted)
-        both = score(cause, model, sum(c['parameter_count'] for c in pair))
-        both['signature'] = 'present'
-        both['significant'] = bool(excess and both['gain'] >= min_gain
-                                   and both['z'] >= z_critical)
-        both['parts'] = names
-        alone = {c['cause']: c for c in pair}
-        # Each effect's own gain: what adding it to the other one alone gains, and whether
-        # that is beyond the noise (Diebold-Mariano, the other alone against both).
-        both['part_gains'] = {}
-        both['part_z'] = {}
-        for name in names:
-            other = alone[next(m for m in names if m != name)]
-            both['part_gains'][name] = (1.0 - both['rms_error'] / other['rms_error']
-                                        if other['rms_error'] > 0.0 else 0.0)
-            both['part_z'][name] = _dm_statistic(residuals[other['cause']], residuals[cause],
-                                                 bandwidth)[0]
-        candidates.append(both)
-        each = all(both['part_gains'][m] >= min_gain and both['part_z'][m] >= z_critical
-                   for m in names)
-        parts_text = ', '.join(f'{m} {both["part_gains"][m]:+.3f} (z {both["part_z"][m]:.1f})'
-                               for m in names)
-        alone_text = chosen['cause'] if chosen is not None else 'none'
-        if both['significant'] and each and (chosen is None or both['gain'] > chosen['gain']):
-            decision['steps'].append(
-                f'{cause}: gain {both["gain"]:+.3f}, z {both["z"]:.1f}; each effect adds'
-                f' beyond the other alone ({parts_text}): both')
-            chosen = both
-        else:
-            decision['steps'].append(
-                f'{cause}: gain {both["gain"]:+.3f}, z {both["z"]:.1f}; not significant, or'
-                f' not each effect adds beyond the other alone ({parts_text}): {alone_text}')
-    ties = _ties(chosen, candidates, residuals, z_critical, bandwidth, decision['steps'])
-    decision['ranking'] = _ranking(chosen, candidates, residuals, bandwidth)
-    decision['ambiguous'] = bool(ties)
-    decision['tied_with'] = [c['cause'] for c in ties]
-    decision['separate_by'] = (_separation([chosen['cause'], *decision['tied_with']])
-                               if chosen is not None and ties else '')
-    series.update({'baseline': sim0, 'candidates': sims})
+        chosen = _try_pair(scorer, pair, candidates, chosen, (n, l), decision['steps'],
+                           min_gain=min_gain, z_critical=z_critical, excess=excess)
+    _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
+    series.update({'baseline': sim0, 'candidates': scorer.sims})
     if chosen is None:
         cause, model, extended, gain = 'none', base.model, dict(baseline), 0.0
     else:
-        cause, model, gain = chosen['cause'], chosen['model'], float(chosen['gain'])
-        extended = {'cause': cause, 'rms_error': chosen['rms_error'],
-                    'nonlinearity_error': chosen['nonlinearity_error'],
-                    'parameters': chosen['parameters']}
+        cause, model, gain = chosen.cause, chosen.model, float(chosen.gain)
+        extended = {'cause': cause, 'rms_error': chosen.rms_error,
+                    'nonlinearity_error': chosen.nonlinearity_error,
+                    'parameters': chosen.parameters}
     extended.setdefault('parameters', {})
-    # A named effect whose gain stays below the bar a user can rely on is present but weak:
-    # significant and physically supported, yet small against what else the plain model
-    # misses (or the noise).
-    decision['strength_bar'] = STRONG_GAIN
-    decision['strength'] = ('none' if chosen is None else
-                            'clear' if gain >= STRONG_GAIN else 'present, weak')
-    evidence = _evidence(cause, baseline, candidates, residual, sigma, yv[val], data)
-    if decision['strength'] == 'present, weak':
-        span = float(np.ptp(yv[val]))
-        decision['weak_reason'] = (
-            f'{cause} is present, weak: its extension cuts the validation error by only'
-            f' {100 * gain:.0f} % (below {100 * STRONG_GAIN:.0f} %), although the cut is'
-            f' significant and the physical signature is {chosen["signature"] if chosen else ""};'
-            f' the plain model misses {100 * baseline["rms_error"]:.2f} % of the range, the'
-            f' noise floor is {100 * sigma / span:.2f} %: most of the error is not this effect'
-            ' (a longer record, or an excitation that shows it more, e.g. longer holds for'
-            ' slow effects, measures it better)')
-        evidence += ' ' + decision['weak_reason'][0].upper() + decision['weak_reason'][1:] + '.'
+    public = [c.public() for c in candidates]
+    evidence = _evidence(cause, baseline, public, residual, sigma, yv[val], data)
+    evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(yv[val])))
     if decision['ambiguous']:
         evidence += (f' Ambiguous: {", ".join(decision["tied_with"])} explain(s) the validation'
                      f' data as well, within the noise (ranked by gain; the signature'
                      f' decided). To separate them: {decision["separate_by"]}.')
     records = ([('record', t)] if validation is None
                else [('training record', t), ('validation record', tv)])
-    warning = time_base_warning(implausible_time_constants(candidates, residual), records)
+    warning = time_base_warning(implausible_time_constants(public, residual), records)
     warnings = [] if warning is None else [warning]
     for text in warnings:
         say(f'warning: {text}')
     say(f'verdict: {cause} (gain {gain:.3f})')
-    public = [{k: v for k, v in c.items() if k != 'model'} for c in candidates]
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,
                            series=series)
+
+
+@dataclass
+class Candidate:
+    """
+    One candidate extension, scored on the validation data against the baseline.
+
+    Attributes
+    ----------
+    cause : str
+        The effect's name (two joined by ``' + '`` for a pair).
+    model : object
+        The fitted extended model.
+    rms_error, nonlinearity_error : float
+        Its validation errors, fractions of the output range.
+    gain : float
+        Relative reduction of the baseline's validation RMS error.
+    z : float
+        Diebold-Mariano statistic against the baseline (one-sided).
+    bandwidth : int
+        Its HAC lags.
+    training_rms_error : float
+        Its RMS error on the training record's determined samples.
+    validation_output_offset : float
+        The validation record's re-estimated sensor zero for it [m].
+    parameter_count : int
+        Free parameters of the effect(s).
+    parameters : dict
+        The effect's parameters (Gamma's left out).
+    signature : str
+        ``present``, ``absent`` or ``unavailable`` (the physical signature).
+    significant : bool
+        Gain and z above the bars, and the baseline above the noise.
+    parts : list of str
+        A pair's effects (empty for one effect).
+    part_gains, part_z : dict
+        For a pair: each effect's gain beyond the other alone, and its z.
+
+    """
+
+    cause: str
+    model: Any
+    rms_error: float
+    nonlinearity_error: float
+    gain: float
+    z: float
+    bandwidth: int
+    training_rms_error: float
+    validation_output_offset: float
+    parameter_count: int
+    parameters: dict[str, Any]
+    signature: str = 'unavailable'
+    significant: bool = False
+    parts: list[str] = field(default_factory=list)
+    part_gains: dict[str, float] = field(default_factory=dict)
+    part_z: dict[str, float] = field(default_factory=dict)
+
+    def public(self) -> dict[str, Any]:
+        """Return the report's form (no model; a pair's parts only for a pair)."""
+        form = {k: v for k, v in asdict(self).items()
+                if k not in ('model', 'parts', 'part_gains', 'part_z')}
+        if self.parts:
+            form.update(parts=list(self.parts), part_gains=dict(self.part_gains),
+                        part_z=dict(self.part_z))
+        return form
+
+
+class _Scorer:
+    """Scores candidate models on the validation data against the baseline."""
+
+    def __init__(self, on_validation: Callable[[Any], FloatArray],
+                 training: tuple[FloatArray, FloatArray, FloatArray], burn_in: int,
+                 validation_output: FloatArray, scored: slice, r0: FloatArray,
+                 baseline: dict[str, Any], bandwidth: int | None, reestimate: bool,
+                 say: Callable[[str], None]) -> None:
+        self.on_validation = on_validation
+        self.training = training
+        self.determined = slice(burn_in, None)
+        self.scored = scored
+        self.measured = validation_output[scored]
+        self.r0 = r0
+        self.baseline = baseline
+        self.bandwidth = bandwidth
+        self.reestimate = reestimate
+        self.say = say
+        self.sims: dict[str, FloatArray] = {}
+        self.residuals: dict[str, FloatArray] = {}
+
+    def score(self, cause: str, model: Any, parameter_count: int) -> Candidate:
+        """Simulate a fitted model on the validation record and measure its gain."""
+        sim = self.on_validation(model)
+        val = self.scored
+        shift = _zero_shift(sim[val], self.measured, self.reestimate)
+        sim = sim + shift
+        self.sims[cause] = sim
+        rc = self.measured - sim[val]
+        self.residuals[cause] = rc
+        errs = _errors(sim[val], self.measured)
+        base = self.baseline['rms_error']
+        # A baseline without error leaves nothing to gain (and no ratio to form).
+        gain = 1.0 - errs['rms_error'] / base if base > 0.0 else 0.0
+        z, lags = _dm_statistic(self.r0, rc, self.bandwidth)
+        params = {k: v for k, v in model.to_params().items()
+                  if not k.startswith(('model.hysteresis', 'model.superposition'))
+                  and k not in OPERATING_POINT_KEYS}
+        tt, xt, yt = self.training
+        keep = self.determined
+        train = rms_range_error(model.response(tt, xt)[keep], yt[keep])
+        self.say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
+                 f' z {z:.1f}')
+        return Candidate(cause, model, errs['rms_error'], errs['nonlinearity_error'], gain, z,
+                         lags, train, shift, parameter_count, params)
+
+
+def _fit_candidates(scorer: _Scorer, causes: tuple[str, ...],
+                    order: tuple[int, int]) -> list[Candidate]:
+    # Each effect fitted on the training record at the baseline's order, then scored.
+    out = []
+    tt, xt, yt = scorer.training
+    for cause in causes:
+        scorer.say(f'fitting candidate {cause}')
+        model = EFFECTS[cause].fit(tt, xt, yt, order=order)
+        out.append(scorer.score(cause, model,
+                                EFFECTS[cause].parameter_count(model.to_params())))
+    return out
+
+
+def _try_pair(scorer: _Scorer, pair: tuple[Candidate, Candidate], candidates: list[Candidate],
+              chosen: Candidate | None, order: tuple[int, int], steps: list[str], *,
+              min_gain: float, z_critical: float, excess: bool) -> Candidate | None:
+    # Two effects with their physical signatures, at different places of the chain (an
+    # input stage and a material effect): fit both at once.  Each alone can miss on the
+    # validation data (the other effect biases its fit), so the pair is tried whenever both
+    # signatures are present; it is chosen when each effect adds beyond the other alone.
+    names = sorted(c.cause for c in pair)
+    cause = composite_cause(names)
+    scorer.say(f'fitting candidate {cause} (both signatures present)')
+    tt, xt, yt = scorer.training
+    model = fit_composite(tt, xt, yt, names, order=order,
+                          fits={c.cause: c.model for c in pair})
+    both = scorer.score(cause, model, sum(c.parameter_count for c in pair))
+    both.signature = 'present'
+    both.significant = bool(excess and both.gain >= min_gain and both.z >= z_critical)
+    both.parts = names
+    alone = {c.cause: c for c in pair}
+    for name in names:
+        other = alone[next(m for m in names if m != name)]
+        both.part_gains[name] = (1.0 - both.rms_error / other.rms_error
+                                 if other.rms_error > 0.0 else 0.0)
+        both.part_z[name] = _dm_statistic(scorer.residuals[other.cause],
+                                          scorer.residuals[cause], scorer.bandwidth)[0]
+    candidates.append(both)
+    each = all(both.part_gains[m] >= min_gain and both.part_z[m] >= z_critical for m in names)
+    parts_text = ', '.join(f'{m} {both.part_gains[m]:+.3f} (z {both.part_z[m]:.1f})'
+                           for m in names)
+    if both.significant and each and (chosen is None or both.gain > chosen.gain):
+        steps.append(f'{cause}: gain {both.gain:+.3f}, z {both.z:.1f}; each effect adds'
+                     f' beyond the other alone ({parts_text}): both')
+        return both
+    steps.append(f'{cause}: gain {both.gain:+.3f}, z {both.z:.1f}; not significant, or not'
+                 f' each effect adds beyond the other alone ({parts_text}):'
+                 f' {chosen.cause if chosen is not None else "none"}')
+    return chosen
+
+
+def _state_ties(decision: dict[str, Any], chosen: Candidate | None,
+                candidates: list[Candidate], residuals: dict[str, FloatArray],
+                z_critical: float, bandwidth: int | None) -> None:
+    # The candidates within the noise of the chosen one, the ranking, how to separate them.
+    ties = _ties(chosen, candidates, residuals, z_critical, bandwidth, decision['steps'])
+    decision['ranking'] = _ranking(chosen, candidates, residuals, bandwidth)
+    decision['ambiguous'] = bool(ties)
+    decision['tied_with'] = [c.cause for c in ties]
+    decision['separate_by'] = (_separation([chosen.cause, *decision['tied_with']])
+                               if chosen is not None and ties else '')
+
+
+def _strength(decision: dict[str, Any], chosen: Candidate | None, baseline: dict[str, Any],
+              sigma: float, span: float) -> str:
+    # A named effect whose gain stays below the bar a user can rely on is present but weak:
+    # significant and physically supported, yet small against what else the plain model
+    # misses (or the noise).  Returns the sentence the evidence gets.
+    decision['strength_bar'] = STRONG_GAIN
+    decision['strength'] = ('none' if chosen is None else
+                            'clear' if chosen.gain >= STRONG_GAIN else 'present, weak')
+    if chosen is None or decision['strength'] != 'present, weak':
+        return ''
+    reason = (
+        f'{chosen.cause} is present, weak: its extension cuts the validation error by only'
+        f' {100 * chosen.gain:.0f} % (below {100 * STRONG_GAIN:.0f} %), although the cut is'
+        f' significant and the physical signature is {chosen.signature}; the plain model'
+        f' misses {100 * baseline["rms_error"]:.2f} % of the range, the noise floor is'
+        f' {100 * sigma / span:.2f} %: most of the error is not this effect (a longer record,'
+        ' or an excitation that shows it more, e.g. longer holds for slow effects, measures'
+        ' it better)')
+    decision['weak_reason'] = reason
+    return ' ' + reason[0].upper() + reason[1:] + '.'
+
+
+def _records(recording: Any, validation: Any, split: float) -> tuple[
+        FloatArray, tuple[FloatArray, FloatArray, FloatArray],
+        tuple[FloatArray, FloatArray, FloatArray], int, dict[str, Any]]:
+    # The training and the validation record (a separate one, or the record's tail after
+    # the split), the first validation sample scored, and what the report says of them.
+    t, x, y = _arrays(recording, 'recording')
+    if validation is None:
+        if not 0.1 <= split <= 0.9:
+            msg = f'split must be in [0.1, 0.9]; found {split!r}'
+            raise DataError(msg)
+        n_train = int(round(split * t.size))
+        tt, xt, yt = t[:n_train], x[:n_train], y[:n_train]
+        tv, xv, yv, start = t, x, y, n_train
+        data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
+                'split': split, 'training_samples': n_train,
+                'validation': f'samples {n_train}..{t.size - 1} of the same record'}
+    else:
+        tt, xt, yt = t, x, y
+        tv, xv, yv = _arrays(validation, 'validation')
+        start = 0
+        data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
+                'validation': getattr(validation, 'source', '') or 'separate recording',
+                'validation_samples': int(tv.size)}
+    if tt.size < 200 or tv.size - start < 100:
+        msg = (f'too few samples to diagnose: {tt.size} for training and {tv.size - start}'
+               ' for validation; record at least a few loops (>= 300 samples)')
+        raise DataError(msg)
+    return t, (tt, xt, yt), (tv, xv, yv), start, data
+
+
+def _scored_part(tv: FloatArray, xv: FloatArray, yv: FloatArray, sign: int,
+                 data: dict[str, Any]) -> tuple[int, bool]:
+    # The first sample of a separate validation record that is scored, and whether each
+    # model's start state is estimated on it (stated in data['validation_scored']).
+    estimate_start = False
+    # A separate experiment starts from its own state.  Scored once its input has
+    # covered its range (the plays' and the effects' slow states then follow from the
+    # data) when that leaves at least half of it; else from its first sample (after the
+    # ringing of a step just before it), every model with the start state that explains
+    # the samples before its plays are determined (its weights kept).
+    covered = burn_in(xv, 0.99 * float(np.ptp(xv)), to_turning_point=True)
+    if covered <= 0.5 * tv.size:
+        start, left_out = covered, ('the samples before the input covered its range'
+                                    ' (the start state of the plays and effects)')
+    else:
+        start = _leading_ringing(tv, xv, yv, sign)
+        estimate_start = True
+        left_out = ('the ringing after a step just before the record' if start
+                    else 'nothing')
+    if tv.size - start < 100:
+        msg = ('too little to score: the validation record leaves only'
+               f' {tv.size - start} samples (from sample {start}: {left_out}); record a'
+               ' longer validation (e.g. mpi-ros diagnose --excitation)')
+        raise DataError(msg)
+    data['validation_burn_in'] = start
+    data['validation_scored'] = {
+        'from_sample': start, 'samples': int(tv.size - start), 'left_out': left_out,
+        'start_state': ('estimated for each model (its weights kept)' if estimate_start
+                        else 'set by the data before the scored part')}
+    return start, estimate_start
 
 
 def _arrays(rec: Any, name: str) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -585,74 +710,74 @@ def _dm_statistic(r_a: FloatArray, r_b: FloatArray,
     return float(d.mean() / math.sqrt(max(variance, 1e-300) / n)), lags
 
 
-def _decide(candidates: list[dict[str, Any]], excess: bool,
-            steps: list[str]) -> dict[str, Any] | None:
+def _decide(candidates: list[Candidate], excess: bool,
+            steps: list[str]) -> Candidate | None:
     if not excess:
         steps.append('the baseline residual does not exceed the noise floor: none')
         return None
     for c in candidates:
-        steps.append(f'{c["cause"]}: gain {c["gain"]:+.3f}, z {c["z"]:.1f}'
-                     f' ({"" if c["significant"] else "not "}significant), signature'
-                     f' {c["signature"]}')
-    eligible = [c for c in candidates if c['significant'] and c['signature'] != 'absent']
+        steps.append(f'{c.cause}: gain {c.gain:+.3f}, z {c.z:.1f}'
+                     f' ({"" if c.significant else "not "}significant), signature'
+                     f' {c.signature}')
+    eligible = [c for c in candidates if c.significant and c.signature != 'absent']
     if not eligible:
         steps.append('no candidate is both significant and physically supported: none')
         return None
-    best = max(eligible, key=lambda c: c['gain'])
+    best = max(eligible, key=lambda c: c.gain)
     note = (' (signature unavailable in this record: decided on the gain alone)'
-            if best['signature'] == 'unavailable' else '')
-    steps.append(f'largest gain among the eligible: {best["cause"]}'
-                 f' ({best["gain"]:.3f}){note}')
+            if best.signature == 'unavailable' else '')
+    steps.append(f'largest gain among the eligible: {best.cause}'
+                 f' ({best.gain:.3f}){note}')
     return best
 
 
-def _pair(candidates: list[dict[str, Any]]) -> tuple[dict[str, Any], dict[str, Any]] | None:
+def _pair(candidates: list[Candidate]) -> tuple[Candidate, Candidate] | None:
     # The two candidates with their physical signatures present that chain (an input stage
     # beside a material effect), the largest summed gain first; two input stages (a lag and
     # a dead time) are told apart by two rates, not combined.
-    present = [c for c in candidates if c['signature'] == 'present' and c['cause'] in EFFECTS]
+    present = [c for c in candidates if c.signature == 'present' and c.cause in EFFECTS]
     pairs = []
     for k, a in enumerate(present):
         for b in present[k + 1:]:
-            if EFFECTS[a['cause']].stage == EFFECTS[b['cause']].stage:
+            if EFFECTS[a.cause].stage == EFFECTS[b.cause].stage:
                 continue
             try:
-                check_combination([a['cause'], b['cause']])
+                check_combination([a.cause, b.cause])
             except ModelError:
                 continue
             pairs.append((a, b))
-    return max(pairs, key=lambda p: p[0]['gain'] + p[1]['gain']) if pairs else None
+    return max(pairs, key=lambda p: p[0].gain + p[1].gain) if pairs else None
 
 
-def _ties(best: dict[str, Any] | None, candidates: list[dict[str, Any]],
+def _ties(best: Candidate | None, candidates: list[Candidate],
           residuals: dict[str, FloatArray], z_critical: float, bandwidth: int | None,
-          steps: list[str]) -> list[dict[str, Any]]:
+          steps: list[str]) -> list[Candidate]:
     # The significant candidates the chosen one does not beat significantly (a one-sided
     # Diebold-Mariano test between the two): within the noise of each other.
     if best is None:
         return []
     tied = []
     for c in candidates:
-        if c is best or not c['significant']:
+        if c is best or not c.significant:
             continue
-        z, _ = _dm_statistic(residuals[c['cause']], residuals[best['cause']], bandwidth)
+        z, _ = _dm_statistic(residuals[c.cause], residuals[best.cause], bandwidth)
         if z < z_critical:
             tied.append(c)
-            steps.append(f'{c["cause"]} is within the noise of {best["cause"]} (z {z:.1f} <'
+            steps.append(f'{c.cause} is within the noise of {best.cause} (z {z:.1f} <'
                          f' {z_critical}): ambiguous')
     return tied
 
 
-def _ranking(best: dict[str, Any] | None, candidates: list[dict[str, Any]],
+def _ranking(best: Candidate | None, candidates: list[Candidate],
              residuals: dict[str, FloatArray],
              bandwidth: int | None) -> list[dict[str, Any]]:
     # Every candidate by its validation gain, with its z against the chosen one.
     out = []
-    for c in sorted(candidates, key=lambda c: -c['gain']):
+    for c in sorted(candidates, key=lambda c: -c.gain):
         z = (math.nan if best is None or c is best else
-             _dm_statistic(residuals[c['cause']], residuals[best['cause']], bandwidth)[0])
-        out.append({'cause': c['cause'], 'gain': c['gain'], 'z_against_chosen': z,
-                    'significant': c['significant'], 'signature': c['signature']})
+             _dm_statistic(residuals[c.cause], residuals[best.cause], bandwidth)[0])
+        out.append({'cause': c.cause, 'gain': c.gain, 'z_against_chosen': z,
+                    'significant': c.significant, 'signature': c.signature})
     return out
 
 
