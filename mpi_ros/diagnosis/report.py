@@ -333,7 +333,9 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
     ax.set_xlabel(f'input [{axes.current}]')
     ax.set_ylabel(out_label)
     ax.set_title('validation loops: where the baseline (blue) leaves the measured loop\n'
-                 '(black), the extended model (red) should follow it', fontsize=10)
+                 '(black), the extended model (red) should follow it' if len(sims) > 1 else
+                 'validation loops: the baseline MPI (blue) should lie on the measured\n'
+                 'loop (black); no extension was chosen', fontsize=10)
     ax.legend(fontsize=8)
     written.append(_save(fig, out / 'loops.png', plt))
 
@@ -345,7 +347,9 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
         ax.set_ylabel(f'measured - simulated [{axes.displacement}]')
         ax.set_title('validation residual: the extended model (red) should be smaller than the'
                      ' baseline (blue)\nand lose its structure (drift in holds, spikes at fast'
-                     ' moves)', fontsize=10)
+                     ' moves)' if len(sims) > 1 else 'validation residual of the baseline MPI:'
+                     ' no extension was chosen;\nwhat is left should look like noise, without'
+                     ' drift in holds or spikes at fast moves', fontsize=10)
         ax.legend(fontsize=8)
         written.append(_save(fig, out / 'residual.png', plt))
         parameters = {c['cause']: c.get('parameters', {}) for c in facts.get('candidates', [])}
