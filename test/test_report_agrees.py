@@ -157,8 +157,8 @@ def test_dead_time_validation_scored_from_a_later_sample_in_volts_and_nm(tmp_pat
     for name, (tk, xk), zero, seed in (('data', (t, x), -123e-6, 1),
                                        ('val', (tv, xv), -116e-6, 2)):
         y = MagnetostrictiveActuator(cfg, seed=seed).simulate(tk, xk)
-        write_csv_columns(tmp_path / f'{name}.csv', {'time': tk, 'u_V': 10.0 * xk,
-                                                      'D1_nm': (zero - y) * 1e9})
+        columns = {'time': tk, 'u_V': 10.0 * xk, 'D1_nm': (zero - y) * 1e9}
+        write_csv_columns(tmp_path / f'{name}.csv', columns)
     facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv', '--validate',
                                     str(tmp_path / 'val.csv'), '--output-scale', '1e-9')
     assert facts['data']['validation_scored']['from_sample'] > 0
