@@ -8,7 +8,9 @@
 The data options (``--input-topic``, ``--input-joint``, ``--input-index``,
 ``--input-column``, ``--output-scale``, ...) are those of ``mpi-ros identify``
 (:func:`mpi_ros.cli_options.add_data_options`); they apply to DATA and to
-``--validate``.
+``--validate``.  The report names the data's units from the input and output column (or
+topic and joint) names and the scales (``volts`` -> V, ``D1_nm`` with ``--output-scale
+1e-9`` -> m; nothing named: A and m); ``--input-unit`` / ``--output-unit`` state them.
 
 ``mpi-ros diagnose --excitation OUT.csv [--excitation-rate HZ --excitation-bias A
 --excitation-amplitude A --seed N]`` writes the diagnostic validation excitation (columns
@@ -17,17 +19,22 @@ The data options (``--input-topic``, ``--input-joint``, ``--input-index``,
 """
 
 import argparse
+import csv
+from pathlib import Path
 import sys
 from typing import Any, Callable, Sequence
 
 from .diagnose import diagnose
-from .report import write_extended_params, write_json, write_report
+from .report import data_units, INPUT_UNITS, OUTPUT_UNITS, report_facts, summary_lines, \
+    write_extended_params, write_json, write_report
 from .signatures import diagnostic_excitation
 from ..cli_options import (
     add_data_options, add_order_option, ArgumentParser, data_options, order_option)
 from ..errors import DataError, MPIError
 from ..progress import Progress
-from ..recordings import join_recordings, read_recording, Recording, write_csv_columns
+from ..recordings import DataOptions, join_recordings, read_recording, Recording, \
+    write_csv_columns
+from ..recordings.reading import source_kind
 
 __all__ = ['diagnose_main', 'build_parser']
 
@@ -59,6 +66,12 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p.add_argument('--excitation-amplitude', type=float, default=0.8,
                    help='half-width of --excitation [A] (default 0.8)')
     p.add_argument('--seed', type=int, default=0, help='seed of --excitation (default 0)')
+    p.add_argument('--input-unit', choices=sorted(INPUT_UNITS),
+                   help='unit of the input after --input-scale, for the report (default: from'
+                        ' the column/topic name and the scale, else A)')
+    p.add_argument('--output-unit', choices=sorted(OUTPUT_UNITS),
+                   help='unit of the output after --output-scale, for the report (default:'
+                        ' from the column/topic name and the scale, else m)')
     p.add_argument('--quiet', action='store_true',
                    help='no progress line on stderr (it is drawn only when stderr is a '
                         'terminal)')
@@ -86,6 +99,37 @@ def _write_excitation(args: argparse.Namespace) -> None:
                                        amplitude=args.excitation_amplitude, seed=args.seed)
     write_csv_columns(args.excitation, {'time': t, 'current': current},
                       comment='diagnostic validation excitation of mpi-ros diagnose')
+
+
+def _signal_names(path: str, options: DataOptions) -> tuple[str, str]:
+    # The names the reader takes the input and output from: CSV columns (resolved as the
+    # reader resolves unset ones) or bag topics with their joints.
+    if source_kind(path) == 'bag':
+        return (f'{options.input_topic} {options.input_joint or ""}'.strip(),
+                f'{options.output_topic} {options.output_joint or ""}'.strip())
+    header: list[str] = []
+    with Path(path).open(encoding='utf-8', newline='') as f:
+        for row in csv.reader(f):
+            if row and row[0].strip() and not row[0].lstrip().startswith('#'):
+                header = [name.strip() for name in row]
+                break
+    rest = [name for name in header if name != options.time_column]
+    name_in = options.input_column or (rest[0] if rest else '')
+    after = header[header.index(name_in) + 1:] if name_in in header else []
+    name_out = options.output_column or next(
+        (name for name in after if name != options.time_column), '')
+    return name_in, name_out
+
+
+def _units(args: argparse.Namespace) -> dict[str, str]:
+    options = data_options(args)
+    try:
+        name_in, name_out = _signal_names(args.data[0], options)   # the first training file
+    except (OSError, UnicodeDecodeError, csv.Error):
+        name_in = name_out = ''
+    return data_units(name_in, name_out, input_scale=options.input_scale,
+                      output_scale=options.output_scale, input_unit=args.input_unit,
+                      output_unit=args.output_unit)
 
 
 def _read(path: str, args: argparse.Namespace, say: Callable[[str], None]) -> Any:
@@ -146,8 +190,12 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
             validation = _read(args.validate, args, say)
         report = diagnose(data, validation=validation, split=args.split, order=order,
                           progress=say)
-        write_json(report, args.json)
-        files = write_report(report, args.report)
+        report.data['units'] = _units(args)
+        facts = report_facts(report)       # the JSON, the summary and summary.md: one dict
+        write_json(facts, args.json)
+        files = write_report(report, args.report, facts=facts)
+        for line in summary_lines(facts):
+            progress.say(line)
         say(f'wrote {args.json} and {len(files)} file(s) in {args.report}')
         if args.params_out:
             if report.model is None:

@@ -582,7 +582,10 @@ def _records(recording: Any, validation: Any, split: float) -> tuple[
         tv, xv, yv, start = t, x, y, n_train
         data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
                 'split': split, 'training_samples': n_train,
-                'validation': f'samples {n_train}..{t.size - 1} of the same record'}
+                'validation': f'samples {n_train}..{t.size - 1} of the same record',
+                'validation_scored': {'from_sample': n_train, 'samples': int(t.size - n_train),
+                                      'left_out': 'the training part',
+                                      'start_state': 'continues the training part'}}
     else:
         tt, xt, yt = t, x, y
         tv, xv, yv = _arrays(validation, 'validation')
@@ -814,7 +817,8 @@ def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatA
     holds = hold_segments(tv, xv, 0.5)
     moves = [float(r[j] - r[k]) for k, j in holds]
     steps = [float(np.sign(xv[k] - xv[max(k - int(0.2 * (j - k)) - 1, 0)])) for k, j in holds]
-    out['holds'] = {'count': len(holds),
+    out['holds'] = {'count': len(holds), 'minimum_duration': 0.5,
+                    'signature_minimum_duration': 1.0,
                     'mean_abs_residual_change': float(np.mean(np.abs(moves))) if moves else 0.0,
                     'change_along_last_step': float(np.mean(np.array(moves) * np.array(
                         steps))) if moves else 0.0}
@@ -858,7 +862,8 @@ def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, A
     details = [EFFECTS[p].evidence(residual) for p in parts if p in EFFECTS]
     detail = '; '.join(d for d in details if d is not None)
     if not detail:
-        detail = 'the record has no holds or bursts to check the physical signature'
+        detail = ('the record has no hold of 1 s or more and no bursts the signature tests'
+                  ' can use')
     each = ''
     if len(parts) > 1:
         each = ('; each adds beyond the other alone: ' + ', '.join(

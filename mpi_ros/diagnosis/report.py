@@ -2,29 +2,79 @@
 """
 Report for people: a markdown summary and PNG plots of a :class:`DiagnosisReport`.
 
-Plots (matplotlib, Agg backend): measured vs simulated loops (``loops.png``), the
-residuals over time (``residual.png``) and one signature plot per candidate
-(``signature_<cause>.png``): creep - residual during input holds; rate dependence -
-residual against the input rate; thermal drift - residual against the lagged input power;
-dead time - cross-correlation of measured and simulated output rate against lag.
+**One dictionary feeds everything.**  The JSON (``report.to_json()``), the summary lines the
+command line prints and ``summary.md`` are all written from the same dictionary; the prose
+only rounds its numbers (3 significant digits) and never computes a number of its own.
+The units are the data's (``data['units']``: input ``A`` or ``V``, output ``m``, ``µm``,
+``nm``, ...; see :func:`data_units`), A and m (SI, REP 103) when nothing says otherwise.
+
+Plots (matplotlib, Agg backend), each titled with what to look at: measured vs simulated
+loops (``loops.png``), the residuals over time (``residual.png``) and one signature plot
+per candidate (``signature_<cause>.png``, drawn by the effect's ``plot``): creep - the
+residual during input holds; rate dependence - the RMS residual against the input speed;
+thermal drift - the residual against the input power through the fitted thermal lag; dead
+time - the dead-time model's residual against the delay, smallest at the fitted delay.
 """
 
+import inspect
 import json
+import math
 import os
 from pathlib import Path
-from typing import Any
+import re
+from typing import Any, Mapping, Sequence
 
+import numpy as np
+from scipy.stats import norm
 
 from .diagnose import DiagnosisReport
 from ..extensions import EFFECTS
+from ..extensions._common import AxisUnits
 from ..params import write_params_yaml
 
-__all__ = ['write_report', 'write_json', 'write_extended_params']
+__all__ = ['report_facts', 'write_report', 'write_json', 'write_extended_params', 'summary_lines',
+           'markdown', 'data_units', 'significant', 'z_wording', 'INPUT_UNITS',
+           'OUTPUT_UNITS']
+
+#: Input units the report knows, with their factor to the SI unit they are a multiple of.
+INPUT_UNITS = {'A': ('A', 1.0), 'mA': ('A', 1e-3), 'uA': ('A', 1e-6), 'µA': ('A', 1e-6),
+               'V': ('V', 1.0), 'mV': ('V', 1e-3), 'kV': ('V', 1e3), 'uV': ('V', 1e-6),
+               'µV': ('V', 1e-6)}
+#: Output (length) units the report knows, with their factor to m.
+OUTPUT_UNITS = {'m': 1.0, 'mm': 1e-3, 'um': 1e-6, 'µm': 1e-6, 'nm': 1e-9, 'pm': 1e-12}
+
+# Words in a column or topic name that name a unit (case-insensitive), and the unit.
+_WORDS = {'volt': 'V', 'volts': 'V', 'voltage': 'V', 'millivolt': 'mV', 'millivolts': 'mV',
+          'amp': 'A', 'amps': 'A', 'ampere': 'A', 'amperes': 'A', 'current': 'A',
+          'milliamp': 'mA', 'milliamps': 'mA',
+          'meter': 'm', 'meters': 'm', 'metre': 'm', 'metres': 'm',
+          'micron': 'µm', 'microns': 'µm', 'micrometer': 'µm', 'micrometers': 'µm',
+          'nanometer': 'nm', 'nanometers': 'nm', 'millimeter': 'mm', 'millimeters': 'mm'}
+# Unit tokens matched with their case (``V``, ``mV``, ``nm``; ``u``/``µ``/``μ`` for micro).
+_TOKENS = {'V': 'V', 'mV': 'mV', 'kV': 'kV', 'uV': 'uV', 'µV': 'µV', 'μV': 'µV',
+           'A': 'A', 'mA': 'mA', 'uA': 'uA', 'µA': 'µA', 'μA': 'µA',
+           'm': 'm', 'mm': 'mm', 'um': 'µm', 'µm': 'µm', 'μm': 'µm', 'nm': 'nm', 'pm': 'pm'}
+_PREFIXES = ((1.0, 'm'), (1e-3, 'mm'), (1e-6, 'µm'), (1e-9, 'nm'), (1e-12, 'pm'))
 
 
-def write_json(report: DiagnosisReport, path: str | os.PathLike[str]) -> None:
-    """Write ``report.to_json()`` to ``path`` (UTF-8, indented)."""
-    Path(path).write_text(json.dumps(report.to_json(), indent=2) + '\n', encoding='utf-8')
+def write_json(report: DiagnosisReport | Mapping[str, Any],
+               path: str | os.PathLike[str]) -> None:
+    """Write the report's dictionary (``report.to_json()``) to ``path`` (UTF-8, indented)."""
+    facts = report_facts(report) if isinstance(report, DiagnosisReport) else report
+    Path(path).write_text(json.dumps(facts, indent=2) + '\n', encoding='utf-8')
+
+
+def report_facts(report: DiagnosisReport) -> dict[str, Any]:
+    """
+    Return the one dictionary the JSON, the summary lines and ``summary.md`` are written from.
+
+    ``report.to_json()`` with the data's units (``data['units']``, see :func:`data_units`;
+    A and m when the report does not name them).
+
+    """
+    facts = report.to_json()
+    facts['data'].setdefault('units', data_units())
+    return facts
 
 
 def write_extended_params(report: DiagnosisReport, path: str | os.PathLike[str], *,
@@ -47,7 +97,198 @@ def write_extended_params(report: DiagnosisReport, path: str | os.PathLike[str],
     write_params_yaml(path, report.parameters(), node_name=node_name, header=header)
 
 
-def write_report(report: DiagnosisReport, directory: str | os.PathLike[str]) -> list[Path]:
+def data_units(input_name: str = '', output_name: str = '', *, input_scale: float = 1.0,
+               output_scale: float = 1.0, input_unit: str | None = None,
+               output_unit: str | None = None) -> dict[str, str]:
+    """
+    Name the units of the data after the reader's scales, from the signals' names.
+
+    A name (a CSV column, a bag topic or joint) names a unit by a token (``Vplus_V``,
+    ``u_V``, ``D1_nm``, ``I_mA``) or a word (``voltage``, ``volts``, ``current``,
+    ``microns``).  With a scale of 1 the data are in that unit; with the scale that
+    converts the unit's prefix away (``mV`` and 1e-3, ``nm`` and 1e-9) in its SI unit; any
+    other scale is the reader's conversion to A and m (``--input-scale``:
+    "multiply the input by this to get A").  Nothing named: A and m (SI, REP 103).
+
+    Parameters
+    ----------
+    input_name, output_name : str
+        Names of the input and output signals ('' when unknown).
+    input_scale, output_scale : float
+        The reader's factors (``--input-scale``, ``--output-scale``).
+    input_unit, output_unit : str, optional
+        The user's statement of the units after the scales (overrides the names; a key of
+        :data:`INPUT_UNITS` resp. :data:`OUTPUT_UNITS`).
+
+    Returns
+    -------
+    dict
+        ``time`` (``'s'``), ``input``, ``output`` (unit names) and ``from`` (how they were
+        found, one phrase).
+
+    Examples
+    --------
+    >>> u = data_units('volts', 'nm', output_scale=1e-9)
+    >>> u['input'], u['output']
+    ('V', 'm')
+    >>> data_units('current', 'displacement_um')['output']
+    'µm'
+
+    """
+    found = []
+    units = {}
+    for role, name, scale, stated, known in (
+            ('input', input_name, input_scale, input_unit, INPUT_UNITS),
+            ('output', output_name, output_scale, output_unit, OUTPUT_UNITS)):
+        if stated is not None:
+            units[role] = stated
+            found.append(f'{role} unit stated')
+            continue
+        named = _named_unit(name, role)
+        base = 'A' if role == 'input' else 'm'
+        if named is None:
+            units[role] = base
+            found.append(f'{role} {name!r} names no unit: {base}' if name
+                         else f'{role}: {base} (SI)')
+            continue
+        if role == 'input':
+            si, factor = INPUT_UNITS[named]
+        else:
+            si, factor = 'm', OUTPUT_UNITS[named]
+        if scale == 1.0:
+            unit = named
+        elif math.isclose(scale, factor, rel_tol=1e-9):
+            unit = si
+        else:
+            unit = base
+        units[role] = unit
+        detail = '' if scale == 1.0 else f' times {scale:g}'
+        found.append(f'{role} {name!r}{detail}: {unit}')
+    return {'time': 's', 'input': units['input'], 'output': units['output'],
+            'from': '; '.join(found)}
+
+
+def significant(value: Any, digits: int = 3) -> str:
+    """
+    Format a number with ``digits`` significant digits (plain, or exponent when tiny/huge).
+
+    Examples
+    --------
+    >>> significant(0.0065317), significant(66.93), significant(48351.0), significant(5e-23)
+    ('0.00653', '66.9', '4.84e+04', '5.00e-23')
+
+    """
+    if value is None or isinstance(value, bool):
+        return 'n/a'
+    v = float(value)
+    if not math.isfinite(v):
+        return 'n/a'
+    if v == 0.0:
+        return '0'
+    rounded = float(f'{v:.{digits - 1}e}')
+    exponent = math.floor(math.log10(abs(rounded)))
+    if -3 <= exponent < digits:
+        return f'{rounded:.{max(digits - 1 - exponent, 0)}f}'
+    return f'{rounded:.{digits - 1}e}'
+
+
+def z_wording(z: Any, z_critical: float) -> str:
+    """
+    Say what a Diebold-Mariano z of a candidate against the baseline means.
+
+    ``z >= z_critical``: significantly better; ``z <= -z_critical``: significantly worse;
+    else not significant (``z_critical`` the one-sided critical value the diagnosis used).
+
+    """
+    if z is None:
+        return 'not tested'
+    if z >= z_critical:
+        return 'significantly better'
+    if z <= -z_critical:
+        return 'significantly worse'
+    return 'not significant'
+
+
+def summary_lines(facts: Mapping[str, Any]) -> list[str]:
+    """
+    Return the short summary (printed on stderr, and the head of ``summary.md``).
+
+    Parameters
+    ----------
+    facts : Mapping
+        The report's dictionary (``report.to_json()``), the same the JSON holds.
+
+    Returns
+    -------
+    list of str
+        One statement per line: verdict, gains, ties, scored part, holds, units.
+
+    """
+    units = _units(facts)
+    lines = [f'verdict: {facts["cause"]} ({_verdict_label(facts)})'
+             + (f', validation gain {_percent(facts["gain"])}' if facts['gain'] else '')]
+    decision = facts.get('decision', {})
+    reason = decision.get('weak_reason') or decision.get('reason')
+    if reason and 'weak' in _verdict_label(facts):
+        lines.append(f'weak: {reason}')
+    if facts.get('baseline'):
+        zc = float(decision.get('z_critical', 1.645))
+        lines.append('gains on the validation data (Diebold-Mariano z against the baseline): '
+                     + ', '.join(f'{c["cause"]} {_signed_percent(c["gain"])} (z'
+                                 f' {significant(c["z"])}, {z_wording(c["z"], zc)})'
+                                 for c in _ranked(facts)))
+    if decision.get('ambiguous'):
+        lines.append(f'ambiguous: {" and ".join(_tied(facts))} explain the validation data'
+                     ' equally well within the noise; separate them with'
+                     ' mpi-ros diagnose --excitation (see summary.md)')
+    lines.append(f'scored part: {_scored(facts)}')
+    lines.append(f'holds: {_holds(facts)}')
+    lines.append(f'units: input {units["input"]}, output {units["output"]},'
+                 f' time s ({units["from"]})')
+    return lines
+
+
+def markdown(facts: Mapping[str, Any], images: Sequence[str] = ()) -> str:
+    """
+    Return ``summary.md`` for the report's dictionary.
+
+    Parameters
+    ----------
+    facts : Mapping
+        The report's dictionary (``report.to_json()``), the same the JSON holds.
+    images : sequence of str
+        File names of the plots, in the report folder.
+
+    Returns
+    -------
+    str
+        Markdown; every number rounded to 3 significant digits (counts exactly).
+
+    """
+    units = _units(facts)
+    decision = facts.get('decision', {})
+    lines = ['# mpi_ros diagnosis', '',
+             f'**Verdict: {facts["cause"]}** ({_verdict_label(facts)})', '']
+    lines += [f'- {line[0].upper()}{line[1:]}' for line in summary_lines(facts)]
+    lines.append('')
+    lines += [f'**Warning:** {warning}\n' for warning in facts.get('warnings', [])]
+    if not facts.get('baseline'):
+        lines += ['## Why no model was fitted', '', facts.get('evidence', ''), '']
+    else:
+        lines += _candidate_section(facts, units)
+        if decision.get('ambiguous'):
+            lines += _tie_section(facts)
+        lines += _evidence_section(facts, units)
+    lines += _data_section(facts, units)
+    if images:
+        lines += ['## Plots', '']
+        for name in images:
+            lines += [f'![{name}]({name})', '', f'*{_caption(name)}*', '']
+    return '\n'.join(lines).rstrip('\n') + '\n'
+
+
+def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
+                 facts: Mapping[str, Any] | None = None) -> list[Path]:
     """
     Write ``summary.md`` and the PNG plots into ``directory`` (created if missing).
 
@@ -57,6 +298,9 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str]) -> 
         The diagnosis.
     directory : str or PathLike
         Output directory.
+    facts : Mapping, optional
+        The report's dictionary the JSON was written from (default ``report.to_json()``):
+        the prose is written from it.
 
     Returns
     -------
@@ -68,43 +312,55 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str]) -> 
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
 
+    facts = report_facts(report) if facts is None else facts
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     s = report.series
     written = []
     t, x, y, k0 = s['time'], s['current'], s['displacement'], s['start']
+    axes = _axis_units(_units(facts), y[k0:])
     val = slice(k0, None)
     sims = {'baseline MPI': s.get('baseline')}
     if report.cause in s.get('candidates', {}):
         sims[f'extended ({report.cause})'] = s['candidates'][report.cause]
+    out_label = f'output [{axes.displacement}]'
 
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    ax.plot(x[val], y[val], lw=0.8, color='k', label='measured')
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    ax.plot(x[val], axes.scale * y[val], lw=0.8, color='k', label='measured')
     for (name, sim), color in zip(sims.items(), ('tab:blue', 'tab:red')):
         if sim is not None:
-            ax.plot(x[val], sim[val], lw=0.8, color=color, label=name)
-    ax.set_xlabel('input (current) [A]')
-    ax.set_ylabel('output (displacement) [m]')
-    ax.set_title('validation data: measured vs simulated')
+            ax.plot(x[val], axes.scale * sim[val], lw=0.8, color=color, label=name)
+    ax.set_xlabel(f'input [{axes.current}]')
+    ax.set_ylabel(out_label)
+    ax.set_title('validation loops: where the baseline (blue) leaves the measured loop\n'
+                 '(black), the extended model (red) should follow it' if len(sims) > 1 else
+                 'validation loops: the baseline MPI (blue) should lie on the measured\n'
+                 'loop (black); no extension was chosen', fontsize=10)
     ax.legend(fontsize=8)
     written.append(_save(fig, out / 'loops.png', plt))
 
     if sims['baseline MPI'] is not None:
-        fig, ax = plt.subplots(figsize=(8, 3.5))
+        fig, ax = plt.subplots(figsize=(8, 3.8))
         for (name, sim), color in zip(sims.items(), ('tab:blue', 'tab:red')):
-            ax.plot(t[val], (y - sim)[val], lw=0.6, color=color, label=name)
+            ax.plot(t[val], axes.scale * (y - sim)[val], lw=0.6, color=color, label=name)
         ax.set_xlabel('time [s]')
-        ax.set_ylabel('measured - simulated [m]')
-        ax.set_title('validation residual over time')
+        ax.set_ylabel(f'measured - simulated [{axes.displacement}]')
+        ax.set_title('validation residual: the extended model (red) should be smaller than the'
+                     ' baseline (blue)\nand lose its structure (drift in holds, spikes at fast'
+                     ' moves)' if len(sims) > 1 else 'validation residual of the baseline MPI:'
+                     ' no extension was chosen;\nwhat is left should look like noise, without'
+                     ' drift in holds or spikes at fast moves', fontsize=10)
         ax.legend(fontsize=8)
         written.append(_save(fig, out / 'residual.png', plt))
+        parameters = {c['cause']: c.get('parameters', {}) for c in facts.get('candidates', [])}
         for cause, sim in s.get('candidates', {}).items():
             plot = _signature(cause, t, x, y, sims['baseline MPI'], sim, k0,
-                              out / f'signature_{cause}.png', plt)
+                              out / f'signature_{cause}.png', plt, axes,
+                              parameters.get(cause, {}))
             if plot is not None:
                 written.append(plot)
     summary = out / 'summary.md'
-    summary.write_text(_markdown(report, [p.name for p in written]), encoding='utf-8')
+    summary.write_text(markdown(facts, [p.name for p in written]), encoding='utf-8')
     written.append(summary)
     return written
 
@@ -117,39 +373,294 @@ def _save(fig: Any, path: Path, plt: Any) -> Path:
 
 
 def _signature(cause: str, t: Any, x: Any, y: Any, base: Any, sim: Any, k0: int,
-               path: Path, plt: Any) -> Path | None:
-    # Each effect draws its own signature plot (mpi_ros.extensions.effect.Effect.plot).
+               path: Path, plt: Any, axes: AxisUnits,
+               parameters: Mapping[str, Any]) -> Path | None:
+    # Each effect draws its own signature plot (mpi_ros.extensions.effect.Effect.plot);
+    # the built-in ones take the units and the fitted parameters as keywords.
     effect = EFFECTS.get(cause)
     if effect is None or effect.plot is None:
         return None
-    fig, ax = plt.subplots(figsize=(6, 4))
-    effect.plot(ax, t, x, y, base, sim, k0)
-    ax.legend(fontsize=8, markerscale=6)
+    accepted = inspect.signature(effect.plot).parameters
+    extra = {k: v for k, v in (('units', axes), ('parameters', parameters))
+             if k in accepted}
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    effect.plot(ax, t, x, y, base, sim, k0, **extra)
+    ax.legend(fontsize=8, markerscale=3)
     return _save(fig, path, plt)
 
 
-def _markdown(report: DiagnosisReport, images: list[str]) -> str:
-    j = report.to_json()
-    lines = ['# mpi_ros diagnosis', '', f'**Verdict: `{report.cause}`**', '',
-             report.evidence, '']
-    lines += [f'**Warning:** {warning}\n' for warning in report.warnings]
-    if report.baseline:
-        b, e = report.baseline, report.extended
-        lines += ['| model | validation RMS error | (37) nonlinearity error | gain |',
-                  '|---|---|---|---|',
-                  f'| baseline MPI, order {tuple(b["order"])} | {100 * b["rms_error"]:.3f} % |'
-                  f' {100 * b["nonlinearity_error"]:.3f} % | - |']
-        for c in report.candidates:
-            mark = ' **(chosen)**' if c['cause'] == report.cause else ''
-            lines.append(f'| {c["cause"]}{mark} | {100 * c["rms_error"]:.3f} % |'
-                         f' {100 * c["nonlinearity_error"]:.3f} % | {100 * c["gain"]:+.1f} %'
-                         f' (z {c["z"]:.1f}) |')
-        lines += ['', f'Extended model validation RMS error: {100 * e["rms_error"]:.3f} %.', '',
-                  '## Decision', '']
-        lines += [f'- {step}' for step in report.decision.get('steps', [])]
-        lines += ['', '## Residual structure (baseline, validation data)', '', '```',
-                  json.dumps(j['residual'], indent=1), '```', '']
-    lines += ['## Data', '', '```', json.dumps(j['data'], indent=1), '```', '',
-              '## Plots', '']
-    lines += [f'![{name}]({name})' for name in images]
-    return '\n'.join(lines) + '\n'
+def _caption(name: str) -> str:
+    captions = {
+        'loops.png': 'Measured and simulated output against the input, validation data.',
+        'residual.png': 'Measured minus simulated output over time, validation data.',
+        'signature_creep.png': 'Creep: residual over time with the input; look at the holds.',
+        'signature_rate_dependence.png': 'Rate dependence: RMS residual against the input'
+                                         ' speed.',
+        'signature_thermal_drift.png': 'Thermal drift: residual against the lagged input'
+                                       ' power.',
+        'signature_dead_time.png': "Dead time: the dead-time model's residual against the"
+                                   ' delay; the minimum should sit on the fitted value.'}
+    return captions.get(name, name)
+
+
+def _units(facts: Mapping[str, Any]) -> dict[str, str]:
+    units = facts.get('data', {}).get('units')
+    return dict(units) if units else data_units()
+
+
+def _axis_units(units: Mapping[str, str], y: Any) -> AxisUnits:
+    # Metres are drawn with the prefix that suits the output's range; a named unit as it is.
+    if units['output'] != 'm':
+        return AxisUnits(current=units['input'], displacement=units['output'])
+    span = float(np.ptp(y)) if len(y) else 0.0
+    factor, prefix = next(((f, p) for f, p in _PREFIXES if span >= f), _PREFIXES[-1])
+    return AxisUnits(current=units['input'], displacement=prefix, scale=1.0 / factor)
+
+
+def _named_unit(name: str, role: str) -> str | None:
+    known = INPUT_UNITS if role == 'input' else OUTPUT_UNITS
+    for token in reversed([w for w in re.split(r'[^0-9A-Za-zµμ]+', name) if w]):
+        unit = _TOKENS.get(token) or _WORDS.get(token.lower())
+        if unit is not None and unit in known:
+            return unit
+    return None
+
+
+def _percent(fraction: Any) -> str:
+    return f'{significant(100.0 * float(fraction))} %'
+
+
+def _signed_percent(fraction: Any) -> str:
+    text = _percent(fraction)
+    return text if text.startswith('-') else '+' + text
+
+
+def _length(value: Any, unit: str) -> str:
+    # A length in the data's output unit; metres get the prefix that suits the value.
+    if value is None:
+        return 'n/a'
+    v = float(value)
+    if unit != 'm' or v == 0.0:
+        return f'{significant(v)} {unit}'
+    factor, prefix = next(((f, p) for f, p in _PREFIXES if abs(v) >= f), _PREFIXES[-1])
+    return f'{significant(v / factor)} {prefix}'
+
+
+def _seconds(value: Any) -> str:
+    v = float(value)
+    return f'{significant(1e3 * v)} ms' if abs(v) < 1.0 else f'{significant(v)} s'
+
+
+def _verdict_label(facts: Mapping[str, Any]) -> str:
+    # The diagnosis' own label when it gives one (e.g. 'present, weak'), else by the cause.
+    for source in (facts, facts.get('decision', {})):
+        label = source.get('verdict')
+        if isinstance(label, str) and label:
+            return label
+    if facts.get('decision', {}).get('strength') == 'present, weak':
+        return 'present, weak'
+    cause = facts['cause']
+    if cause == 'none':
+        return 'no effect found'
+    if cause == 'outside_invertible_class':
+        return 'outside the invertible class: no model fitted'
+    if facts.get('decision', {}).get('ambiguous'):
+        return f'present, ambiguous: tied with {" and ".join(_tied(facts)[1:])}'
+    return 'present'
+
+
+def _ranked(facts: Mapping[str, Any]) -> list[Mapping[str, Any]]:
+    return sorted(facts.get('candidates', []), key=lambda c: -c['gain'])
+
+
+def _tied(facts: Mapping[str, Any]) -> list[str]:
+    return [facts['cause'], *facts.get('decision', {}).get('tied_with', [])]
+
+
+def _scored(facts: Mapping[str, Any]) -> str:
+    data = facts.get('data', {})
+    scored = data.get('validation_scored')
+    if scored is None and 'training_samples' in data:        # a split record
+        scored = {'from_sample': data['training_samples'],
+                  'samples': data['samples'] - data['training_samples'],
+                  'left_out': 'the training part'}
+    if scored is None:
+        return 'the whole validation record'
+    where = ('validation record' if 'validation_samples' in data
+             else 'record (after the training part)')
+    left = scored.get('left_out', '')
+    return (f'{where} from sample {scored["from_sample"]}, {scored["samples"]} samples'
+            + (f' (left out before it: {left})' if left and left != 'nothing' else ''))
+
+
+def _holds(facts: Mapping[str, Any]) -> str:
+    residual = facts.get('residual', {})
+    holds = residual.get('holds')
+    if holds is None:
+        return 'not counted (no model fitted)'
+    shortest = holds.get('minimum_duration')
+    text = (f'{holds["count"]} input hold(s)'
+            + (f' of {significant(shortest)} s or more' if shortest else '')
+            + ' in the scored part')
+    used = residual.get('hold_signature')
+    need = holds.get('signature_minimum_duration')
+    longer = f' ({significant(need)} s or more)' if need else ''
+    if used is None:
+        return (f'{text}; none long enough{longer} for the hold signature test (creep,'
+                ' thermal drift): that signature is unavailable')
+    return f'{text}; {used["holds"]} used by the hold signature test{longer}'
+
+
+def _parameters(parameters: Mapping[str, Any]) -> str:
+    units = {p.key: p.unit for e in EFFECTS.values() for p in e.parameters}
+    parts = []
+    for key, value in parameters.items():
+        name = key.rsplit('.', 1)[-1].replace('_', ' ')
+        unit = units.get(key, '')
+        if isinstance(value, (list, tuple)):
+            values = [float(v) for v in value]
+            if not values:
+                continue
+            show = _seconds if unit == 's' else significant
+            parts.append(f'{name} {show(min(values))} to {show(max(values))}'
+                         f' ({len(values)} values)')
+        elif isinstance(value, (int, float)):
+            parts.append(f'{name} {_seconds(value)}' if unit == 's'
+                         else f'{name} {significant(value)}')
+    return '; '.join(parts) or '-'
+
+
+def _candidate_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[str]:
+    b, decision = facts['baseline'], facts.get('decision', {})
+    zc = float(decision.get('z_critical', 1.645))
+    level = float(norm.sf(zc))
+    lines = ['## Models on the validation data', '',
+             'Errors are RMS over the validation output range; the gain is the relative cut'
+             ' of the baseline RMS error; z is the Diebold-Mariano statistic of the squared'
+             f' errors against the baseline, tested one-sided at {_percent(level)}: z >='
+             f' {significant(zc, 4)} is significantly better, z <= -{significant(zc, 4)}'
+             ' significantly worse.', '',
+             '| rank | model | RMS error | (37) nonlinearity error | gain | z | test |'
+             ' signature | fitted parameters |',
+             '|---|---|---|---|---|---|---|---|---|',
+             f'| - | baseline MPI, order {b["order"][0]}, {b["order"][1]} |'
+             f' {_percent(b["rms_error"])} | {_percent(b["nonlinearity_error"])} | - | - | - |'
+             ' - | - |']
+    for rank, c in enumerate(_ranked(facts), 1):
+        mark = ' (chosen)' if c['cause'] == facts['cause'] else ''
+        lines.append(f'| {rank} | {c["cause"]}{mark} | {_percent(c["rms_error"])} |'
+                     f' {_percent(c["nonlinearity_error"])} | {_signed_percent(c["gain"])} |'
+                     f' {significant(c["z"])} | {z_wording(c["z"], zc)} |'
+                     f' {c.get("signature", "-")} | {_parameters(c.get("parameters", {}))} |')
+    lines += ['', f'Straight line fitted on the training data: {_percent(b["linear_rms_error"])}'
+              f' RMS error on the validation data.']
+    min_gain = decision.get('min_gain')
+    if min_gain is not None:
+        above = ('exceeds' if decision.get('baseline_above_noise') else 'does not exceed')
+        lines += ['', f'Rule: a candidate counts when its gain is at least'
+                  f' {_percent(min_gain)}, its z test says significantly better and its'
+                  ' physical signature is present (or unavailable in this record); the'
+                  ' largest gain among those wins.  The baseline residual'
+                  f' {above} {significant(decision.get("noise_factor"))} times the noise'
+                  f' floor ({_length(decision.get("noise_floor"), units["output"])}).']
+    return lines + ['']
+
+
+def _tie_section(facts: Mapping[str, Any]) -> list[str]:
+    decision = facts['decision']
+    tied = _tied(facts)
+    zc = float(decision.get('z_critical', 1.645))
+    lines = ['## Ambiguous: the record cannot tell these causes apart', '',
+             f'{" and ".join(tied)} explain the validation data equally well within the'
+             f' noise ({facts["cause"]} beats none of them with z >= {significant(zc, 4)}).'
+             ' Ranked by gain:', '']
+    rank = 0
+    for row in decision.get('ranking', []):
+        if row['cause'] not in tied:
+            continue
+        rank += 1
+        against = ('chosen' if row['cause'] == facts['cause'] else
+                   f'z {significant(row.get("z_against_chosen"))} against {facts["cause"]}')
+        lines.append(f'{rank}. {row["cause"]}: gain {_signed_percent(row["gain"])}'
+                     f' ({against}; signature {row.get("signature", "-")})')
+    lines += ['', 'To separate them, run `mpi-ros diagnose --excitation validation_input.csv`,'
+              ' play that input on the rig, record the answer and diagnose again with'
+              ' `--validate` the new record.  The excitation holds the input after steps up'
+              f' and down and drives bursts at 5-40 Hz: {_separation(tied)}.', '']
+    return lines
+
+
+def _separation(tied: Sequence[str]) -> str:
+    # What the diagnostic excitation adds for these causes.
+    slow = [c for c in ('creep', 'thermal_drift') if c in tied]
+    fast = [c for c in ('rate_dependence', 'dead_time') if c in tied]
+    how = []
+    if len(slow) == 2:
+        how.append('a hold separates creep (the residual follows log t in the direction of'
+                   ' the step) from thermal drift (it follows the input power)')
+    if slow and fast:
+        how.append(f'a hold separates {" and ".join(slow)} (the residual keeps moving while'
+                   f' the input holds) from {" and ".join(fast)} (silent during a hold)')
+    if len(fast) == 2:
+        how.append('two rates separate a lag (its phase saturates and its amplitude falls'
+                   ' with the frequency) from a dead time (its phase grows in proportion to'
+                   ' the frequency)')
+    return '; '.join(how) or 'its holds and bursts test every signature'
+
+
+def _evidence_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[str]:
+    residual, out = facts.get('residual', {}), units['output']
+    lines = ['## Physical evidence (baseline residual, validation data)', '',
+             f'- Baseline residual RMS {_length(residual.get("rms"), out)}; noise floor'
+             f' {_length(residual.get("noise_floor"), out)}'
+             f' ({_percent(residual.get("noise_floor_relative", 0.0))} of the output range).',
+             f'- Holds: {_holds(facts)}.']
+    holds = residual.get('hold_signature')
+    if holds is not None:
+        lines.append(f'- During {holds["holds"]} hold(s) the residual has a log(t) component'
+                     f' of {_length(holds["log_amplitude"], out)} RMS'
+                     f' (p = {significant(holds["log_p"])}) and a smooth drift of'
+                     f' {_length(holds["drift_amplitude"], out)} RMS'
+                     f' (p = {significant(holds["drift_p"])}).')
+    bursts = residual.get('burst_signature')
+    if bursts is None:
+        lines.append('- Bursts: none the burst signature test can use (rate dependence and'
+                     ' dead time signatures unavailable).')
+    else:
+        f = bursts['frequencies']
+        lines.append(f'- Bursts at {len(f)} frequencies, {significant(f[0])} to'
+                     f' {significant(f[-1])} Hz: the phase of measured/simulated follows the'
+                     f' {bursts["law"]} law (delay L = {_seconds(bursts["delay"])}, residual'
+                     f' {significant(bursts["delay_sse"])}; lag tau ='
+                     f' {_seconds(bursts["lag_time_constant"])}, residual'
+                     f' {significant(bursts["lag_sse"])}; p = {significant(bursts["p"])}).')
+    level = facts.get('decision', {}).get('signature_level')
+    if level is not None:
+        lines.append(f'- Each signature test runs at p < {significant(level)}.')
+    return lines + ['']
+
+
+def _data_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[str]:
+    data = facts.get('data', {})
+    lines = ['## Data', '',
+             f'- Training: `{data.get("source", "")}`, {data.get("samples", "?")} samples'
+             + (f', the first {_percent(data["split"])} of the record' if 'split' in data
+                else '') + '.']
+    if 'validation_samples' in data:
+        lines.append(f'- Validation: `{data.get("validation", "")}`,'
+                     f' {data["validation_samples"]} samples (a separate record).')
+    lines.append(f'- Scored: {_scored(facts)}.')
+    scored = data.get('validation_scored') or {}
+    if scored.get('start_state'):
+        lines.append(f'- Start state of the scored part: {scored["start_state"]}.')
+    if data.get('output_offset_reestimated'):
+        shift = facts.get('baseline', {}).get('validation_output_offset')
+        lines.append('- The validation record has its own sensor zero: only its output offset'
+                     ' is re-estimated, for every model alike (baseline:'
+                     f' {_length(shift, units["output"])}).')
+    if 'output_sign' in data:
+        lines.append(f'- Output sign: {data["output_sign"]:+d}'
+                     + (' (a falling sensor)' if data['output_sign'] < 0 else '') + '.')
+    lines.append(f'- Units: input {units["input"]}, output {units["output"]}, time s'
+                 f' ({units["from"]}).')
+    return lines + ['']

@@ -9,6 +9,7 @@ actuator's states are determined by the data) in the fit and in the trial errors
 """
 
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 import math
 from typing import Any, TypeVar
 
@@ -22,7 +23,7 @@ from ..identification.procedure import fit_record, prepare_record
 from ..metrics import rms_range_error
 from ..model import MPIModel
 
-__all__ = ['check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
+__all__ = ['AxisUnits', 'check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
            'Order', 'rate_cross_correlation', 'resolve_order',
            'scalar_parameter', 'search_fit', 'vector_parameter']
 
@@ -386,16 +387,61 @@ def burst_verdict(residual: Mapping[str, Any], level: float, law: str) -> str:
     return 'present' if bursts['p'] < level and bursts['law'] == law else 'absent'
 
 
+@dataclass(frozen=True)
+class AxisUnits:
+    """
+    Units of a report plot's axes (the data's, as the diagnosis report names them).
+
+    Attributes
+    ----------
+    current : str
+        Unit of the input (``'A'``, or ``'V'`` for a voltage-driven actuator).
+    displacement : str
+        Unit the output is drawn in (``'m'``, ``'µm'``, ``'nm'``, ...).
+    scale : float
+        Factor from the output's values to the drawn ones (1e6 to draw metres in µm).
+
+    """
+
+    current: str = 'A'
+    displacement: str = 'm'
+    scale: float = 1.0
+
+
 def residual_axes(ax: Any, time: FloatArray, measured: FloatArray, baseline: FloatArray,
                   extended: FloatArray, start: int, label: str,
-                  against: FloatArray | None = None) -> None:
-    """Plot the baseline's and an extension's residual (after ``start``) on ``ax``."""
+                  against: FloatArray | None = None, *,
+                  units: AxisUnits | None = None) -> None:
+    """
+    Plot the baseline's and an extension's residual (after ``start``) on ``ax``.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+        Target.
+    time : ndarray of float, shape (N,)
+        Sample times [s].
+    measured, baseline, extended : ndarray of float, shape (N,)
+        Measured output and the two models' simulations (output unit).
+    start : int
+        First scored sample.
+    label : str
+        Name of the extended model in the legend.
+    against : ndarray of float, shape (N - start,), optional
+        Abscissa of a scatter plot (default: a line over time).
+    units : AxisUnits, optional
+        Units of the axes (default: A and m).
+
+    """
+    units = units or AxisUnits()
     val = slice(start, None)
     abscissa = time[val] if against is None else against
     style = {'lw': 0.6} if against is None else {'ls': '', 'marker': '.', 'ms': 1}
-    ax.plot(abscissa, (measured - baseline)[val], label='baseline residual', **style)
-    ax.plot(abscissa, (measured - extended)[val], label=f'{label} residual', **style)
-    ax.set_ylabel('residual [m]')
+    ax.plot(abscissa, units.scale * (measured - baseline)[val], label='baseline MPI residual',
+            **style)
+    ax.plot(abscissa, units.scale * (measured - extended)[val], label=f'{label} residual',
+            **style)
+    ax.set_ylabel(f'measured - simulated [{units.displacement}]')
 
 
 def _correlation(a: FloatArray, b: FloatArray) -> float:

@@ -45,8 +45,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
-    vector_parameter
+from ._common import AxisUnits, check_series, hold_evidence, Order, residual_axes, \
+    resolve_order, vector_parameter
 from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
 from .effect import Effect, EffectParameter, ExtendedModelBase, SLOW_TIME_LIMIT
 from ..errors import ModelError
@@ -345,13 +345,22 @@ def _signature(residual: Mapping[str, Any], level: float) -> str:
 
 
 def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
-          baseline: FloatArray, extended: FloatArray, start: int) -> None:
+          baseline: FloatArray, extended: FloatArray, start: int, *,
+          units: AxisUnits | None = None, parameters: Mapping[str, Any] | None = None) -> None:
+    units = units or AxisUnits()
     ax2 = ax.twinx()
-    ax2.plot(time[start:], current[start:], color='0.7', lw=0.6)
-    ax2.set_ylabel('input [A]', color='0.5')
-    residual_axes(ax, time, measured, baseline, extended, start, 'creep model')
+    ax2.plot(time[start:], current[start:], color='0.75', lw=0.6)
+    ax2.set_ylabel(f'input (grey) [{units.current}]', color='0.5')
+    residual_axes(ax, time, measured, baseline, extended, start, 'creep model', units=units)
+    ax.set_zorder(ax2.get_zorder() + 1)
+    ax.patch.set_visible(False)
     ax.set_xlabel('time [s]')
-    ax.set_title('creep: residual keeps moving while the input holds')
+    taus = np.asarray((parameters or {}).get(CREEP_TIME_CONSTANTS, []), dtype=np.float64)
+    weights = np.asarray((parameters or {}).get(CREEP_WEIGHTS, []), dtype=np.float64)
+    used = taus[weights > 0.0] if taus.size == weights.size else taus[:0]
+    fitted = (f' (lags {used.min():.3g}-{used.max():.3g} s)' if used.size else '')
+    ax.set_title('creep shows as a baseline residual that keeps moving (log t) while the'
+                 f'\ninput (grey) holds; the creep model{fitted} should stay flat', fontsize=10)
 
 
 #: The creep effect, for the registry (:mod:`mpi_ros.extensions.effect`).

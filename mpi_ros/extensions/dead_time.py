@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
-    fit_gamma, lag_search_limits, Order, rate_cross_correlation, resolve_order, \
-    scalar_parameter, search_fit
+from ._common import AxisUnits, burst_evidence, burst_verdict, check_series, \
+    determined_start, fit_gamma, lag_search_limits, Order, resolve_order, scalar_parameter, \
+    search_fit
 from ._signals import delay
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT
 from ..identification import select_order
@@ -126,13 +126,33 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
 
 
 def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
-          baseline: FloatArray, extended: FloatArray, start: int) -> None:
-    lags, xc = rate_cross_correlation(time[start:], measured[start:], baseline[start:], 0.1)
-    ax.plot(lags * 1e3, xc, label='corr(measured rate, simulated rate)')
-    ax.axvline(0.0, color='0.6', lw=0.6)
-    ax.set_xlabel('shift of the measured output [ms]')
-    ax.set_ylabel('correlation')
-    ax.set_title('dead time: lag of the best match')
+          baseline: FloatArray, extended: FloatArray, start: int, *,
+          units: AxisUnits | None = None, parameters: Mapping[str, Any] | None = None) -> None:
+    # The dead-time model's residual against the delay d: its simulation is Gamma[x](t - L),
+    # shifted by d - L it is Gamma[x](t - d).  The fitted L minimises the residual, so the
+    # curve's minimum lies at L (the baseline's cross-correlation did not: the MPI loop
+    # widens to absorb part of a delay, and its best shift fell short of L).
+    units = units or AxisUnits()
+    fitted = float((parameters or {}).get(DEAD_TIME, 0.0))
+    t = time[start:]
+    dt = float(np.median(np.diff(t)))
+    longest = max(2.5 * fitted, 20.0 * dt)
+    keep = (t >= t[0] + longest) & (t <= t[-1] - fitted)
+    if int(keep.sum()) < 3:                  # too short for the window: the whole record
+        keep = np.ones(t.size, dtype=bool)
+    delays = np.linspace(0.0, longest, 241)
+    rms = np.array([np.sqrt(np.mean((measured[start:][keep] - np.interp(
+        t[keep] - (d - fitted), time, extended)) ** 2)) for d in delays]) * units.scale
+    best = int(np.argmin(rms))
+    ax.plot(delays * 1e3, rms, label='dead-time model, simulated with delay d')
+    ax.plot(delays[best] * 1e3, rms[best], 'o', ms=3, color='tab:red',
+            label=f'minimum at d = {1e3 * delays[best]:.3g} ms')
+    ax.axvline(fitted * 1e3, color='0.4', lw=0.8, ls='--',
+               label=f'fitted dead time L = {1e3 * fitted:.3g} ms')
+    ax.set_xlabel('delay d of the simulated output [ms]')
+    ax.set_ylabel(f'RMS residual [{units.displacement}]')
+    ax.set_title(f'dead time: the residual is smallest at the fitted delay'
+                 f' L = {1e3 * fitted:.3g} ms', fontsize=10)
 
 
 #: The dead-time effect, for the registry (:mod:`mpi_ros.extensions.effect`).  It has no

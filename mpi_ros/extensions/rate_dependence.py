@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import burst_evidence, burst_verdict, check_series, determined_start, \
-    fit_gamma, lag_search_limits, Order, residual_axes, resolve_order, scalar_parameter, \
+from ._common import AxisUnits, burst_evidence, burst_verdict, check_series, \
+    determined_start, fit_gamma, lag_search_limits, Order, resolve_order, scalar_parameter, \
     search_fit
 from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT
@@ -189,11 +189,30 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
 
 
 def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
-          baseline: FloatArray, extended: FloatArray, start: int) -> None:
-    rate = np.gradient(current[start:], time[start:])
-    residual_axes(ax, time, measured, baseline, extended, start, 'rate model', against=rate)
-    ax.set_xlabel('input rate [A/s]')
-    ax.set_title('rate dependence: residual vs input rate')
+          baseline: FloatArray, extended: FloatArray, start: int, *,
+          units: AxisUnits | None = None, parameters: Mapping[str, Any] | None = None) -> None:
+    # RMS residual in speed classes (log-spaced, holds left out, classes of >= 20 samples):
+    # a lag's error grows with the rate; the fitted lag flattens it.
+    units = units or AxisUnits()
+    tau = float((parameters or {}).get(RATE_TIME_CONSTANT, float('nan')))
+    speed = np.abs(np.gradient(current[start:], time[start:]))
+    top = float(np.max(speed))
+    edges = np.geomspace(1e-2 * top, top, 13) if top > 0.0 else np.array([0.0, 1.0])
+    which = np.digitize(speed, edges[1:-1])
+    classes = [np.flatnonzero((which == k) & (speed >= edges[0])) for k in range(edges.size - 1)]
+    classes = [c for c in classes if c.size >= 20] or [np.arange(speed.size)]
+    centre = [float(np.median(speed[c])) for c in classes]
+    for sim, label in ((baseline, 'baseline MPI'), (extended, 'rate model')):
+        r = (measured - sim)[start:]
+        ax.plot(centre, [units.scale * float(np.sqrt(np.mean(r[c] ** 2))) for c in classes],
+                marker='o', ms=3, label=label)
+    if top > 0.0:
+        ax.set_xscale('log')
+    ax.set_xlabel(f'input speed |dx/dt| [{units.current}/s] (classes, holds left out)')
+    ax.set_ylabel(f'RMS residual [{units.displacement}]')
+    fitted = f' (lag tau = {1e3 * tau:.3g} ms)' if np.isfinite(tau) else ''
+    ax.set_title('rate dependence shows as a baseline error that grows with the input'
+                 f' speed;\nthe rate model{fitted} should flatten it', fontsize=10)
 
 
 #: The rate-dependence effect, for the registry (:mod:`mpi_ros.extensions.effect`).

@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, hold_evidence, Order, residual_axes, resolve_order, \
-    scalar_parameter, search_fit
+from ._common import AxisUnits, check_series, hold_evidence, Order, residual_axes, \
+    resolve_order, scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, ExtendedModelBase, SLOW_TIME_LIMIT
 from ..identification import identify_weights
@@ -221,12 +221,21 @@ def _evidence(residual: Mapping[str, Any]) -> str | None:
 
 
 def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
-          baseline: FloatArray, extended: FloatArray, start: int) -> None:
-    power = first_order_lag(time, current * current, float(time[-1] - time[0]) / 3.0)[start:]
+          baseline: FloatArray, extended: FloatArray, start: int, *,
+          units: AxisUnits | None = None, parameters: Mapping[str, Any] | None = None) -> None:
+    # The abscissa is the thermal state of the fit: x^2 through its lag tau_T (record / 3
+    # when no fitted value is given).
+    units = units or AxisUnits()
+    tau = float((parameters or {}).get(THERMAL_TIME_CONSTANT, 0.0))
+    which = f'tau_T = {tau:.3g} s, fitted' if tau > 0.0 else 'tau_T = record / 3'
+    if not tau > 0.0:
+        tau = float(time[-1] - time[0]) / 3.0
+    power = first_order_lag(time, current * current, tau)[start:]
     residual_axes(ax, time, measured, baseline, extended, start, 'thermal model',
-                  against=power)
-    ax.set_xlabel('lagged input power x^2 [A^2] (time constant = record / 3)')
-    ax.set_title('thermal drift: residual vs heating')
+                  against=power, units=units)
+    ax.set_xlabel(f'lagged input power x^2 [{units.current}^2] ({which})')
+    ax.set_title('thermal drift shows as a baseline residual that follows the lagged power;'
+                 "\nthe thermal model's should not", fontsize=10)
 
 
 #: The thermal-drift effect, for the registry (:mod:`mpi_ros.extensions.effect`).

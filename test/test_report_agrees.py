@@ -1,0 +1,228 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+``mpi-ros diagnose``: summary.md and the stderr summary say what the JSON says.
+
+Each record goes through the command line as a user runs it; summary.md is parsed back and
+its holds count, scored part, verdict, gains, z wording and units are checked against
+report.json.  No line of summary.md may look like JSON or carry more than 4 significant
+digits.
+"""
+
+import json
+import math
+import re
+
+from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.cli import main
+from mpi_ros.diagnosis.report import data_units, markdown, summary_lines
+from mpi_ros.diagnosis.signatures import diagnostic_excitation
+from mpi_ros.excitation import identification_excitation
+from mpi_ros.recordings import write_csv_columns
+import numpy as np
+import pytest
+
+NOISE = 2e-8                       # [m] sensor noise, 0.05 % of the stroke
+# Rounding to 3 significant digits moves a number by at most half a unit of the third digit.
+ROUNDING = 5e-3
+
+
+def _record(path, config, *, seconds=20.0, seed=1, **excitation):
+    t, x = identification_excitation(seconds, sample_rate=1000.0, seed=seed, **excitation)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=NOISE, **config),
+                                 seed=seed).simulate(t, x)
+    write_csv_columns(path, {'time': t, 'current': x, 'displacement': y})
+
+
+def _diagnose(tmp_path, capsys, data, *extra):
+    argv = ['diagnose', str(data), '--order', '8', '4', '--json', str(tmp_path / 'r.json'),
+            '--report', str(tmp_path / 'report'), *extra]
+    assert main(argv) == 0, capsys.readouterr().err
+    err = capsys.readouterr().err
+    facts = json.loads((tmp_path / 'r.json').read_text(encoding='utf-8'))
+    summary = (tmp_path / 'report' / 'summary.md').read_text(encoding='utf-8')
+    return facts, summary, err
+
+
+def _close(text, value):
+    """Whether a number printed with 3 significant digits is ``value`` rounded."""
+    return math.isclose(float(text), value, rel_tol=ROUNDING, abs_tol=1e-12)
+
+
+def _check_agreement(facts, summary, err):
+    lines = summary.splitlines()
+    # Verdict.
+    verdict = re.fullmatch(r'\*\*Verdict: (.+?)\*\* \((.+)\)', lines[2])
+    assert verdict is not None, lines[:4]
+    assert verdict.group(1) == facts['cause']
+    assert verdict.group(2).startswith('no effect found' if facts['cause'] == 'none'
+                                       else 'present')
+    # Holds: the count of the JSON, and the holds the signature test used.
+    residual = facts['residual']
+    holds = re.search(r'Holds: (\d+) input hold\(s\)', summary)
+    assert holds is not None and int(holds.group(1)) == residual['holds']['count']
+    if residual['hold_signature'] is None:
+        assert 'none long enough' in summary
+    else:
+        used = re.search(r'; (\d+) used by the hold signature test', summary)
+        assert int(used.group(1)) == residual['hold_signature']['holds']
+        assert 'none long enough' not in summary
+    assert 'no holds' not in summary and 'no holds' not in facts['evidence']
+    # Scored part.
+    scored = re.search(r'from sample (\d+), (\d+) samples', summary)
+    assert scored is not None
+    assert int(scored.group(1)) == facts['data']['validation_scored']['from_sample']
+    assert int(scored.group(2)) == facts['data']['validation_scored']['samples']
+    # Every candidate's gain, errors and z, and the z test's wording.
+    zc = facts['decision']['z_critical']
+    rows = {}
+    for line in lines:
+        row = re.fullmatch(r'\| (\d+) \| (\S+)( \(chosen\))? \| (\S+) % \| (\S+) % \|'
+                           r' (\S+) % \| (\S+) \| ([a-z ]+) \| .*', line)
+        if row:
+            rows[row.group(2)] = row
+    assert sorted(rows) == sorted(c['cause'] for c in facts['candidates'])
+    for c in facts['candidates']:
+        row = rows[c['cause']]
+        assert _close(row.group(4), 100 * c['rms_error'])
+        assert _close(row.group(5), 100 * c['nonlinearity_error'])
+        assert _close(row.group(6), 100 * c['gain'])
+        assert _close(row.group(7), c['z'])
+        wording = ('significantly better' if c['z'] >= zc else
+                   'significantly worse' if c['z'] <= -zc else 'not significant')
+        assert row.group(8) == wording
+        assert bool(row.group(3)) == (c['cause'] == facts['cause'])
+    ranks = [int(rows[c['cause']].group(1)) for c in
+             sorted(facts['candidates'], key=lambda c: -c['gain'])]
+    assert ranks == list(range(1, len(ranks) + 1))
+    # Units.
+    units = re.search(r'Units: input (\S+), output (\S+), time s', summary)
+    assert (units.group(1), units.group(2)) == (facts['data']['units']['input'],
+                                                facts['data']['units']['output'])
+    # Ties.
+    if facts['decision']['ambiguous']:
+        tied = [facts['cause'], *facts['decision']['tied_with']]
+        section = summary.split('## Ambiguous', 1)[1].split('\n## ', 1)[0]
+        for row in facts['decision']['ranking']:
+            if row['cause'] in tied:
+                gain = re.search(rf'\d+\. {row["cause"]}: gain (\S+) %', section)
+                assert gain is not None and _close(gain.group(1), 100 * row['gain'])
+        assert '`mpi-ros diagnose --excitation' in section
+    else:
+        assert '## Ambiguous' not in summary
+    # The stderr summary is the summary's head, line by line.
+    for line in summary_lines(facts):
+        assert line in err.splitlines()
+        assert f'- {line[0].upper()}{line[1:]}' in lines
+    _check_prose(summary)
+
+
+def _check_prose(summary):
+    for line in summary.splitlines():
+        assert not re.match(r'\s*[{\[]', line), line
+        assert not re.search(r'"\w+":', line), line
+        for number in re.findall(r'\d*\.\d+(?:e[-+]?\d+)?|\d+e[-+]?\d+', line):
+            mantissa = number.split('e')[0].replace('.', '').lstrip('0')
+            assert len(mantissa) <= 4, (number, line)
+
+
+def test_no_effect_record(tmp_path, capsys):
+    _record(tmp_path / 'data.csv', {})
+    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    _check_agreement(facts, summary, err)
+    assert facts['data']['units'] == data_units('current', 'displacement')
+    assert (facts['data']['units']['input'], facts['data']['units']['output']) == ('A', 'm')
+
+
+def test_creep_record_with_holds(tmp_path, capsys):
+    _record(tmp_path / 'data.csv', {'creep_gain': 0.06}, seconds=30.0, hold_duration=2.0)
+    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    assert facts['residual']['holds']['count'] > 0          # the record holds the input
+    _check_agreement(facts, summary, err)
+
+
+def test_tie_is_ranked_with_how_to_separate(tmp_path, capsys):
+    """A 10 ms dead time without holds or bursts: the record cannot separate the causes."""
+    _record(tmp_path / 'data.csv', {'dead_time_s': 0.01}, holds=False, bursts=False)
+    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    assert facts['decision']['ambiguous'], facts['decision']['steps']
+    _check_agreement(facts, summary, err)
+    assert 'ambiguous' in err
+
+
+def test_dead_time_validation_scored_from_a_later_sample_in_volts_and_nm(tmp_path, capsys):
+    """A separate validation record in V and nm, with its own zero, scored after its burn-in."""
+    cfg = ActuatorConfig(noise_std_m=NOISE, dead_time_s=0.0099)
+    t, x = identification_excitation(20.0, sample_rate=1000.0, seed=1)
+    tv, xv = diagnostic_excitation(sample_rate=1000.0, seed=2, repeats=1, hold_duration=1.5)
+    for name, (tk, xk), zero, seed in (('data', (t, x), -123e-6, 1),
+                                       ('val', (tv, xv), -116e-6, 2)):
+        y = MagnetostrictiveActuator(cfg, seed=seed).simulate(tk, xk)
+        columns = {'time': tk, 'u_V': 10.0 * xk, 'D1_nm': (zero - y) * 1e9}
+        write_csv_columns(tmp_path / f'{name}.csv', columns)
+    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv', '--validate',
+                                    str(tmp_path / 'val.csv'), '--output-scale', '1e-9')
+    assert facts['data']['validation_scored']['from_sample'] > 0
+    assert (facts['data']['units']['input'], facts['data']['units']['output']) == ('V', 'm')
+    _check_agreement(facts, summary, err)
+    assert 'current [A]' not in summary and 'input V' in summary
+    # The fitted dead time, 3 significant digits, in the table; the sensor zero in nm or um.
+    chosen = next(c for c in facts['candidates'] if c['cause'] == 'dead_time')
+    fitted = re.search(r'\| dead time (\S+) ms \|', summary)
+    assert _close(fitted.group(1), 1e3 * chosen['parameters']['model.dead_time'])
+    shift = re.search(r'\(baseline: (\S+) (µm|nm)\)', summary)
+    factor = 1e6 if shift.group(2) == 'µm' else 1e9
+    assert _close(shift.group(1), factor * facts['baseline']['validation_output_offset'])
+
+
+@pytest.mark.parametrize('names, scales, expected', [
+    (('Vplus_V', 'D1_nm'), (1.0, 1e-9), ('V', 'm')),
+    (('voltage', 'displacement_um'), (1.0, 1.0), ('V', 'µm')),
+    (('volts', 'nm'), (0.1, 1e-9), ('A', 'm')),         # the scale converts volts to A
+    (('input_mV', 'pos'), (1e-3, 1.0), ('V', 'm')),
+    (('/current_command', '/displacement'), (1.0, 1.0), ('A', 'm')),
+    (('ch1', 'ch2'), (1.0, 1.0), ('A', 'm')),
+])
+def test_units_from_the_names_and_scales(names, scales, expected):
+    units = data_units(*names, input_scale=scales[0], output_scale=scales[1])
+    assert (units['input'], units['output']) == expected
+
+
+def test_combined_and_weak_verdicts_are_written(tmp_path, capsys):
+    """A verdict of two causes joined by ' + ' and the label 'present, weak' reach the prose."""
+    _record(tmp_path / 'data.csv', {})
+    facts, _, _ = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    first, second = facts['candidates'][:2]
+    combined = {**first, 'cause': f'{first["cause"]} + {second["cause"]}',
+                'parameters': {**first['parameters'], **second['parameters']}}
+    facts = {**facts, 'cause': combined['cause'], 'gain': 0.1,
+             'candidates': [*facts['candidates'], combined],
+             'decision': {**facts['decision'], 'verdict': 'present, weak',
+                          'weak_reason': 'the gain 0.1 is below 0.2'}}
+    text = markdown(facts)
+    assert f'**Verdict: {combined["cause"]}** (present, weak)' in text
+    assert 'Weak: the gain 0.1 is below 0.2' in text
+    assert re.search(rf'\| \d+ \| {re.escape(combined["cause"])} \(chosen\) \|', text)
+    _check_prose(text)
+
+
+def test_dead_time_plot_has_its_minimum_at_the_fitted_delay():
+    """The signature plot's minimum lies on the fitted L (within one grid step)."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    from mpi_ros.extensions import EFFECTS
+    rate, dead = 1000.0, 0.0123
+    t = np.arange(5000) / rate
+    x = 1.0 + 0.6 * np.sin(2.0 * np.pi * 2.0 * t)
+    measured = np.interp(t - dead, t, np.tanh(x))
+    fitted = 0.012                                   # the fit's L, off the truth a little
+    extended = np.interp(t - fitted, t, np.tanh(x))
+    fig, ax = plt.subplots()
+    EFFECTS['dead_time'].plot(ax, t, x, measured, np.tanh(x), extended, 1000,
+                              parameters={'model.dead_time': fitted})
+    curve = ax.get_lines()[0]
+    delays, rms = curve.get_xdata(), curve.get_ydata()
+    plt.close(fig)
+    step = float(delays[1] - delays[0])
+    # The shifted extended simulation matches best where the delay is the truth.
+    assert abs(delays[int(np.argmin(rms))] - 1e3 * dead) <= step
