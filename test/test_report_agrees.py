@@ -226,3 +226,23 @@ def test_dead_time_plot_has_its_minimum_at_the_fitted_delay():
     step = float(delays[1] - delays[0])
     # The shifted extended simulation matches best where the delay is the truth.
     assert abs(delays[int(np.argmin(rms))] - 1e3 * dead) <= step
+
+
+def test_a_pair_states_each_effect_and_a_weak_strength(tmp_path, capsys):
+    """The diagnosis' own keys: a pair's parts with each gain, decision.strength 'present, weak'."""
+    _record(tmp_path / 'data.csv', {})
+    facts, _, _ = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    first, second = facts['candidates'][:2]
+    names = sorted([first['cause'], second['cause']])
+    pair = {**first, 'cause': ' + '.join(names), 'gain': 0.15, 'parts': names,
+            'part_gains': {names[0]: 0.12, names[1]: 0.09},
+            'part_z': {names[0]: 2.5, names[1]: -1.8}}
+    facts = {**facts, 'cause': pair['cause'], 'gain': 0.15,
+             'candidates': [*facts['candidates'], pair],
+             'decision': {**facts['decision'], 'strength': 'present, weak',
+                          'weak_reason': f'{pair["cause"]} is present, weak'}}
+    text = markdown(facts)
+    assert f'**Verdict: {pair["cause"]}** (present, weak)' in text
+    assert (f'{names[0]} +12.0 % (z 2.50, significantly better), {names[1]} +9.00 % (z -1.80,'
+            ' significantly worse)') in text
+    _check_prose(text)

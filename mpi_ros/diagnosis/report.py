@@ -237,6 +237,15 @@ def summary_lines(facts: Mapping[str, Any]) -> list[str]:
                      + ', '.join(f'{c["cause"]} {_signed_percent(c["gain"])} (z'
                                  f' {significant(c["z"])}, {z_wording(c["z"], zc)})'
                                  for c in _ranked(facts)))
+    chosen = next((c for c in facts.get('candidates', []) if c['cause'] == facts['cause']), {})
+    if chosen.get('parts'):
+        zc = float(decision.get('z_critical', 1.645))
+        lines.append('each effect beyond the other alone (the pair against the other effect'
+                     ' alone): ' + ', '.join(
+                         f'{name} {_signed_percent(chosen["part_gains"][name])} (z'
+                         f' {significant(chosen["part_z"][name])},'
+                         f' {z_wording(chosen["part_z"][name], zc)})'
+                         for name in chosen['parts']))
     if decision.get('ambiguous'):
         lines.append(f'ambiguous: {" and ".join(_tied(facts))} explain the validation data'
                      ' equally well within the noise; separate them with'
