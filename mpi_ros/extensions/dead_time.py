@@ -23,7 +23,9 @@ from ._common import burst_evidence, burst_verdict, check_series, determined_sta
     fit_gamma, lag_search_limits, Order, rate_cross_correlation, resolve_order, \
     scalar_parameter, search_fit
 from ._signals import delay
-from .effect import Effect, EffectParameter, FAST_TIME_LIMIT
+from .effect import Effect, EffectParameter, FAST_TIME_LIMIT, PlantChunk, PlantEffect, \
+    PlantParameter
+from .plant_steps import delay_state, delay_stream
 from ..identification import select_order
 from ..model import MPIModel
 
@@ -149,6 +151,23 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
     ax.set_title('dead time: lag of the best match')
 
 
+def _plant_start(values: Mapping[str, Any]) -> dict[str, Any]:
+    return {'dead_time': values['dead_time_s'], 'history': delay_state()}
+
+
+def _plant_run(state: dict[str, Any], chunk: PlantChunk, signal: FloatArray) -> FloatArray:
+    return delay_stream(state['history'], chunk.time, signal, state['dead_time'])
+
+
+#: Dead time in the simulated plant (output side, after the other output steps):
+#: ``s_meas(t) = s(t - L)``, linearly interpolated on the sampled stream, 0 before the
+#: first sample.
+PLANT = PlantEffect(
+    stage='output', label='dead time', start=_plant_start, run=_plant_run,
+    parameters=(
+        PlantParameter('dead_time_s', 0.0, 'dead time of the measurement, 0 = off', 's',
+                       low=0.0, note='(0 switches it off)', switch=True),))
+
 #: The dead-time effect, for the registry (:mod:`mpi_ros.extensions.effect`).  It has no
 #: ``inverse_step``: a delay cannot be inverted causally.
 EFFECT = Effect(
@@ -160,4 +179,5 @@ EFFECT = Effect(
                         ' delay', 's', (0.0, 1.0e3), plausible_max=FAST_TIME_LIMIT),),
     model_class=DeadTimeModel, fit=fit_dead_time, parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'delay'),
-    evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot)
+    evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot,
+    plant=PLANT)
