@@ -302,8 +302,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                         else 'nothing')
         if tv.size - start < 100:
             msg = ('too little to score: the validation record leaves only'
-                   f' {tv.size - start} samples (from sample {start}: {left_out}); record a longer validation'
-                   ' (e.g. mpi-ros diagnose --excitation)')
+                   f' {tv.size - start} samples (from sample {start}: {left_out}); record a'
+                   ' longer validation (e.g. mpi-ros diagnose --excitation)')
             raise DataError(msg)
         series['start'] = start
         data['validation_burn_in'] = start
