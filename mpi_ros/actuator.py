@@ -65,7 +65,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .errors import DataError, ModelError
-from .extensions.effect import PlantChunk, PlantEffect, plant_effects, PlantParameter
+from .extensions.effect import plant_effects, PlantChunk, PlantEffect, PlantParameter
 
 __all__ = ['ActuatorConfig', 'MagnetostrictiveActuator']
 
@@ -264,7 +264,8 @@ class ActuatorConfig:
         """Tell whether two configs have the same fields and values."""
         if not isinstance(other, ActuatorConfig):
             return NotImplemented
-        return self._values == other._values
+        same: bool = self._values == other._values
+        return same
 
     def __hash__(self) -> int:
         """Hash the fields and values."""

@@ -74,9 +74,9 @@ from .parameters import (
 from .qos import loop_qos
 from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
-from ..extensions.effect import plant_effects
 from ..diagnosis.signatures import diagnostic_excitation
 from ..excitation import identification_excitation
+from ..extensions.effect import plant_effects
 from ..model import MPIModel
 from ..recordings import BagRecorder
 
