@@ -42,7 +42,7 @@ from ..model import MPIModel
 __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'EFFECTS', 'register_effect',
            'unregister_effect', 'effect_keys', 'effect_off_values', 'effects_present',
            'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT', 'PlantChunk', 'PlantEffect', 'PlantParameter',
-           'PLANT_STAGES', 'plant_effects']
+           'PLANT_STAGES', 'plant_effects', 'plant_switch']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -260,6 +260,11 @@ class PlantEffect:
                    ' whose 0 switches the effect off with switch=True')
             raise ModelError(msg)
 
+    @property
+    def switch(self) -> PlantParameter:
+        """Return the (first) parameter whose 0 switches the effect off."""
+        return next(p for p in self.parameters if p.switch)
+
     def is_on(self, values: Mapping[str, Any]) -> bool:
         """Tell whether a switch parameter is not 0 (missing ones count as their default)."""
         return any(values.get(p.name, p.default) != 0 for p in self.parameters if p.switch)
@@ -399,6 +404,41 @@ def plant_effects() -> list[tuple[str, PlantEffect]]:
     """
     chain = [(e.name, e.plant) for e in EFFECTS.values() if e.plant is not None]
     return sorted(chain, key=lambda item: PLANT_STAGES.index(item[1].stage))
+
+
+def plant_switch(name: str) -> str:
+    """
+    Return the actuator parameter that switches an effect on in the simulated plant.
+
+    Parameters
+    ----------
+    name : str
+        A registered effect's name (``'creep'``).
+
+    Returns
+    -------
+    str
+        The field of :class:`mpi_ros.actuator.ActuatorConfig` (``'creep_gain'``); the plant
+        simulator node's parameter is ``actuator.<field>``.
+
+    Raises
+    ------
+    ModelError
+        When no effect of that name with a plant step is registered.
+
+    Examples
+    --------
+    >>> plant_switch('rate_dependence')
+    'eddy_time_constant_s'
+
+    """
+    effect = EFFECTS.get(name)
+    if effect is None or effect.plant is None:
+        known = ', '.join(n for n, _ in plant_effects())
+        msg = (f'no registered effect {name!r} with a plant step; the plant simulates: {known};'
+               ' register the effect with plant=PlantEffect(...)')
+        raise ModelError(msg)
+    return effect.plant.switch.name
 
 
 def _is_off(value: Any) -> bool:
