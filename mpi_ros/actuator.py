@@ -449,6 +449,12 @@ class MagnetostrictiveActuator:
         steps = [plant for _, plant in cfg.effects if plant.is_on(values)]
         self._input_steps = tuple(p for p in steps if p.stage == 'input')
         self._output_steps = tuple(p for p in steps if p.stage == 'output')
+        # The compiled core's constant arguments (read once: the config's fields are looked
+        # up through __getattr__).
+        self._core = (self._table, self._grid_lo, self._grid_step, cfg.reversible_fraction,
+                      cfg.reversible_current_scale_a, cfg.map_linear_fraction, cfg.map_knee,
+                      self._map_norm, cfg.displacement_scale_m)
+        self._noise_std = cfg.noise_std_m
         self._sensor_shift = cfg.sensor_offset_m - self._zeroed_displacement()
         self._state = self._initial_state()
 
@@ -539,6 +545,12 @@ class MagnetostrictiveActuator:
             Non-finite values or a time not after the previous sample.
 
         """
+        scalars = self._state['scalars']
+        if (type(t) is float and type(current) is float and math.isfinite(t)
+                and math.isfinite(current) and not (scalars[_HAS_PREV] and t <= scalars[_T_PREV])):
+            # The common case (the plant simulator node, once per command) without the
+            # array checks of the boundary; anything else goes through advance().
+            return float(self._run(self._state, np.array([t]), np.array([current]))[0])
         return float(self.advance([t], [current])[0])
 
     def static_map(self, magnetization: npt.ArrayLike) -> FloatArray:
@@ -586,12 +598,8 @@ class MagnetostrictiveActuator:
 
     def _material(self, state: dict[str, Any], current: FloatArray) -> FloatArray:
         """Return the hysteresis core's displacement for the current the material sees."""
-        cfg = self._config
-        out: FloatArray = _kernel(current, self._table, self._grid_lo, self._grid_step,
-                                  cfg.reversible_fraction, cfg.reversible_current_scale_a,
-                                  cfg.map_linear_fraction, cfg.map_knee, self._map_norm,
-                                  cfg.displacement_scale_m, state['scalars'],
-                                  state['maxima'], state['minima'])
+        out: FloatArray = _kernel(current, *self._core, state['scalars'], state['maxima'],
+                                  state['minima'])
         return out
 
     def _run(self, state: dict[str, Any], t: FloatArray, x: FloatArray) -> FloatArray:
@@ -612,8 +620,8 @@ class MagnetostrictiveActuator:
         scalars[_T_PREV] = t[-1]
         if self._sensor_shift != 0.0:
             out = out + self._sensor_shift
-        if self._config.noise_std_m > 0:
-            out = out + self._config.noise_std_m * state['rng'].standard_normal(out.shape[0])
+        if self._noise_std > 0:
+            out = out + self._noise_std * state['rng'].standard_normal(out.shape[0])
         return out
 
 

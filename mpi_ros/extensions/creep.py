@@ -50,7 +50,7 @@ from ._common import check_series, hold_evidence, Order, residual_axes, resolve_
 from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
 from .effect import Effect, EffectParameter, PlantChunk, PlantEffect, PlantParameter, \
     SLOW_TIME_LIMIT
-from .plant_steps import lag_bank_sum, lag_state
+from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
 from ..model import _superposition_value, MPIModel
@@ -385,9 +385,8 @@ def _plant_run(state: dict[str, Any], chunk: PlantChunk, signal: FloatArray) -> 
     if chunk.material is None:
         msg = 'the creep plant step runs on the output side; it needs the material output'
         raise ModelError(msg)
-    taus = state['taus']
-    acc = lag_bank_sum(chunk.time, chunk.material, taus, state['lags'])
-    result: FloatArray = signal + state['gain'] * acc / taus.shape[0]
+    result: FloatArray = lag_bank_add(chunk.time, chunk.material, state['taus'],
+                                      state['gain'], state['lags'], signal)
     return result
 
 

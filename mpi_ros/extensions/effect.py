@@ -31,7 +31,7 @@ line (docs/design.md).
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -190,8 +190,7 @@ class PlantParameter:
         return low_ok and high_ok
 
 
-@dataclass(frozen=True)
-class PlantChunk:
+class PlantChunk(NamedTuple):
     """
     What a plant step sees of a chunk of samples, besides the signal it transforms.
 

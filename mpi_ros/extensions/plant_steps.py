@@ -25,8 +25,8 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['LAG_STATE_SIZE', 'lag_state', 'lag_stream', 'lag_bank_sum', 'delay_state',
-           'delay_stream']
+__all__ = ['LAG_STATE_SIZE', 'lag_state', 'lag_stream', 'lag_add', 'lag_bank_add',
+           'delay_state', 'delay_stream']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -98,26 +98,69 @@ def lag_stream(time: FloatArray, signal: FloatArray, tau: float,
 
 
 @numba.njit(cache=True, nogil=True)
-def lag_bank_sum(time: FloatArray, signal: FloatArray, taus: FloatArray,
-                 state: FloatArray) -> FloatArray:  # pragma: no cover - compiled
+def lag_add(time: FloatArray, driver: FloatArray, tau: float, gain: float, state: FloatArray,
+            signal: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     """
-    Return the sum of a bank of first-order lags of one input; advance the state in place.
+    Return ``signal + gain y`` for the first-order lag ``y`` of ``driver``; advance its state.
 
     Parameters
     ----------
     time : ndarray of float, shape (N,)
         Sample times [s], after the state's previous sample.
+    driver : ndarray of float, shape (N,)
+        Lag input.
+    tau : float
+        Time constant [s], > 0.
+    gain : float
+        Factor of the lag output.
+    state : ndarray of float, shape (4,)
+        :func:`lag_state` ``()``, updated.
     signal : ndarray of float, shape (N,)
-        Common input of the lags.
-    taus : ndarray of float, shape (k,)
-        Time constants [s], > 0.
-    state : ndarray of float, shape (3 + k,)
-        :func:`lag_state` ``(k)``, updated.
+        The signal the lag adds to (left unchanged).
 
     Returns
     -------
     ndarray of float, shape (N,)
-        ``sum_j y_j`` at each sample, summed in the order of ``taus``.
+        ``signal + gain * y``.
+
+    """
+    n = time.shape[0]
+    out = np.empty(n)
+    for k in range(n):
+        if state[0] > 0.0:
+            state[3] = _lag(state[3], state[2], driver[k], time[k] - state[1], tau)
+        state[0] = 1.0
+        state[1] = time[k]
+        state[2] = driver[k]
+        out[k] = signal[k] + gain * state[3]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def lag_bank_add(time: FloatArray, driver: FloatArray, taus: FloatArray, gain: float,
+                 state: FloatArray, signal: FloatArray) -> FloatArray:  # pragma: no cover
+    """
+    Return ``signal + gain mean_j y_j`` for a bank of lags of one input; advance the state.
+
+    Parameters
+    ----------
+    time : ndarray of float, shape (N,)
+        Sample times [s], after the state's previous sample.
+    driver : ndarray of float, shape (N,)
+        Common input of the lags.
+    taus : ndarray of float, shape (k,)
+        Time constants [s], > 0.
+    gain : float
+        Factor of the lags' mean.
+    state : ndarray of float, shape (3 + k,)
+        :func:`lag_state` ``(k)``, updated.
+    signal : ndarray of float, shape (N,)
+        The signal the bank adds to (left unchanged).
+
+    Returns
+    -------
+    ndarray of float, shape (N,)
+        ``signal + gain * (sum_j y_j) / k``, summed in the order of ``taus``.
 
     """
     n = time.shape[0]
@@ -129,12 +172,12 @@ def lag_bank_sum(time: FloatArray, signal: FloatArray, taus: FloatArray,
         acc = 0.0
         for j in range(count):
             if has_prev:
-                state[3 + j] = _lag(state[3 + j], state[2], signal[k], h, taus[j])
+                state[3 + j] = _lag(state[3 + j], state[2], driver[k], h, taus[j])
             acc += state[3 + j]
         state[0] = 1.0
         state[1] = time[k]
-        state[2] = signal[k]
-        out[k] = acc
+        state[2] = driver[k]
+        out[k] = signal[k] + gain * acc / count
     return out
 
 

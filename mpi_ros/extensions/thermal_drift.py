@@ -31,7 +31,7 @@ from ._common import check_series, hold_evidence, Order, residual_axes, resolve_
 from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, PlantChunk, PlantEffect, PlantParameter, \
     SLOW_TIME_LIMIT
-from .plant_steps import lag_state, lag_stream
+from .plant_steps import lag_add, lag_state
 from ..identification import identify_weights
 from ..model import MPIModel
 
@@ -256,8 +256,8 @@ def _plant_start(values: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _plant_run(state: dict[str, Any], chunk: PlantChunk, signal: FloatArray) -> FloatArray:
-    heat = lag_stream(chunk.time, chunk.current * chunk.current, state['tau'], state['lag'])
-    result: FloatArray = signal + state['gain'] * heat
+    result: FloatArray = lag_add(chunk.time, chunk.current * chunk.current, state['tau'],
+                                 state['gain'], state['lag'], signal)
     return result
 
 
