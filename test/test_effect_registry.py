@@ -18,8 +18,8 @@ from mpi_ros import MPIModel
 from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.compensation import Compensator
 from mpi_ros.diagnosis import diagnose
-from mpi_ros.excitation import identification_excitation
 from mpi_ros.errors import ModelError
+from mpi_ros.excitation import identification_excitation
 from mpi_ros.extensions import (Effect, EffectParameter, EFFECTS, extended_model_from_params,
                                 register_effect, unregister_effect)
 from mpi_ros.extensions._common import fit_gamma, search_fit
