@@ -25,14 +25,10 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['LAG_STATE_SIZE', 'lag_state', 'lag_stream', 'lag_add', 'lag_bank_add',
+__all__ = ['lag_state', 'lag_stream', 'lag_add', 'lag_bank_add',
            'delay_state', 'delay_stream']
 
 FloatArray = npt.NDArray[np.float64]
-
-#: Length of a lag's state vector: (has a previous sample, its time, its input, output).
-LAG_STATE_SIZE = 4
-
 
 def lag_state(lags: int = 1) -> FloatArray:
     """
