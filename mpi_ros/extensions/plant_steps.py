@@ -30,6 +30,7 @@ __all__ = ['lag_state', 'lag_stream', 'lag_add', 'lag_bank_add',
 
 FloatArray = npt.NDArray[np.float64]
 
+
 def lag_state(lags: int = 1) -> FloatArray:
     """
     Return the state of a lag (bank) at rest.

@@ -80,7 +80,7 @@ from ..extensions.effect import plant_effects
 from ..model import MPIModel
 from ..recordings import BagRecorder
 
-__all__ = ['PlantSimulatorNode', 'plant_parameters', 'PARAMETERS', 'main']
+__all__ = ['PlantSimulatorNode', 'plant_parameters', 'main']
 
 Type = Parameter.Type
 
@@ -108,16 +108,26 @@ def plant_parameters() -> Tuple[ParameterSpec, ...]:
     Returns
     -------
     tuple of ParameterSpec
-        :data:`PARAMETERS` with the ``actuator.*`` specs (the hysteresis core's, the
-        sensor's and the registered effects') after the ``model.*`` ones.
+        The node's own parameters with the ``actuator.*`` specs (the hysteresis core's,
+        the sensor's and the registered effects') after the ``model.*`` ones.  The module
+        attribute ``PARAMETERS`` is this, computed when it is read.
 
     """
-    return PARAMETERS[:_ACTUATOR_AT] + _actuator_parameters() + PARAMETERS[_ACTUATOR_AT:]
+    return (_OWN_PARAMETERS[:_ACTUATOR_AT] + _actuator_parameters()
+            + _OWN_PARAMETERS[_ACTUATOR_AT:])
+
+
+def __getattr__(name: str) -> Any:
+    """Return ``PARAMETERS``: every parameter, from the effect registry as it is now."""
+    if name == 'PARAMETERS':
+        return plant_parameters()
+    msg = f'module {__name__!r} has no attribute {name!r}'
+    raise AttributeError(msg)
 
 
 #: The node's parameters besides the ``actuator.*`` ones, which come from the effect
 #: registry when the node is built (:func:`plant_parameters`).
-PARAMETERS = (
+_OWN_PARAMETERS = (
     ParameterSpec('truth', Type.STRING, 'builtin',
                   'What the simulated plant is: the built-in magnetostrictive actuator '
                   '(actuator.*) or an MPI model (model.*)',
