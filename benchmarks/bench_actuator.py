@@ -6,7 +6,8 @@ Actuator (plant simulation) speed benchmark (run on demand, not in the test suit
 Measures :class:`mpi_ros.actuator.MagnetostrictiveActuator` on the machine this runs on:
 batch ``simulate`` (samples per second, best of repeats) and the streaming ``step`` the
 plant simulator node calls once per command (median and p99 per sample), without effects
-and with every plant effect on.  Issue 19 moved the effects from the compiled kernel into
+and with every plant effect on, and ``advance`` with one sample (the general path, with the
+array checks of the boundary).  Issue 19 moved the effects from the compiled kernel into
 the effect registry; this is how that change is checked not to slow the plant down.
 
 Usage: ``python benchmarks/bench_actuator.py [--samples N] [--steps N] [--repeats N]``
@@ -51,9 +52,16 @@ def main() -> None:
             t0 = clock()
             act.step(tk, xk)
             laps[k] = clock() - t0
+        chunk = np.empty(args.steps)                      # one-sample advance() calls
+        act.reset()
+        for k, (tk, xk) in enumerate(zip(t[:args.steps].tolist(), x[:args.steps].tolist())):
+            t0 = clock()
+            act.advance([tk], [xk])
+            chunk[k] = clock() - t0
         print(f'{name}: simulate {args.samples / min(times) / 1e6:.2f} million samples/s'
               f' (best of {args.repeats}); step median {np.median(laps) / 1e3:.2f} us,'
-              f' p99 {np.percentile(laps, 99) / 1e3:.2f} us')
+              f' p99 {np.percentile(laps, 99) / 1e3:.2f} us; one-sample advance median'
+              f' {np.median(chunk) / 1e3:.2f} us')
 
 
 if __name__ == '__main__':
