@@ -64,20 +64,19 @@ from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import MPIError
 from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.extensions import EFFECTS, extended_model_from_params
+from mpi_ros.extensions.effect import plant_switch
 from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error
 from mpi_ros.params import write_params_yaml
 from mpi_ros.recordings import Recording
 import numpy as np
 
-#: The plant's effect strengths (``actuator.*`` of the plant simulator).
-STRENGTHS = {
-    'none': {},
-    'creep': {'creep_gain': 0.06},
-    'rate_dependence': {'eddy_time_constant_s': 0.005},
-    'thermal_drift': {'thermal_gain_m_per_a2': 1.2e-6},
-    'dead_time': {'dead_time_s': 0.01},
-}
+#: The plant's effect strengths: the value of each effect's plant switch (its ``actuator.*``
+#: parameter of the plant simulator, named by the effect registry).
+SWITCH_VALUES = {'creep': 0.06, 'rate_dependence': 0.005, 'thermal_drift': 1.2e-6,
+                 'dead_time': 0.01}
+STRENGTHS = {'none': {}, **{effect: {plant_switch(effect): value}
+                            for effect, value in SWITCH_VALUES.items()}}
 NOISE = 4e-8                    # [m] sensor noise (the demo's)
 RECORD_RATE = 1000.0            # [Hz] the plant simulator's excitation rate
 RECORD_DURATION = 60.0          # [s] identification excitation

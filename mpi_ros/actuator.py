@@ -3,12 +3,13 @@
 Simulated magnetostrictive actuator: the "truth" plant for tests, demos and the simulator node.
 
 (Over 500 lines on purpose: one simulator - its configuration, its compiled Preisach kernel
-with the effects' states, and the sensor model - that only makes sense read together.)
+and the sensor model - that only makes sense read together.)
 
 This is deliberately *not* a modified Prandtl-Ishlinskii model, so that identifying an MPI
 model on its data is a fair test.  The coil current ``i`` [A] drives
 
-1. an optional eddy-current lag, ``tau_e di_e/dt = i - i_e`` (off: ``i_e = i``);
+1. the input-side steps of the registered effects (an eddy-current lag,
+   ``tau_e di_e/dt = i - i_e``; off: ``i_e = i``);
 2. a Preisach operator ``P[i_e]`` in [0, 1]: a superposition of relay hysterons with
    switching thresholds ``alpha >= beta`` (up at ``alpha``, down at ``beta``), weighted by a
    smooth density that is Gaussian in the coercive coordinate ``u = (alpha - beta) / 2`` and
@@ -16,9 +17,17 @@ model on its data is a fair test.  The coil current ``i`` [A] drives
 3. a magnetization-like state ``y = (1 - r) P + r i_e / i_r`` (``r`` reversible fraction);
 4. a strictly increasing, non-convex, asymmetric static map (magnetostriction with
    saturation) ``s_h = s_max g(y)``;
-5. optional slow effects (creep, thermal drift), a dead time and sensor noise;
+5. the output-side steps of the registered effects (creep, thermal drift, a dead time);
 6. a sensor zero: the reading is ``s - s_0 + sensor_offset_m``, where ``s_0`` is the
-   displacement where the sensor was zeroed (0 at rest by default, see below).
+   displacement where the sensor was zeroed (0 at rest by default, see below), and
+   sensor noise.
+
+Steps 2-4 are the compiled hysteresis core.  The effects are plug-ins: each registered
+:class:`~mpi_ros.extensions.effect.Effect` with a ``plant`` step
+(:class:`~mpi_ros.extensions.effect.PlantEffect`) adds its parameters to
+:class:`ActuatorConfig` and, when switched on, its vectorised pass at its stage of the chain
+(steps 1 and 5, in the order of registration within a stage); see the effect modules for
+their equations and :mod:`mpi_ros.extensions.plant_steps` for the exact lags and the delay.
 
 At 0 A the actuator is at rest with displacement 0: every relay is 'down' and the
 current history starts at 0 A.  The paper's operating range is 1 A +- 0.8 A (section 5).
@@ -42,19 +51,12 @@ interpolated) and the memory of alternating dominant extrema ``(M_k, m_k)``, ``M
 The wiping-out property removes the extrema a larger excursion erases, so the cost per
 sample is a handful of table look-ups and the output has no staircase.
 
-Sampling may be non-uniform.  Each first-order lag is advanced exactly for an input that
-is linear between samples (first-order hold): with ``h = t_k - t_{k-1}``,
-``a = exp(-h / tau)`` and slope ``q = (u_k - u_{k-1}) / h``,
-
-``x_k = a x_{k-1} + (1 - a) u_k + q (a h - tau (1 - a))``.
-
-Before the first sample the actuator was at rest at 0 A; the first sample is applied at
-``time[0]`` with no elapsed time, so the lags start from rest.
+Sampling may be non-uniform.  Before the first sample the actuator was at rest at 0 A; the
+first sample is applied at ``time[0]`` with no elapsed time, so the effects' lags start from
+rest.
 
 """
 
-from collections import deque
-from dataclasses import asdict, dataclass, field, fields
 import math
 from typing import Any, Mapping
 
@@ -63,29 +65,76 @@ import numpy as np
 import numpy.typing as npt
 
 from .errors import DataError, ModelError
+from .extensions.effect import plant_effects, PlantChunk, PlantEffect, PlantParameter
 
 __all__ = ['ActuatorConfig', 'MagnetostrictiveActuator']
 
 FloatArray = npt.NDArray[np.float64]
 
 _STACK_CAPACITY = 128
-# Indices into the scalar state vector of the compiled kernel.
-_HAS_PREV, _T_PREV, _I_PREV, _I_EFF, _SH_PREV, _THERMAL, _ISQ_PREV, _COUNT = range(8)
-_N_SCALARS = 8
+# Indices into the scalar state vector: has a previous sample, its time, memory length.
+_HAS_PREV, _T_PREV, _COUNT = range(3)
+_N_SCALARS = 3
+
+#: The hysteresis core's parameters (before the effects' in a config's order).
+_MATERIAL = (
+    PlantParameter('displacement_scale_m', 4.0e-5, 'displacement at magnetization 1', 'm',
+                   low=0.0, low_open=True),
+    PlantParameter('coercive_current_a', 0.3, 'Preisach density centre in (alpha-beta)/2',
+                   'A', low=0.0),
+    PlantParameter('coercive_spread_a', 0.1, 'Preisach density spread in (alpha-beta)/2',
+                   'A', low=0.0, low_open=True),
+    PlantParameter('interaction_center_a', 0.95, 'Preisach density centre in (alpha+beta)/2',
+                   'A'),
+    PlantParameter('interaction_spread_a', 0.45,
+                   'Preisach density spread in (alpha+beta)/2', 'A', low=0.0, low_open=True),
+    PlantParameter('reversible_fraction', 0.1, 'reversible share of the magnetization', '1',
+                   low=0.0, high=1.0, high_open=True),
+    PlantParameter('reversible_current_scale_a', 2.0,
+                   'current where the reversible part is full', 'A', low=0.0, low_open=True),
+    PlantParameter('map_linear_fraction', 0.15, 'linear share of the static map', '1',
+                   low=0.0, high=1.0, low_open=True,
+                   note='so that the static map is strictly increasing'),
+    PlantParameter('map_knee', 0.55, 'knee of the static magnetostriction map', '1',
+                   low=0.0, low_open=True),
+    PlantParameter('threshold_min_a', -1.0, 'lowest relay threshold', 'A'),
+    PlantParameter('threshold_max_a', 3.0, 'highest relay threshold', 'A', low=0.0,
+                   low_open=True),
+    PlantParameter('relay_grid_size', 161, 'grid points per axis of the Preisach plane',
+                   low=3, high=2001),
+)
+#: The sensor's parameters (after the effects' in a config's order).
+_SENSOR = (
+    PlantParameter('noise_std_m', 0.0, 'sensor noise standard deviation, 0 = off', 'm',
+                   low=0.0, note='(0 switches it off)'),
+    PlantParameter('sensor_zero_current_a', 0.0, 'current where the sensor was zeroed', 'A'),
+    PlantParameter('sensor_zero_peak_current_a', 0.0,
+                   'peak current visited from rest before zeroing, 0 = none', 'A'),
+    PlantParameter('sensor_offset_m', 0.0, 'constant added to every reading', 'm'),
+)
 
 
-def _describe(text: str) -> dict[str, str]:
-    return {'description': text}
-
-
-@dataclass(frozen=True)
 class ActuatorConfig:
     """
     Parameters of :class:`MagnetostrictiveActuator` (SI units, named in each field).
 
-    Every optional effect is off when its strength is 0 (the default).  The ROS parameter
-    names are the field names, optionally prefixed with ``actuator.`` (see
-    :meth:`from_mapping`).
+    The fields are the hysteresis core's and the sensor's (below) and those of every
+    registered effect with a plant step (:class:`~mpi_ros.extensions.effect.PlantEffect`,
+    read from :data:`~mpi_ros.extensions.EFFECTS` when the config is built).  The built-in
+    effects add ``creep_gain``, ``creep_time_constant_min_s``, ``creep_time_constant_max_s``
+    and ``creep_lag_count`` (:mod:`~mpi_ros.extensions.creep`), ``eddy_time_constant_s``
+    (:mod:`~mpi_ros.extensions.rate_dependence`), ``thermal_gain_m_per_a2`` and
+    ``thermal_time_constant_s`` (:mod:`~mpi_ros.extensions.thermal_drift`) and
+    ``dead_time_s`` (:mod:`~mpi_ros.extensions.dead_time`).  Every effect is off when its
+    switch is 0 (the default).  The ROS parameter names are the field names, optionally
+    prefixed with ``actuator.`` (see :meth:`from_mapping`).  The config is immutable; its
+    fields are read as attributes (``config.creep_gain``).
+
+    Parameters
+    ----------
+    **values : float or int
+        Field values by name; missing fields keep their defaults.  Integers are accepted
+        for float fields, integral floats for integer fields.
 
     Attributes
     ----------
@@ -113,21 +162,6 @@ class ActuatorConfig:
         ``alpha > 0`` carry weight, so all are 'down' at rest.
     relay_grid_size : int
         Grid points per axis of the Preisach plane (Everett table size).
-    creep_gain : float
-        ``gamma >= 0``: fraction of a change of the hysteretic displacement that creeps in
-        afterwards.  0 switches creep off.
-    creep_time_constant_min_s, creep_time_constant_max_s : float
-        Range [s] of the logarithmically spaced creep time constants.
-    creep_lag_count : int
-        Number of first-order lags in the creep bank.
-    eddy_time_constant_s : float
-        ``tau_e >= 0`` [s] of the eddy-current lag.  0 switches rate dependence off.
-    thermal_gain_m_per_a2 : float
-        ``k_T`` [m/A^2]: displacement per unit thermal state.  0 switches drift off.
-    thermal_time_constant_s : float
-        ``tau_T > 0`` [s] of the thermal state.
-    dead_time_s : float
-        ``L >= 0`` [s]: pure delay between current and measured displacement.
     noise_std_m : float
         Standard deviation [m] of additive Gaussian sensor noise.  0 switches it off.
     sensor_zero_current_a : float
@@ -140,6 +174,11 @@ class ActuatorConfig:
     sensor_offset_m : float
         Further constant added to every reading [m] (a shifted sensor zero).
 
+    Raises
+    ------
+    ModelError
+        An unknown field, or a value of the wrong type or range (the first one found).
+
     Notes
     -----
     Static map (magnetostriction ``lambda ~ M^2`` at low magnetization, saturating at high):
@@ -148,117 +187,103 @@ class ActuatorConfig:
     ``h(y) = 0`` otherwise.  ``g`` is convex then concave (non-convex), not odd-symmetric
     about its midpoint, and ``g' >= c > 0``: strictly increasing, hence invertible.
 
-    Creep (thermally activated domain-wall relaxation with a spread of time constants,
-    which gives the ``log t`` law over ``[tau_min, tau_max]``): lags ``q_j`` with
-    ``tau_j dq_j/dt = s_h - q_j``, ``tau_j`` log-spaced, add ``gamma mean_j(q_j)``.  After a
-    step of ``s_h`` by ``D`` the output creeps by about ``gamma D`` over those decades.
+    The effects' equations are in their modules (``PLANT``).  Noise: ``s_meas +=
+    noise_std_m * N(0, 1)`` from a seeded :class:`numpy.random.Generator`.
 
-    Rate dependence (eddy currents delay the field in the core): the material sees
-    ``i_e`` with ``tau_e di_e/dt = i - i_e``; loops widen as ``omega tau_e`` grows.
-
-    Thermal drift (Joule heating of the coil, thermal expansion of the rod):
-    ``tau_T dT/dt = i^2 - T`` (``T`` in A^2, steady state the mean of ``i^2``), adding
-    ``k_T T``.
-
-    Dead time: ``s_meas(t) = s(t - L)``, linearly interpolated on the sampled stream, 0
-    before the first sample.  Noise: ``s_meas += noise_std_m * N(0, 1)`` from a seeded
-    :class:`numpy.random.Generator`.
+    Examples
+    --------
+    >>> ActuatorConfig(creep_gain=0.05).creep_gain
+    0.05
 
     """
 
-    displacement_scale_m: float = field(
-        default=4.0e-5, metadata=_describe('displacement at magnetization 1 [m]'))
-    coercive_current_a: float = field(
-        default=0.3, metadata=_describe('Preisach density centre in (alpha-beta)/2 [A]'))
-    coercive_spread_a: float = field(
-        default=0.1, metadata=_describe('Preisach density spread in (alpha-beta)/2 [A]'))
-    interaction_center_a: float = field(
-        default=0.95, metadata=_describe('Preisach density centre in (alpha+beta)/2 [A]'))
-    interaction_spread_a: float = field(
-        default=0.45, metadata=_describe('Preisach density spread in (alpha+beta)/2 [A]'))
-    reversible_fraction: float = field(
-        default=0.1, metadata=_describe('reversible share of the magnetization [1]'))
-    reversible_current_scale_a: float = field(
-        default=2.0, metadata=_describe('current where the reversible part is full [A]'))
-    map_linear_fraction: float = field(
-        default=0.15, metadata=_describe('linear share of the static map [1]'))
-    map_knee: float = field(
-        default=0.55, metadata=_describe('knee of the static magnetostriction map [1]'))
-    threshold_min_a: float = field(
-        default=-1.0, metadata=_describe('lowest relay threshold [A]'))
-    threshold_max_a: float = field(
-        default=3.0, metadata=_describe('highest relay threshold [A]'))
-    relay_grid_size: int = field(
-        default=161, metadata=_describe('grid points per axis of the Preisach plane'))
-    creep_gain: float = field(
-        default=0.0, metadata=_describe('creep fraction of a change, 0 = off [1]'))
-    creep_time_constant_min_s: float = field(
-        default=0.1, metadata=_describe('shortest creep time constant [s]'))
-    creep_time_constant_max_s: float = field(
-        default=100.0, metadata=_describe('longest creep time constant [s]'))
-    creep_lag_count: int = field(
-        default=7, metadata=_describe('number of creep lags'))
-    eddy_time_constant_s: float = field(
-        default=0.0, metadata=_describe('eddy-current lag time constant, 0 = off [s]'))
-    thermal_gain_m_per_a2: float = field(
-        default=0.0, metadata=_describe('thermal drift per unit state, 0 = off [m/A^2]'))
-    thermal_time_constant_s: float = field(
-        default=30.0, metadata=_describe('thermal time constant [s]'))
-    dead_time_s: float = field(
-        default=0.0, metadata=_describe('dead time of the measurement, 0 = off [s]'))
-    noise_std_m: float = field(
-        default=0.0, metadata=_describe('sensor noise standard deviation, 0 = off [m]'))
-    sensor_zero_current_a: float = field(
-        default=0.0, metadata=_describe('current where the sensor was zeroed [A]'))
-    sensor_zero_peak_current_a: float = field(
-        default=0.0, metadata=_describe('peak current visited from rest before zeroing,'
-                                        ' 0 = none [A]'))
-    sensor_offset_m: float = field(
-        default=0.0, metadata=_describe('constant added to every reading [m]'))
+    __slots__ = ('_values', '_effects')
 
-    def __post_init__(self) -> None:
-        """Check every field; raise ModelError naming the first bad one."""
-        for f in fields(self):
-            value = getattr(self, f.name)
-            number = (isinstance(value, (int, float, np.integer, np.floating))
-                      and not isinstance(value, bool))
-            convert: type[int] | type[float]
-            if f.type in (int, 'int'):
-                # Integral floats are accepted: YAML and ROS tools may write 81.0 for 81.
-                ok = number and math.isfinite(value) and float(value).is_integer()
-                expected, convert = 'an integer', int
-            else:
-                ok = number and math.isfinite(value)
-                expected, convert = 'a finite number', float
-            if not ok:
-                msg = f'actuator.{f.name} must be {expected}; found {value!r}'
-                raise ModelError(msg)
-            # Plain Python types, so that to_mapping() declares ROS parameters of the right type.
-            object.__setattr__(self, f.name, convert(value))
-        positive = ('displacement_scale_m', 'coercive_spread_a', 'interaction_spread_a',
-                    'reversible_current_scale_a', 'map_knee', 'creep_time_constant_min_s',
-                    'thermal_time_constant_s', 'threshold_max_a')
-        for name in positive:
-            self._require(name, getattr(self, name) > 0, '> 0')
-        for name in ('coercive_current_a', 'creep_gain', 'eddy_time_constant_s',
-                     'dead_time_s', 'noise_std_m'):
-            self._require(name, getattr(self, name) >= 0, '>= 0 (0 switches it off)')
-        self._require('reversible_fraction', 0 <= self.reversible_fraction < 1, 'in [0, 1)')
-        self._require('map_linear_fraction', 0 < self.map_linear_fraction <= 1,
-                      'in (0, 1] so that the static map is strictly increasing')
-        self._require('threshold_min_a', self.threshold_min_a < self.threshold_max_a,
-                      f'< threshold_max_a = {self.threshold_max_a}')
-        self._require('relay_grid_size', 3 <= self.relay_grid_size <= 2001, 'in [3, 2001]')
-        self._require('creep_time_constant_max_s',
-                      self.creep_time_constant_max_s >= self.creep_time_constant_min_s,
-                      f'>= creep_time_constant_min_s = {self.creep_time_constant_min_s}')
-        self._require('creep_lag_count', 1 <= self.creep_lag_count <= 100, 'in [1, 100]')
+    # The hysteresis core's and the sensor's fields, typed (the effects' are read through
+    # __getattr__ as well).
+    displacement_scale_m: float
+    coercive_current_a: float
+    coercive_spread_a: float
+    interaction_center_a: float
+    interaction_spread_a: float
+    reversible_fraction: float
+    reversible_current_scale_a: float
+    map_linear_fraction: float
+    map_knee: float
+    threshold_min_a: float
+    threshold_max_a: float
+    relay_grid_size: int
+    noise_std_m: float
+    sensor_zero_current_a: float
+    sensor_zero_peak_current_a: float
+    sensor_offset_m: float
 
-    def _require(self, name: str, condition: bool, expected: str) -> None:
-        if not condition:
-            msg = (f'actuator.{name} must be {expected}; found {getattr(self, name)!r};'
-                   f' fix the parameter (default {_DEFAULTS[name]!r})')
+    def __init__(self, **values: Any) -> None:
+        effects = plant_effects()
+        parameters = _parameters(effects)
+        unknown = [name for name in values if name not in parameters]
+        if unknown:
+            msg = (f'unknown actuator parameter {unknown[0]!r}; valid names are'
+                   f' {", ".join(sorted(parameters))}')
             raise ModelError(msg)
+        checked: dict[str, float | int] = {}
+        for name, spec in parameters.items():
+            checked[name] = _checked_type(spec, values.get(name, spec.default))
+        object.__setattr__(self, '_values', checked)
+        object.__setattr__(self, '_effects', tuple(effects))
+        for name, spec in parameters.items():
+            if not spec.accepts(checked[name]):
+                self._reject(name, spec.expected, spec.default)
+        if not checked['threshold_min_a'] < checked['threshold_max_a']:
+            self._reject('threshold_min_a', f'< threshold_max_a = {checked["threshold_max_a"]}',
+                         parameters['threshold_min_a'].default)
+        for _, plant in effects:
+            wrong = plant.check(checked) if plant.check is not None else None
+            if wrong is not None:
+                self._reject(wrong[0], wrong[1], parameters[wrong[0]].default)
+
+    def _reject(self, name: str, expected: str, default: float | int) -> None:
+        msg = (f'actuator.{name} must be {expected}; found {self._values[name]!r};'
+               f' fix the parameter (default {default!r})')
+        raise ModelError(msg)
+
+    def __getattr__(self, name: str) -> Any:
+        """Return a field's value (the effects' fields included)."""
+        try:
+            return object.__getattribute__(self, '_values')[name]
+        except KeyError:
+            msg = f'ActuatorConfig has no field {name!r}'
+            raise AttributeError(msg) from None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Refuse: the config is immutable."""
+        msg = f'ActuatorConfig is immutable; build a new one instead of setting {name!r}'
+        raise AttributeError(msg)
+
+    def __eq__(self, other: object) -> bool:
+        """Tell whether two configs have the same fields and values."""
+        if not isinstance(other, ActuatorConfig):
+            return NotImplemented
+        same: bool = self._values == other._values
+        return same
+
+    def __hash__(self) -> int:
+        """Hash the fields and values."""
+        return hash(tuple(self._values.items()))
+
+    def __repr__(self) -> str:
+        """Return ``ActuatorConfig(name=value, ...)``."""
+        return f'ActuatorConfig({", ".join(f"{k}={v!r}" for k, v in self._values.items())})'
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle by value (a config built again from its fields)."""
+        return (_restore, (dict(self._values),))
+
+    @property
+    def effects(self) -> tuple[tuple[str, PlantEffect], ...]:
+        """Return the plant steps of the effects registered when the config was built."""
+        effects: tuple[tuple[str, PlantEffect], ...] = self._effects
+        return effects
 
     @classmethod
     def from_mapping(cls, mapping: Mapping[str, Any], *,
@@ -291,7 +316,7 @@ class ActuatorConfig:
         0.05
 
         """
-        names = {f.name for f in fields(cls)}
+        names = set(_parameters(plant_effects()))
         values: dict[str, Any] = {}
         for key, value in mapping.items():
             name = key[len(prefix):] if prefix and key.startswith(prefix) else key
@@ -320,7 +345,21 @@ class ActuatorConfig:
             Round-trips through :meth:`from_mapping`.
 
         """
-        return {prefix + key: value for key, value in asdict(self).items()}
+        return {prefix + key: value for key, value in self._values.items()}
+
+    @classmethod
+    def parameters(cls) -> tuple[PlantParameter, ...]:
+        """
+        Return every field's description, read from the effect registry now.
+
+        Returns
+        -------
+        tuple of PlantParameter
+            The hysteresis core's, the registered effects' (in signal-chain order) and
+            the sensor's fields: name, default, description, unit and range.
+
+        """
+        return tuple(_parameters(plant_effects()).values())
 
     @classmethod
     def descriptions(cls) -> dict[str, str]:
@@ -333,10 +372,42 @@ class ActuatorConfig:
             Field name to description.
 
         """
-        return {f.name: f.metadata['description'] for f in fields(cls)}
+        return {p.name: p.text for p in cls.parameters()}
 
 
-_DEFAULTS = {f.name: f.default for f in fields(ActuatorConfig)}
+def _parameters(effects: list[tuple[str, PlantEffect]]) -> dict[str, PlantParameter]:
+    """Return every field by name: the core's, the effects' (in chain order), the sensor's."""
+    parameters = {p.name: p for p in _MATERIAL}
+    for name, plant in effects:
+        for p in plant.parameters:
+            if p.name in parameters or any(p.name == q.name for q in _SENSOR):
+                msg = (f'effect {name!r}: plant parameter {p.name!r} is a field of the actuator'
+                       ' already; give it another name')
+                raise ModelError(msg)
+            parameters[p.name] = p
+    parameters.update((p.name, p) for p in _SENSOR)
+    return parameters
+
+
+def _checked_type(spec: PlantParameter, value: Any) -> float | int:
+    """Return a value as the field's plain Python type; raise ModelError when it is not."""
+    number = (isinstance(value, (int, float, np.integer, np.floating))
+              and not isinstance(value, bool))
+    if isinstance(spec.default, int):
+        # Integral floats are accepted: YAML and ROS tools may write 81.0 for 81.
+        if number and math.isfinite(value) and float(value).is_integer():
+            return int(value)
+        expected = 'an integer'
+    else:
+        if number and math.isfinite(value):
+            return float(value)
+        expected = 'a finite number'
+    msg = f'actuator.{spec.name} must be {expected}; found {value!r}'
+    raise ModelError(msg)
+
+
+def _restore(values: dict[str, Any]) -> ActuatorConfig:
+    return ActuatorConfig(**values)
 
 
 class MagnetostrictiveActuator:
@@ -371,9 +442,19 @@ class MagnetostrictiveActuator:
         self._table = _everett_table(cfg)
         self._grid_lo = float(cfg.threshold_min_a)
         self._grid_step = (cfg.threshold_max_a - cfg.threshold_min_a) / (cfg.relay_grid_size - 1)
-        self._creep_taus = np.geomspace(cfg.creep_time_constant_min_s,
-                                        cfg.creep_time_constant_max_s, cfg.creep_lag_count)
         self._map_norm = 1.0 - math.exp(-1.0 / cfg.map_knee ** 2)
+        # The effects' plant steps that are switched on, in signal-chain order.
+        values = cfg.to_mapping()
+        self._values = values
+        steps = [plant for _, plant in cfg.effects if plant.is_on(values)]
+        self._input_steps = tuple(p for p in steps if p.stage == 'input')
+        self._output_steps = tuple(p for p in steps if p.stage == 'output')
+        # The compiled core's constant arguments (read once: the config's fields are looked
+        # up through __getattr__).
+        self._core = (self._table, self._grid_lo, self._grid_step, cfg.reversible_fraction,
+                      cfg.reversible_current_scale_a, cfg.map_linear_fraction, cfg.map_knee,
+                      self._map_norm, cfg.displacement_scale_m)
+        self._noise_std = cfg.noise_std_m
         self._sensor_shift = cfg.sensor_offset_m - self._zeroed_displacement()
         self._state = self._initial_state()
 
@@ -464,6 +545,12 @@ class MagnetostrictiveActuator:
             Non-finite values or a time not after the previous sample.
 
         """
+        scalars = self._state['scalars']
+        if (type(t) is float and type(current) is float and math.isfinite(t)
+                and math.isfinite(current) and not (scalars[_HAS_PREV] and t <= scalars[_T_PREV])):
+            # The common case (the plant simulator node, once per command) without the
+            # array checks of the boundary; anything else goes through advance().
+            return float(self._run(self._state, np.array([t]), np.array([current]))[0])
         return float(self.advance([t], [current])[0])
 
     def static_map(self, magnetization: npt.ArrayLike) -> FloatArray:
@@ -495,13 +582,7 @@ class MagnetostrictiveActuator:
             return 0.0
         state = self._initial_state()
         path = np.array([0.0, cfg.sensor_zero_peak_current_a, cfg.sensor_zero_current_a])
-        return float(_kernel(np.arange(3.0), path, self._table,
-                             self._grid_lo, self._grid_step, cfg.reversible_fraction,
-                             cfg.reversible_current_scale_a, cfg.map_linear_fraction,
-                             cfg.map_knee, self._map_norm, cfg.displacement_scale_m, 0.0, 0.0,
-                             self._creep_taus, 0.0, cfg.thermal_time_constant_s,
-                             state['scalars'], state['maxima'], state['minima'],
-                             state['creep'])[-1])
+        return float(self._material(state, path)[-1])
 
     def _initial_state(self) -> dict[str, Any]:
         scalars = np.zeros(_N_SCALARS)
@@ -510,43 +591,38 @@ class MagnetostrictiveActuator:
             'scalars': scalars,
             'maxima': np.zeros(_STACK_CAPACITY),
             'minima': np.zeros(_STACK_CAPACITY),
-            'creep': np.zeros(self._config.creep_lag_count),
-            'delay_time': deque(),
-            'delay_value': deque(),
+            'input': [plant.start(self._values) for plant in self._input_steps],
+            'output': [plant.start(self._values) for plant in self._output_steps],
             'rng': np.random.default_rng(self._seed),
         }
 
-    def _run(self, state: dict[str, Any], t: FloatArray, x: FloatArray) -> FloatArray:
-        cfg = self._config
-        out = _kernel(t, x, self._table, self._grid_lo, self._grid_step,
-                      cfg.reversible_fraction, cfg.reversible_current_scale_a,
-                      cfg.map_linear_fraction, cfg.map_knee, self._map_norm,
-                      cfg.displacement_scale_m, cfg.eddy_time_constant_s, cfg.creep_gain,
-                      self._creep_taus, cfg.thermal_gain_m_per_a2, cfg.thermal_time_constant_s,
-                      state['scalars'], state['maxima'], state['minima'], state['creep'])
-        if cfg.dead_time_s > 0:
-            out = _delay(state, t, out, cfg.dead_time_s)
-        if self._sensor_shift != 0.0:
-            out = out + self._sensor_shift
-        if cfg.noise_std_m > 0:
-            out = out + cfg.noise_std_m * state['rng'].standard_normal(out.shape[0])
+    def _material(self, state: dict[str, Any], current: FloatArray) -> FloatArray:
+        """Return the hysteresis core's displacement for the current the material sees."""
+        out: FloatArray = _kernel(current, *self._core, state['scalars'], state['maxima'],
+                                  state['minima'])
         return out
 
-
-def _delay(state: dict[str, Any], t: FloatArray, out: FloatArray, dead_time: float) -> FloatArray:
-    """Return ``out`` delayed by ``dead_time`` using (and updating) the history buffer."""
-    times: deque[float] = state['delay_time']
-    values: deque[float] = state['delay_value']
-    hist_t = np.concatenate([np.fromiter(times, float, len(times)), t])
-    hist_v = np.concatenate([np.fromiter(values, float, len(values)), out])
-    delayed: FloatArray = np.interp(t - dead_time, hist_t, hist_v, left=0.0)
-    # Keep only what later samples can still need: the last point at or before t[-1] - L.
-    keep_from = max(int(np.searchsorted(hist_t, t[-1] - dead_time, side='right')) - 1, 0)
-    times.clear()
-    values.clear()
-    times.extend(hist_t[keep_from:].tolist())
-    values.extend(hist_v[keep_from:].tolist())
-    return delayed
+    def _run(self, state: dict[str, Any], t: FloatArray, x: FloatArray) -> FloatArray:
+        # The signal chain: input-side steps, the hysteresis core, output-side steps,
+        # then the sensor (zero and noise).
+        seen = x
+        if self._input_steps:
+            chunk = PlantChunk(t, x)
+            for plant, plant_state in zip(self._input_steps, state['input']):
+                seen = plant.run(plant_state, chunk, seen)
+        out = self._material(state, seen)
+        if self._output_steps:
+            chunk = PlantChunk(t, x, out)
+            for plant, plant_state in zip(self._output_steps, state['output']):
+                out = plant.run(plant_state, chunk, out)
+        scalars = state['scalars']
+        scalars[_HAS_PREV] = 1.0
+        scalars[_T_PREV] = t[-1]
+        if self._sensor_shift != 0.0:
+            out = out + self._sensor_shift
+        if self._noise_std > 0:
+            out = out + self._noise_std * state['rng'].standard_normal(out.shape[0])
+        return out
 
 
 def _check_series(time: npt.ArrayLike, current: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -631,40 +707,17 @@ def _everett(table: FloatArray, lo: float, step: float, a: float,
 
 
 @numba.njit(cache=True, nogil=True)
-def _lag(y0: float, u0: float, u1: float, h: float,
-         tau: float) -> float:  # pragma: no cover - compiled
-    """Exact first-order-lag update for an input linear between samples (first-order hold)."""
-    a = math.exp(-h / tau)
-    one_minus_a = -math.expm1(-h / tau)
-    slope = (u1 - u0) / h
-    return a * y0 + one_minus_a * u1 + slope * (a * h - tau * one_minus_a)
-
-
-@numba.njit(cache=True, nogil=True)
-def _kernel(time: FloatArray, current: FloatArray, table: FloatArray, grid_lo: float,
-            grid_step: float, rev_frac: float, rev_scale: float, lin: float, knee: float,
-            map_norm: float, scale: float, eddy_tau: float, creep_gain: float,
-            creep_taus: FloatArray, thermal_gain: float, thermal_tau: float,
-            scalars: FloatArray, maxima: FloatArray, minima: FloatArray,
-            creep: FloatArray) -> FloatArray:  # pragma: no cover - compiled
-    """Advance the actuator state over the samples; return the undelayed, noiseless output."""
-    n_samples = time.shape[0]
-    n_creep = creep_taus.shape[0]
+def _kernel(current: FloatArray, table: FloatArray, grid_lo: float, grid_step: float,
+            rev_frac: float, rev_scale: float, lin: float, knee: float, map_norm: float,
+            scale: float, scalars: FloatArray, maxima: FloatArray,
+            minima: FloatArray) -> FloatArray:  # pragma: no cover - compiled
+    """Advance the Preisach memory over the samples; return the material's displacement."""
+    n_samples = current.shape[0]
     capacity = maxima.shape[0]
     out = np.empty(n_samples)
-    count = int(scalars[7])
+    count = int(scalars[2])
     for k in range(n_samples):
-        t = time[k]
-        i = current[k]
-        has_prev = scalars[0] > 0.0
-        h = t - scalars[1] if has_prev else 0.0
-        # Eddy-current lag of the current seen by the material.
-        if eddy_tau > 0.0:
-            if has_prev:
-                scalars[3] = _lag(scalars[3], scalars[2], i, h, eddy_tau)
-            x = scalars[3]
-        else:
-            x = i
+        x = current[k]
         # Preisach memory: alternating dominant extrema with wiping out.
         last = minima[count - 1]
         if x > last:
@@ -695,24 +748,6 @@ def _kernel(time: FloatArray, current: FloatArray, table: FloatArray, grid_lo: f
         # Magnetization-like state and static magnetostriction map.
         y = (1.0 - rev_frac) * preisach + rev_frac * x / rev_scale
         hy = -math.expm1(-(y / knee) ** 2) if y > 0.0 else 0.0
-        s_h = scale * (lin * y + (1.0 - lin) * hy / map_norm)
-        s = s_h
-        if creep_gain > 0.0:
-            acc = 0.0
-            for j in range(n_creep):
-                if has_prev:
-                    creep[j] = _lag(creep[j], scalars[4], s_h, h, creep_taus[j])
-                acc += creep[j]
-            s += creep_gain * acc / n_creep
-        if thermal_gain != 0.0:
-            if has_prev:
-                scalars[5] = _lag(scalars[5], scalars[6], i * i, h, thermal_tau)
-            s += thermal_gain * scalars[5]
-        scalars[0] = 1.0
-        scalars[1] = t
-        scalars[2] = i
-        scalars[4] = s_h
-        scalars[6] = i * i
-        out[k] = s
-    scalars[7] = count
+        out[k] = scale * (lin * y + (1.0 - lin) * hy / map_norm)
+    scalars[2] = count
     return out

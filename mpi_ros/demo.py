@@ -60,8 +60,12 @@ __all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']
 
 #: The paper's table (section 5).
 ORDERS = ((0, 0), (4, 2), (8, 4), (14, 7))
+
+#: The option that sets each effect's strength in the plant (its argparse destination).
+_STRENGTH_OPTIONS = {'creep': 'creep_gain', 'rate_dependence': 'eddy_time_constant'}
+
 #: Effects ``--effect`` can switch on in the plant simulator.
-EFFECTS = ('creep', 'rate_dependence')
+EFFECTS = tuple(_STRENGTH_OPTIONS)
 _REPLY_TIMEOUT = 5.0
 #: Excitation and tracking lengths [s] when not given: (plain demo, --effect demo).
 _DURATIONS = {False: (40.0, 12.0), True: (60.0, 30.0)}
@@ -209,7 +213,8 @@ def _run_effect(args: argparse.Namespace, progress: Progress) -> dict[str, Any]:
     import rclpy
 
     from .excitation import identification_excitation
-    from .extensions import fit_creep, fit_rate_dependence
+    from .extensions import EFFECTS as REGISTRY
+    from .extensions.effect import plant_switch
     from .identification import identify
     from .demo_report import write_effect_report
     from .metrics import control_error
@@ -217,13 +222,11 @@ def _run_effect(args: argparse.Namespace, progress: Progress) -> dict[str, Any]:
     from .recordings import BagRecorder, read_bag_signals
 
     n, l = ORDERS[-1]  # noqa: E741
-    fit: Callable[..., EffectModel]
-    if args.effect == 'creep':
-        strength = {'actuator.creep_gain': args.creep_gain}
-        fit = fit_creep
-    else:
-        strength = {'actuator.eddy_time_constant_s': args.eddy_time_constant}
-        fit = fit_rate_dependence
+    # The effect's fit and its plant switch (actuator.*) come from the registry; the value
+    # from the effect's option (--creep-gain, --eddy-time-constant).
+    fit: Callable[..., EffectModel] = REGISTRY[args.effect].fit
+    strength = {f'actuator.{plant_switch(args.effect)}':
+                getattr(args, _STRENGTH_OPTIONS[args.effect])}
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     started = time.monotonic()

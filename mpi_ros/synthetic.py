@@ -24,6 +24,7 @@ from scipy import signal
 from .actuator import ActuatorConfig, MagnetostrictiveActuator
 from .errors import DataError
 from .excitation import identification_excitation
+from .extensions.effect import plant_switch
 
 __all__ = ['SyntheticRecord', 'synthetic_record', 'SYNTHETIC_KINDS', 'rising_amplitude_sine',
            'resonance']
@@ -172,10 +173,11 @@ def synthetic_record(kind: str, seed: int, *, noise: float = 0.002) -> Synthetic
     if kind.startswith(('lag', 'dead time')):
         rate = 1000.0 if '1 kHz' in kind else 10000.0
         value = float(kind.split()[1 if kind.startswith('lag') else 2])
+        # The plant's switches of the effects, from the registry.
         if kind.startswith('lag'):
-            truth['lag_time_constant'] = config['eddy_time_constant_s'] = value * 1e-3
+            truth['lag_time_constant'] = config[plant_switch('rate_dependence')] = value * 1e-3
         else:
-            truth['dead_time'] = config['dead_time_s'] = value / rate
+            truth['dead_time'] = config[plant_switch('dead_time')] = value / rate
         if rate == 1000.0:
             t, x = identification_excitation(30.0, sample_rate=rate, seed=seed,
                                              burst_frequency=40.0, hold_duration=2.0,

@@ -5,22 +5,33 @@ Effects are plug-ins: a toy effect registered here, in one place, works end to e
 The toy effect is a drive gain: the material sees ``k x`` instead of the commanded ``x``,
 ``s = Gamma[k x]`` (degenerate with Gamma itself, which is fine for a toy: the point is
 that nothing outside this file is edited).  Registering it makes the parameter form, the
-fit, the exact per-step inverse in the one compensator and the diagnosis candidate work.
+fit, the exact per-step inverse in the one compensator and the diagnosis candidate work,
+and, through its plant step (an input-side gain, ``actuator.drive_gain``), the simulated
+actuator and the plant simulator node, over DDS.
 """
 
 from dataclasses import dataclass
+import time
 from typing import Any
 
 from mpi_ros import MPIModel
+from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.compensation import Compensator
 from mpi_ros.diagnosis import diagnose
+from mpi_ros.errors import ModelError
 from mpi_ros.excitation import identification_excitation
 from mpi_ros.extensions import (Effect, EffectParameter, EFFECTS, extended_model_from_params,
                                 ExtendedModelBase, register_effect, unregister_effect)
 from mpi_ros.extensions._common import fit_gamma, search_fit
+from mpi_ros.extensions.effect import PlantEffect, PlantParameter
+from mpi_ros.nodes.plant_simulator import PlantSimulatorNode
 from mpi_ros.recordings import Recording
 import numpy as np
 import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from std_msgs.msg import Float64
 
 from .core_models import random_model
 
@@ -80,7 +91,13 @@ def fit_drive_gain(time, current, displacement, *, order):
 
 TOY = Effect(name='drive_gain', formula='Gamma[k x]',
              parameters=(EffectParameter(GAIN, 'double', 0.0, 'Toy drive gain k'),),
-             model_class=DriveGainModel, fit=fit_drive_gain, parameter_count=lambda p: 1)
+             model_class=DriveGainModel, fit=fit_drive_gain, parameter_count=lambda p: 1,
+             plant=PlantEffect(
+                 stage='input', label='drive gain',
+                 parameters=(PlantParameter('drive_gain', 0.0, 'Toy drive gain k, 0 = off',
+                                            '1', low=0.0, switch=True),),
+                 start=lambda values: values['drive_gain'],
+                 run=lambda gain, chunk, current: gain * current))
 
 
 @pytest.fixture()
@@ -91,6 +108,7 @@ def toy():
     finally:
         unregister_effect(TOY.name)
     assert 'drive_gain' not in EFFECTS
+    assert 'drive_gain' not in ActuatorConfig().to_mapping()
 
 
 def test_toy_effect_parameter_form_and_exact_inverse(toy):
@@ -126,3 +144,70 @@ def test_toy_effect_is_fitted_and_a_diagnosis_candidate(toy):
     assert names == ['creep', 'drive_gain']
     toy_row = report.candidates[1]
     assert toy_row['signature'] == 'unavailable' and toy_row['parameter_count'] == 1
+
+
+def test_toy_effect_in_the_simulated_actuator(toy):
+    t = np.arange(600) * 1e-3
+    x = 1.0 + 0.7 * np.sin(2 * np.pi * 3 * t) * np.exp(-t)
+    config = ActuatorConfig.from_mapping({'actuator.drive_gain': 1.25})
+    assert ActuatorConfig.descriptions()['drive_gain'] == 'Toy drive gain k, 0 = off [1]'
+    act = MagnetostrictiveActuator(config)
+    out = act.simulate(t, x)
+    # The hysteresis core sees k x: the plain actuator driven with 1.25 x, bit for bit.
+    np.testing.assert_array_equal(out, MagnetostrictiveActuator().simulate(t, 1.25 * x))
+    assert np.max(np.abs(out - MagnetostrictiveActuator().simulate(t, x))) > 1e-6
+    chunks = [act.advance(t[a:b], x[a:b]) for a, b in ((0, 1), (1, 250), (250, 600))]
+    np.testing.assert_array_equal(np.concatenate(chunks), out)
+    with pytest.raises(ModelError, match=r'actuator\.drive_gain must be >= 0'):
+        ActuatorConfig(drive_gain=-1.0)
+    with pytest.raises(ModelError, match='belong to another effect'):
+        register_effect(Effect(name='drive_gain_twin', formula='', parameters=(),
+                               model_class=DriveGainModel, fit=fit_drive_gain,
+                               parameter_count=lambda p: 0, plant=TOY.plant))
+
+
+def test_toy_effect_in_the_plant_simulator_node(toy, ros_env):
+    """The node declares actuator.drive_gain from the registry and applies it over DDS."""
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    nodes = []
+    executor = SingleThreadedExecutor(context=context)
+    try:
+        plant = PlantSimulatorNode(context=context, parameter_overrides=[
+            Parameter('actuator.drive_gain', value=1.25)])
+        nodes.append(plant)
+        descriptor = plant.describe_parameter('actuator.drive_gain')
+        assert 'Toy drive gain k' in descriptor.description and descriptor.read_only
+        driver = rclpy.create_node('toy_driver', context=context)
+        nodes.append(driver)
+        received = []
+        publisher = driver.create_publisher(Float64, 'current_command', 100)
+        driver.create_subscription(Float64, 'displacement',
+                                   lambda msg: received.append(msg.data), 100)
+        executor.add_node(plant)
+        executor.add_node(driver)
+        _spin_until(executor, lambda: publisher.get_subscription_count() > 0
+                    and driver.count_publishers('displacement') > 0)
+        commands = 1.0 + 0.6 * np.sin(np.linspace(0.0, 7.0, 40))
+        for value in commands:                  # lock step: one command, one answer
+            count = len(received)
+            publisher.publish(Float64(data=float(value)))
+            _spin_until(executor, lambda: len(received) > count)
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    # Without time-dependent effects the actuator is rate independent: the node's own
+    # sample times do not matter.  The material saw 1.25 x.
+    expected = MagnetostrictiveActuator().simulate(np.arange(commands.size), 1.25 * commands)
+    np.testing.assert_allclose(received, expected, rtol=0, atol=1e-15)
+    plain = MagnetostrictiveActuator().simulate(np.arange(commands.size), commands)
+    assert np.max(np.abs(np.asarray(received) - plain)) > 1e-6
+
+
+def _spin_until(executor, condition, timeout=10.0):
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, 'timed out'
+        executor.spin_once(timeout_sec=0.05)

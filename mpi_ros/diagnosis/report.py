@@ -237,7 +237,8 @@ def summary_lines(facts: Mapping[str, Any]) -> list[str]:
                      + ', '.join(f'{c["cause"]} {_signed_percent(c["gain"])} (z'
                                  f' {significant(c["z"])}, {z_wording(c["z"], zc)})'
                                  for c in _ranked(facts)))
-    chosen = next((c for c in facts.get('candidates', []) if c['cause'] == facts['cause']), {})
+    chosen: Mapping[str, Any] = next(
+        (c for c in facts.get('candidates', []) if c['cause'] == facts['cause']), {})
     if chosen.get('parts'):
         zc = float(decision.get('z_critical', 1.645))
         lines.append('each effect beyond the other alone (the pair against the other effect'

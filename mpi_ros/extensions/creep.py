@@ -48,7 +48,9 @@ import numpy.typing as npt
 from ._common import AxisUnits, check_series, hold_evidence, Order, residual_axes, \
     resolve_order, vector_parameter
 from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
-from .effect import Effect, EffectParameter, ExtendedModelBase, SLOW_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
+    PlantParameter, SLOW_TIME_LIMIT
+from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
 from ..model import _superposition_value, MPIModel
@@ -363,6 +365,38 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
                  f'\ninput (grey) holds; the creep model{fitted} should stay flat', fontsize=10)
 
 
+def _plant_start(values: Mapping[str, Any]) -> dict[str, Any]:
+    taus = np.geomspace(values['creep_time_constant_min_s'],
+                        values['creep_time_constant_max_s'], values['creep_lag_count'])
+    return {'gain': values['creep_gain'], 'taus': taus, 'lags': lag_state(taus.size)}
+
+
+def _plant_run(state: dict[str, Any], chunk: PlantChunk, signal: FloatArray) -> FloatArray:
+    if chunk.material is None:
+        msg = 'the creep plant step runs on the output side; it needs the material output'
+        raise ModelError(msg)
+    result: FloatArray = lag_bank_add(chunk.time, chunk.material, state['taus'],
+                                      state['gain'], state['lags'], signal)
+    return result
+
+
+#: Creep in the simulated plant (output side): lags ``q_j`` of the hysteresis core's
+#: displacement ``s_h`` with log-spaced ``tau_j`` add ``gamma mean_j(q_j)``; after a step
+#: of ``s_h`` by ``D`` the output creeps by about ``gamma D`` over those decades.
+PLANT = PlantEffect(
+    stage='output', label='creep', start=_plant_start, run=_plant_run,
+    parameters=(
+        PlantParameter('creep_gain', 0.0, 'creep fraction of a change, 0 = off', '1',
+                       low=0.0, note='(0 switches it off)', switch=True),
+        PlantParameter('creep_time_constant_min_s', 0.1, 'shortest creep time constant',
+                       's', low=0.0, low_open=True),
+        PlantParameter('creep_time_constant_max_s', 100.0, 'longest creep time constant',
+                       's'),
+        PlantParameter('creep_lag_count', 7, 'number of creep lags', low=1, high=100)),
+    check=lambda v: None if v['creep_time_constant_max_s'] >= v['creep_time_constant_min_s']
+    else ('creep_time_constant_max_s',
+          f'>= creep_time_constant_min_s = {v["creep_time_constant_min_s"]}'))
+
 #: The creep effect, for the registry (:mod:`mpi_ros.extensions.effect`).
 EFFECT = Effect(
     name='creep', formula='G + sum_j w_Cj C_j[G], G = S[H[x - x0]]',
@@ -376,4 +410,5 @@ EFFECT = Effect(
                         ' constant; empty: no creep')),
     model_class=CreepModel, fit=fit_creep,
     parameter_count=lambda p: len(p[CREEP_WEIGHTS]),
-    signature=_signature, evidence=hold_evidence, plot=_plot)
+    signature=_signature, evidence=hold_evidence, plot=_plot,
+    plant=PLANT)

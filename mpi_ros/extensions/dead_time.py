@@ -23,7 +23,9 @@ from ._common import AxisUnits, burst_evidence, burst_verdict, check_series, \
     determined_start, fit_gamma, lag_search_limits, Order, resolve_order, scalar_parameter, \
     search_fit
 from ._signals import delay
-from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
+    PlantEffect, PlantParameter
+from .plant_steps import delay_state, delay_stream
 from ..identification import select_order
 from ..model import MPIModel
 
@@ -155,6 +157,23 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
                  f' L = {1e3 * fitted:.3g} ms', fontsize=10)
 
 
+def _plant_start(values: Mapping[str, Any]) -> dict[str, Any]:
+    return {'dead_time': values['dead_time_s'], 'history': delay_state()}
+
+
+def _plant_run(state: dict[str, Any], chunk: PlantChunk, signal: FloatArray) -> FloatArray:
+    return delay_stream(state['history'], chunk.time, signal, state['dead_time'])
+
+
+#: Dead time in the simulated plant (output side, after the other output steps):
+#: ``s_meas(t) = s(t - L)``, linearly interpolated on the sampled stream, 0 before the
+#: first sample.
+PLANT = PlantEffect(
+    stage='output', label='dead time', start=_plant_start, run=_plant_run,
+    parameters=(
+        PlantParameter('dead_time_s', 0.0, 'dead time of the measurement, 0 = off', 's',
+                       low=0.0, note='(0 switches it off)', switch=True),))
+
 #: The dead-time effect, for the registry (:mod:`mpi_ros.extensions.effect`).  It has no
 #: ``inverse_step``: a delay cannot be inverted causally.
 EFFECT = Effect(
@@ -166,4 +185,5 @@ EFFECT = Effect(
                         ' delay', 's', (0.0, 1.0e3), plausible_max=FAST_TIME_LIMIT),),
     model_class=DeadTimeModel, fit=fit_dead_time, parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'delay'),
-    evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot, stage='input')
+    evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot, stage='input',
+    plant=PLANT)

@@ -13,17 +13,25 @@ One module per effect (``creep.py``, ``rate_dependence.py``, ``thermal_drift.py`
   plugs in;
 - its fit (``fit(time, current, displacement, order=(n, l))``) and free-parameter count;
 - its diagnosis signature (a verdict from the residual signatures), the evidence sentence
-  and the report plot.
+  and the report plot;
+- its step in the simulated plant (:class:`PlantEffect`, optional): the ``actuator.*``
+  parameters with defaults, units and ranges (:class:`PlantParameter`), how its state starts
+  and a vectorised pass over a chunk of samples, at its place in the plant's signal chain
+  (input side: on the current the material sees; output side: on the displacement).
+  :class:`mpi_ros.actuator.MagnetostrictiveActuator` composes the passes of the registered
+  effects around its compiled hysteresis core, and the plant simulator node declares their
+  parameters.
 
 :func:`register_effect` adds an effect to :data:`EFFECTS`; the built-in ones are registered
 in :mod:`mpi_ros.extensions` (one line each).  The identification, the compensators, the
-diagnosis, its report and the compensator node's parameters all read the registry, never a
-list of names.  Adding an effect is one new module and one registry line (docs/design.md).
+diagnosis, its report, the compensator node's parameters and the simulated plant all read
+the registry, never a list of names.  Adding an effect is one new module and one registry
+line (docs/design.md).
 """
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any, cast, ClassVar, Protocol
+from typing import Any, cast, ClassVar, NamedTuple, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -33,7 +41,15 @@ from ..model import MPIModel
 
 __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFFECTS',
            'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values',
-           'effects_present', 'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT']
+           'effects_present', 'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT', 'PlantChunk', 'PlantEffect',
+           'PlantParameter', 'PLANT_STAGES', 'plant_effects', 'plant_switch']
+
+FloatArray = npt.NDArray[np.float64]
+
+#: The places of a plant step in the signal chain, in order: ``'input'`` acts on the
+#: current the material sees (before the compiled hysteresis core), ``'output'`` on the
+#: displacement (after it, before the sensor zero and the sensor noise).
+PLANT_STAGES = ('input', 'output')
 
 #: Longest dead time or rate lag [s] plausible for a smart-material actuator: amplifier,
 #: sensor and eddy-current delays are microseconds to milliseconds.  A fitted value above it
@@ -145,6 +161,151 @@ class EffectParameter:
 
 
 @dataclass(frozen=True)
+class PlantParameter:
+    """
+    One parameter of the simulated plant (a field of :class:`mpi_ros.actuator.ActuatorConfig`).
+
+    Attributes
+    ----------
+    name : str
+        Field name, e.g. ``creep_gain``; the plant simulator node's parameter is
+        ``actuator.<name>``.
+    default : float or int
+        Default value; an int makes an integer parameter.
+    description : str
+        What it is (one line; the unit is appended from `unit`).
+    unit : str
+        SI unit, ``'1'`` when dimensionless, empty for a count.
+    low, high : float or None
+        Bounds of the value (None: unbounded on that side).
+    low_open, high_open : bool
+        Whether the bound itself is excluded.
+    note : str
+        Added to the "must be" message, e.g. ``'(0 switches it off)'``.
+    switch : bool
+        A value other than 0 switches the effect on (the effect runs only then).
+
+    """
+
+    name: str
+    default: float | int
+    description: str
+    unit: str = ''
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    high_open: bool = False
+    note: str = ''
+    switch: bool = False
+
+    @property
+    def text(self) -> str:
+        """Return the description with its unit, for parameter descriptors."""
+        return f'{self.description} [{self.unit}]' if self.unit else self.description
+
+    @property
+    def expected(self) -> str:
+        """Return what a valid value is, in words (``'>= 0'``, ``'in [1, 100]'``)."""
+        if self.low is not None and self.high is not None:
+            text = (f'in {"(" if self.low_open else "["}{self.low:g}, {self.high:g}'
+                    f'{")" if self.high_open else "]"}')
+        elif self.low is not None:
+            text = f'{">" if self.low_open else ">="} {self.low:g}'
+        elif self.high is not None:
+            text = f'{"<" if self.high_open else "<="} {self.high:g}'
+        else:
+            text = 'any finite number'
+        return f'{text} {self.note}' if self.note else text
+
+    def accepts(self, value: float) -> bool:
+        """Tell whether a finite value lies within the bounds."""
+        low_ok = (self.low is None or value > self.low
+                  or (not self.low_open and value == self.low))
+        high_ok = (self.high is None or value < self.high
+                   or (not self.high_open and value == self.high))
+        return low_ok and high_ok
+
+
+class PlantChunk(NamedTuple):
+    """
+    What a plant step sees of a chunk of samples, besides the signal it transforms.
+
+    Attributes
+    ----------
+    time : ndarray of float, shape (N,)
+        Sample times [s], strictly increasing, after the previous chunk's.
+    current : ndarray of float, shape (N,)
+        Coil current [A] as commanded.
+    material : ndarray of float, shape (N,), or None
+        Output side only: the hysteresis core's displacement [m] before any output-side
+        step (what creep relaxes towards); None on the input side.
+
+    """
+
+    time: FloatArray
+    current: FloatArray
+    material: FloatArray | None = None
+
+
+@dataclass(frozen=True)
+class PlantEffect:
+    """
+    An effect's step in the simulated plant (:class:`mpi_ros.actuator.MagnetostrictiveActuator`).
+
+    Attributes
+    ----------
+    stage : {'input', 'output'}
+        Its place in the signal chain (:data:`PLANT_STAGES`): ``'input'`` transforms the
+        current [A] the material sees (eddy-current lag); ``'output'`` transforms the
+        displacement [m] after the hysteresis core (creep, thermal expansion, dead time).
+        Within a stage the steps run in the order of registration.
+    parameters : tuple of PlantParameter
+        Its ``actuator.*`` parameters; at least one is a switch.
+    start : callable
+        ``start(values)`` -> a fresh state at rest (called at construction and on every
+        reset); ``values`` maps every actuator parameter name to its value.
+    run : callable
+        ``run(state, chunk, signal)`` -> the transformed signal, a new array of shape (N,):
+        a vectorised pass over the chunk (:class:`PlantChunk`) that advances ``state`` in
+        place, so that chunked runs equal one run.  It leaves ``chunk`` and ``signal``
+        unchanged.
+    label : str
+        The effect in words for logs (``'eddy-current lag'``).
+    check : callable or None
+        ``check(values)`` -> None, or ``(name, expected)`` for a value that is wrong given
+        the others (e.g. a range whose end lies below its start).
+
+    """
+
+    stage: str
+    parameters: tuple[PlantParameter, ...]
+    start: Callable[[Mapping[str, Any]], Any]
+    run: Callable[[Any, PlantChunk, FloatArray], FloatArray]
+    label: str
+    check: Callable[[Mapping[str, Any]], 'tuple[str, str] | None'] | None = None
+
+    def __post_init__(self) -> None:
+        """Check the stage and that some parameter switches the effect on."""
+        if self.stage not in PLANT_STAGES:
+            msg = (f'plant effect {self.label!r}: stage must be one of {PLANT_STAGES};'
+                   f' found {self.stage!r}')
+            raise ModelError(msg)
+        if not any(p.switch for p in self.parameters):
+            msg = (f'plant effect {self.label!r}: no parameter is a switch; mark the one'
+                   ' whose 0 switches the effect off with switch=True')
+            raise ModelError(msg)
+
+    @property
+    def switch(self) -> PlantParameter:
+        """Return the (first) parameter whose 0 switches the effect off."""
+        return next(p for p in self.parameters if p.switch)
+
+    def is_on(self, values: Mapping[str, Any]) -> bool:
+        """Tell whether a switch parameter is not 0 (missing ones count as their default)."""
+        return any(values.get(p.name, p.default) != 0 for p in self.parameters if p.switch)
+
+
+@dataclass(frozen=True)
 class Effect:
     """
     Everything about one physical effect, for the registry.
@@ -178,6 +339,8 @@ class Effect:
         current the material sees (its model has ``input_signal(time, current)``);
         ``'material'`` acts in or after the hysteresis.  Effects combine along the chain
         (:mod:`mpi_ros.extensions.composite`): any input stages, at most one material effect.
+    plant : PlantEffect or None
+        Its step in the simulated plant; None when the plant cannot show the effect.
 
     """
 
@@ -193,6 +356,7 @@ class Effect:
         default=lambda residual: None)
     plot: Callable[..., None] | None = None
     stage: str = 'material'
+    plant: PlantEffect | None = None
 
     def __post_init__(self) -> None:
         """Check the stage."""
@@ -231,7 +395,7 @@ def register_effect(effect: Effect) -> Effect:
     Raises
     ------
     ModelError
-        When the name or a key is taken already.
+        When the name, a key or a plant parameter name is taken already.
 
     """
     if effect.name in EFFECTS:
@@ -249,6 +413,13 @@ def register_effect(effect: Effect) -> Effect:
     if clash:
         msg = f'effect {effect.name!r}: parameter keys {clash} belong to another effect'
         raise ModelError(msg)
+    if effect.plant is not None:
+        names = {p.name for _, other in plant_effects() for p in other.parameters}
+        clash = [p.name for p in effect.plant.parameters if p.name in names]
+        if clash:
+            msg = (f'effect {effect.name!r}: plant parameters {clash} belong to another'
+                   ' effect; give them names of their own')
+            raise ModelError(msg)
     EFFECTS[effect.name] = effect
     return effect
 
@@ -272,6 +443,56 @@ def effect_off_values() -> dict[str, Any]:
 def effects_present(mapping: Mapping[str, Any]) -> list[Effect]:
     """Return the effects some of whose keys the mapping holds."""
     return [effect for effect in EFFECTS.values() if any(k in mapping for k in effect.keys)]
+
+
+def plant_effects() -> list[tuple[str, PlantEffect]]:
+    """
+    Return the plant steps of the registered effects, in signal-chain order.
+
+    Returns
+    -------
+    list of (str, PlantEffect)
+        Effect name and its plant step: input-side steps first, then output-side ones;
+        within a stage in the order of registration.
+
+    """
+    chain = [(e.name, e.plant) for e in EFFECTS.values() if e.plant is not None]
+    return sorted(chain, key=lambda item: PLANT_STAGES.index(item[1].stage))
+
+
+def plant_switch(name: str) -> str:
+    """
+    Return the actuator parameter that switches an effect on in the simulated plant.
+
+    Parameters
+    ----------
+    name : str
+        A registered effect's name (``'creep'``).
+
+    Returns
+    -------
+    str
+        The field of :class:`mpi_ros.actuator.ActuatorConfig` (``'creep_gain'``); the plant
+        simulator node's parameter is ``actuator.<field>``.
+
+    Raises
+    ------
+    ModelError
+        When no effect of that name with a plant step is registered.
+
+    Examples
+    --------
+    >>> plant_switch('rate_dependence')
+    'eddy_time_constant_s'
+
+    """
+    effect = EFFECTS.get(name)
+    if effect is None or effect.plant is None:
+        known = ', '.join(n for n, _ in plant_effects())
+        msg = (f'no registered effect {name!r} with a plant step; the plant simulates: {known};'
+               ' register the effect with plant=PlantEffect(...)')
+        raise ModelError(msg)
+    return effect.plant.switch.name
 
 
 def _is_off(value: Any) -> bool:

@@ -23,7 +23,9 @@ from ._common import AxisUnits, burst_evidence, burst_verdict, check_series, \
     determined_start, fit_gamma, lag_search_limits, Order, resolve_order, scalar_parameter, \
     search_fit
 from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
+    PlantEffect, PlantParameter
+from .plant_steps import lag_state, lag_stream
 from ..identification import select_order
 from ..model import MPIModel
 
@@ -215,6 +217,25 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
                  f' speed;\nthe rate model{fitted} should flatten it', fontsize=10)
 
 
+def _plant_start(values: Mapping[str, Any]) -> dict[str, Any]:
+    return {'tau': values['eddy_time_constant_s'], 'lag': lag_state()}
+
+
+def _plant_run(state: dict[str, Any], chunk: PlantChunk, signal: FloatArray) -> FloatArray:
+    lagged: FloatArray = lag_stream(chunk.time, signal, state['tau'], state['lag'])
+    return lagged
+
+
+#: Rate dependence in the simulated plant (input side): eddy currents delay the field in
+#: the core, so the material sees ``i_e`` with ``tau_e di_e/dt = i - i_e``; loops widen as
+#: ``omega tau_e`` grows.
+PLANT = PlantEffect(
+    stage='input', label='eddy-current lag', start=_plant_start, run=_plant_run,
+    parameters=(
+        PlantParameter('eddy_time_constant_s', 0.0,
+                       'eddy-current lag time constant, 0 = off', 's', low=0.0,
+                       note='(0 switches it off)', switch=True),))
+
 #: The rate-dependence effect, for the registry (:mod:`mpi_ros.extensions.effect`).
 EFFECT = Effect(
     name='rate_dependence', formula='Gamma[L_tau_e[x]]',
@@ -226,4 +247,5 @@ EFFECT = Effect(
     model_class=RateDependentModel, fit=fit_rate_dependence,
     parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'lag'),
-    evidence=lambda residual: burst_evidence(residual, 'lag'), plot=_plot, stage='input')
+    evidence=lambda residual: burst_evidence(residual, 'lag'), plot=_plot, stage='input',
+    plant=PLANT)

@@ -29,7 +29,9 @@ import numpy.typing as npt
 from ._common import AxisUnits, check_series, hold_evidence, Order, residual_axes, \
     resolve_order, scalar_parameter, search_fit
 from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter, ExtendedModelBase, SLOW_TIME_LIMIT
+from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
+    PlantParameter, SLOW_TIME_LIMIT
+from .plant_steps import lag_add, lag_state
 from ..identification import identify_weights
 from ..model import MPIModel
 
@@ -238,6 +240,28 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
                  "\nthe thermal model's should not", fontsize=10)
 
 
+def _plant_start(values: Mapping[str, Any]) -> dict[str, Any]:
+    return {'gain': values['thermal_gain_m_per_a2'], 'tau': values['thermal_time_constant_s'],
+            'lag': lag_state()}
+
+
+def _plant_run(state: dict[str, Any], chunk: PlantChunk, signal: FloatArray) -> FloatArray:
+    result: FloatArray = lag_add(chunk.time, chunk.current * chunk.current, state['tau'],
+                                 state['gain'], state['lag'], signal)
+    return result
+
+
+#: Thermal drift in the simulated plant (output side): Joule heating of the coil,
+#: ``tau_T dT/dt = i^2 - T`` (``T`` in A^2, steady state the mean of ``i^2``), expands the
+#: rod by ``k_T T``.
+PLANT = PlantEffect(
+    stage='output', label='thermal drift', start=_plant_start, run=_plant_run,
+    parameters=(
+        PlantParameter('thermal_gain_m_per_a2', 0.0,
+                       'thermal drift per unit state, 0 = off', 'm/A^2', switch=True),
+        PlantParameter('thermal_time_constant_s', 30.0, 'thermal time constant', 's',
+                       low=0.0, low_open=True)))
+
 #: The thermal-drift effect, for the registry (:mod:`mpi_ros.extensions.effect`).
 EFFECT = Effect(
     name='thermal_drift', formula='S[H[x - x0] + w_T L_tau_T[x^2]]',
@@ -250,4 +274,5 @@ EFFECT = Effect(
                         'Thermal-drift extension: weight w_T of the thermal state (H output'
                         ' per A^2, any sign); 0: no drift', '1/A', (-1.0e6, 1.0e6))),
     model_class=ThermalDriftModel, fit=fit_thermal_drift,
-    parameter_count=lambda p: 2, signature=_signature, evidence=_evidence, plot=_plot)
+    parameter_count=lambda p: 2, signature=_signature, evidence=_evidence, plot=_plot,
+    plant=PLANT)

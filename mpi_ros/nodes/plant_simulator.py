@@ -16,7 +16,9 @@ Timing
 Truth (``truth``, read-only)
     ``builtin``: :class:`mpi_ros.actuator.MagnetostrictiveActuator`, a Preisach-type
     actuator that is *not* an MPI model, configured by the ``actuator.*`` parameters
-    (the fields of :class:`mpi_ros.actuator.ActuatorConfig`; every effect is off at 0).
+    (the fields of :class:`mpi_ros.actuator.ActuatorConfig`: the hysteresis core's, the
+    sensor's and those of every registered effect with a plant step, read from the effect
+    registry when the node is built; every effect is off at 0).
     ``mpi``: the MPI model given by the five ``model.*`` parameters of Gamma and its
     operating point ``model.input_offset`` [A], ``model.output_offset`` [m],
     ``model.output_sign`` (+1/-1; defaults 0, 0, +1), the same keys as the compensator's:
@@ -50,7 +52,7 @@ Recording (``record.path``)
     when the node stops cleanly (written beside it and renamed).
 """
 
-from dataclasses import fields, replace
+from dataclasses import replace
 import math
 import time
 from typing import Any, Dict, List, Optional, Tuple
@@ -74,10 +76,11 @@ from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
 from ..diagnosis.signatures import diagnostic_excitation
 from ..excitation import identification_excitation
+from ..extensions.effect import plant_effects
 from ..model import MPIModel
 from ..recordings import BagRecorder
 
-__all__ = ['PlantSimulatorNode', 'PARAMETERS', 'main']
+__all__ = ['PlantSimulatorNode', 'plant_parameters', 'main']
 
 Type = Parameter.Type
 
@@ -86,29 +89,51 @@ _NODE_OWNED_FIELDS = {'noise_std_m': 'noise_std'}
 
 
 def _actuator_parameters() -> Tuple[ParameterSpec, ...]:
-    defaults = ActuatorConfig().to_mapping()
-    descriptions = ActuatorConfig.descriptions()
+    """Return the ``actuator.*`` specs: the actuator's fields, read from the registry now."""
     specs = []
-    for field in fields(ActuatorConfig):
+    for field in ActuatorConfig.parameters():
         if field.name in _NODE_OWNED_FIELDS:
             continue
-        default = defaults[field.name]
-        type_ = Type.INTEGER if isinstance(default, int) else Type.DOUBLE
+        type_ = Type.INTEGER if isinstance(field.default, int) else Type.DOUBLE
         specs.append(ParameterSpec(
-            f'actuator.{field.name}', type_, default,
-            f'Built-in actuator (truth:=builtin): {descriptions[field.name]}',
-            read_only=True))
+            f'actuator.{field.name}', type_, field.default,
+            f'Built-in actuator (truth:=builtin): {field.text}', read_only=True))
     return tuple(specs)
 
 
-PARAMETERS = (
+def plant_parameters() -> Tuple[ParameterSpec, ...]:
+    """
+    Return every parameter of the node, the effects' ``actuator.*`` ones as registered now.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        The node's own parameters with the ``actuator.*`` specs (the hysteresis core's,
+        the sensor's and the registered effects') after the ``model.*`` ones.  The module
+        attribute ``PARAMETERS`` is this, computed when it is read.
+
+    """
+    return (_OWN_PARAMETERS[:_ACTUATOR_AT] + _actuator_parameters()
+            + _OWN_PARAMETERS[_ACTUATOR_AT:])
+
+
+def __getattr__(name: str) -> Any:
+    """Return ``PARAMETERS``: every parameter, from the effect registry as it is now."""
+    if name == 'PARAMETERS':
+        return plant_parameters()
+    msg = f'module {__name__!r} has no attribute {name!r}'
+    raise AttributeError(msg)
+
+
+#: The node's parameters besides the ``actuator.*`` ones, which come from the effect
+#: registry when the node is built (:func:`plant_parameters`).
+_OWN_PARAMETERS = (
     ParameterSpec('truth', Type.STRING, 'builtin',
                   'What the simulated plant is: the built-in magnetostrictive actuator '
                   '(actuator.*) or an MPI model (model.*)',
                   choices=('builtin', 'mpi'), read_only=True),
     *(replace(spec, description=f'truth:=mpi: {spec.description}', read_only=True)
       for spec in MODEL_PARAMETERS),
-    *_actuator_parameters(),
     ParameterSpec('noise_std', Type.DOUBLE, 0.0,
                   'Standard deviation of additive Gaussian sensor noise, 0 = off', 'm',
                   value_range=(0.0, 1.0), read_only=True),
@@ -166,7 +191,8 @@ PARAMETERS = (
                   read_only=True),
 )
 
-_SPECS = specs_by_name(PARAMETERS)
+#: Where the ``actuator.*`` specs go in :func:`plant_parameters` (after ``model.*``).
+_ACTUATOR_AT = 1 + len(MODEL_PARAMETERS)
 
 #: Wall-clock period of the excitation timer; each tick publishes every due sample.
 _EXCITATION_TICK_S = 0.005
@@ -192,10 +218,12 @@ class PlantSimulatorNode(Node):
 
     def __init__(self, node_name: str = 'plant_simulator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        # The effects' actuator.* parameters as registered now, not at import.
+        self._specs = specs_by_name(plant_parameters())
         self.add_on_set_parameters_callback(self._validate_parameters)
-        declare_parameters(self, PARAMETERS)
-        harden_parameter_services(self, specs=_SPECS)
-        values = parameter_values(self, list(_SPECS))
+        declare_parameters(self, tuple(self._specs.values()))
+        harden_parameter_services(self, specs=self._specs)
+        values = parameter_values(self, list(self._specs))
         self._values = values
         self._rng = np.random.default_rng(values['seed'])
         self._noise_std = values['noise_std']
@@ -424,7 +452,7 @@ class PlantSimulatorNode(Node):
     # -- parameters --------------------------------------------------------------------
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
         try:
-            check_parameters(_SPECS, parameters, allow_unset=True)
+            check_parameters(self._specs, parameters, allow_unset=True)
         except ParameterRejected as err:
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
@@ -472,11 +500,9 @@ def _describe_truth(values: Dict[str, Any]) -> str:
         l_s = len(values['model.superposition.thresholds']) - 1
         text = f'an MPI model (n={n}, l={l_s})'
     else:
-        effects = [name for name, key in (
-            ('creep', 'actuator.creep_gain'),
-            ('eddy-current lag', 'actuator.eddy_time_constant_s'),
-            ('thermal drift', 'actuator.thermal_gain_m_per_a2'),
-            ('dead time', 'actuator.dead_time_s')) if values[key] > 0.0]
+        actuator = {name[len('actuator.'):]: value for name, value in values.items()
+                    if name.startswith('actuator.')}
+        effects = [plant.label for _, plant in plant_effects() if plant.is_on(actuator)]
         text = ('the built-in magnetostrictive actuator (Preisach type'
                 + (f'; {", ".join(effects)}' if effects else '') + ')')
     if values['noise_std'] > 0.0:
