@@ -229,7 +229,7 @@ def test_dead_time_plot_has_its_minimum_at_the_fitted_delay():
 
 
 def test_a_pair_states_each_effect_and_a_weak_strength(tmp_path, capsys):
-    """The diagnosis' own keys: a pair's parts with each gain, decision.strength 'present, weak'."""
+    """The diagnosis' keys: a pair's parts with each gain, decision.strength 'present, weak'."""
     _record(tmp_path / 'data.csv', {})
     facts, _, _ = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
     first, second = facts['candidates'][:2]
