@@ -13,7 +13,7 @@ Topics (relative names, ``std_msgs/msg/Float64MultiArray``, SI units)
     ``desired_displacements`` [m] in, ``current_commands`` [A] out, row-major
     ``samples x axes``: one message carries one sample of every axis or a chunk of K
     samples (``layout.dim = [samples, axes]``, or no ``dim`` and a length that is a multiple
-    of N, see :mod:`mpi_ros.nodes.arrays`).  Each input message gives one output message
+    of N, see :mod:`mpi_ros.array_layout`).  Each input message gives one output message
     of the same shape; column k is exactly what a single-axis compensator with axis k's
     model gives for that column (:class:`mpi_ros.compensation.MultiAxisCompensator`, one
     compiled loop over every axis and sample of a message).  ``/diagnostics`` as the
@@ -101,9 +101,6 @@ from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from .arrays import (
-    ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
-)
 from .compensator_base import (
     AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
     ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
@@ -111,6 +108,9 @@ from .compensator_base import (
 from .parameters import (
     declare_parameters, extension_parameters, loop_qos_parameters, MODEL_PARAMETERS,
     parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
+)
+from ..array_layout import (
+    ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
 )
 from ..compensation import kind_of, MultiAxisCompensator
 from ..compensation.multi_axis import chunk_times, joint_names
@@ -289,7 +289,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
     def _on_desired_displacements(self, data: bytes) -> None:
         # As the single-axis node: raw messages, every queued one served here, sequence
         # numbers of the ones taken here checked for gaps.  A block is decoded by one
-        # numpy view of the bytes and answered by one tobytes (mpi_ros.nodes.arrays).
+        # numpy view of the bytes and answered by one tobytes (mpi_ros.array_layout).
         take = self._subscription.handle.take_message
         publish = self._publisher.handle.publish_raw
         loss = self._loss

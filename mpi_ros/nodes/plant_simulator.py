@@ -38,7 +38,7 @@ Several actuators (``axes`` > 1, read-only; default 1: the Float64 topics above)
     ``seed + 1``, ...; or the ``model.*`` MPI model for every axis), driven through
     ``current_commands`` [A] and answering on ``displacements`` [m], both
     ``std_msgs/msg/Float64MultiArray`` blocks of samples x axes as the multi-axis
-    compensator publishes them (:mod:`mpi_ros.nodes.arrays`): one displacement block of
+    compensator publishes them (:mod:`mpi_ros.array_layout`): one displacement block of
     the same shape per command block.  The K samples of a chunk are taken
     ``sample_period`` apart, the last one at the block's arrival.  A non-finite current
     is not applied (the source holds the axis's last current) and is counted.  Excitation
@@ -62,7 +62,6 @@ from rclpy.parameter import Parameter
 from rclpy.task import Future
 from std_msgs.msg import Float64, Float64MultiArray
 
-from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
 from .multi_axis import AXES
 from .parameters import (
     check_parameters, declare_parameters, harden_parameter_services, loop_qos_parameters,
@@ -72,6 +71,7 @@ from .parameters import (
 from .qos import loop_qos
 from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
+from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray
 from ..diagnosis.signatures import diagnostic_excitation
 from ..excitation import identification_excitation
 from ..model import MPIModel
