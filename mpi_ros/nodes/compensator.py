@@ -104,12 +104,12 @@ from .compensator_base import (
     ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
 )
 from .multi_axis import MultiAxisCompensatorNode
-from .parameters import (
-    declare_parameters, extension_parameters, loop_qos_parameters, MODEL_PARAMETERS,
-    parameter_values, ParameterSpec, specs_by_name,
-)
+from .parameters import declare_parameters, parameter_values
 from .spinning import run_node_main
 from ..compensation import Compensator
+from ..compensation.parameters import (
+    extension_parameters, loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec, specs_by_name,
+)
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )

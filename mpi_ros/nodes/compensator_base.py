@@ -62,14 +62,15 @@ from rclpy.task import Future
 from .loss import LossMonitor
 from .parameters import (
     check_parameters, harden_parameter_services, is_null, normalized, parameter_values,
-    ParameterRejected, ParameterSpec, plain_value, set_parameters_in_groups,
+    set_parameters_in_groups,
 )
 from .qos import loop_qos
+from ..compensation.parameters import ParameterSpec, plain_value
 from ..compensation.screening import describe_faults, FAULT_KEYS, new_faults
 from ..compensation.updates import (
     complete, LIMIT_KEYS, model_keys, PLAIN_KEYS, prepare, Prepared, uncompensated,
 )
-from ..errors import MPIError
+from ..errors import MPIError, ParameterRejected
 
 __all__ = [
     'AUTOSTART',
@@ -85,11 +86,10 @@ __all__ = [
     'new_faults',
 ]
 
-Type = Parameter.Type
 
 #: The ``axes`` parameter, declared by both compensator nodes.
 AXES = ParameterSpec(
-    'axes', Type.INTEGER, 1,
+    'axes', 'integer', 1,
     'Number of actuators this node serves: 1 = one actuator on the Float64 topics '
     'desired_displacement / current_command with the model.* keys; N > 1 = N actuators on '
     'the Float64MultiArray topics desired_displacements / current_commands (samples x '
@@ -99,39 +99,39 @@ AXES = ParameterSpec(
 #: ``output.min`` and ``output.max``: the safe current range of every command.
 LIMIT_PARAMETERS = (
     ParameterSpec(
-        'output.min', Type.DOUBLE, 0.0,
+        'output.min', 'double', 0.0,
         'Lowest current command ever published (safe actuator range); '
         'must be below output.max', 'A', value_range=(-1.0e3, 1.0e3)),
     ParameterSpec(
-        'output.max', Type.DOUBLE, 2.0,
+        'output.max', 'double', 2.0,
         'Highest current command ever published (safe actuator range); '
         'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
 )
 
 AUTOSTART = ParameterSpec(
-    'autostart', Type.BOOL, True,
+    'autostart', 'bool', True,
     'Managed (lifecycle) node: true = configure and activate at start-up (a plain node '
     'to ros2 run and launch); false = start unconfigured and wait for the lifecycle '
     'transitions (ros2 lifecycle set <node> configure, then activate; a lifecycle manager)',
     read_only=True)
 
 ENABLED = ParameterSpec(
-    'enabled', Type.BOOL, True,
+    'enabled', 'bool', True,
     'true: invert the MPI model (27); false: pass the best linear map of the '
     'model instead, for comparison')
 
 DIAGNOSTICS_PERIOD = ParameterSpec(
-    'diagnostics_period', Type.DOUBLE, 1.0,
+    'diagnostics_period', 'double', 1.0,
     'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0))
 
 SAMPLE_PERIOD = ParameterSpec(
-    'sample_period', Type.DOUBLE, 1.0e-3,
+    'sample_period', 'double', 1.0e-3,
     'Nominal interval between desired displacements; extended models (creep, rate '
     'dependence, thermal drift) use it when a message has no usable time',
     's', value_range=(1.0e-6, 10.0))
 
 MESSAGE_TIME = ParameterSpec(
-    'message_time', Type.STRING, 'arrival',
+    'message_time', 'string', 'arrival',
     'Time of each desired displacement for the lags of extended models: arrival '
     '(steady clock when the message is served, as the plant simulator does; the last '
     'sample of an array chunk of K, the earlier ones sample_period apart before it, or '

@@ -62,12 +62,12 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 
 from .multi_axis import AXES, axis_key
-from .parameters import (
-    check_parameters, declare_parameters, harden_parameter_services, ParameterRejected,
-    ParameterSpec, specs_by_name,
-)
+from .parameters import check_parameters, declare_parameters, harden_parameter_services
 from .spinning import shutdown, StopSignals
-from ..errors import DataError, IdentificationError, MPIError, ParameterPushError
+from ..compensation.parameters import ParameterSpec, specs_by_name
+from ..errors import (
+    DataError, IdentificationError, MPIError, ParameterPushError, ParameterRejected,
+)
 from ..order import format_order, Order
 from ..params import write_params_yaml
 from ..pipeline import BagFit, fit_bag, fit_bag_axes, parse_order
@@ -80,9 +80,9 @@ __all__ = [
 
 Type = Parameter.Type
 
-_KINDS = {'str': Type.STRING, 'optional_str': Type.STRING, 'choice': Type.STRING,
-          'optional_int': Type.INTEGER, 'optional_float': Type.DOUBLE, 'float': Type.DOUBLE,
-          'bool': Type.BOOL}
+_KINDS = {'str': 'string', 'optional_str': 'string', 'choice': 'string',
+          'optional_int': 'integer', 'optional_float': 'double', 'float': 'double',
+          'bool': 'bool'}
 _UNSET = {'optional_str': "''", 'optional_int': '-1', 'optional_float': '0'}
 
 
@@ -103,21 +103,21 @@ def _data_parameter(option: DataOption) -> ParameterSpec:
 DATA_PARAMETERS = tuple(_data_parameter(option) for option in DATA_OPTIONS)
 
 PARAMETERS = (
-    ParameterSpec('bag', Type.STRING, '',
+    ParameterSpec('bag', 'string', '',
                   'Path of the rosbag2 bag (directory, or .mcap/.db3 file) to identify from '
                   '(a .csv file is read with the CSV data parameters)'),
     *DATA_PARAMETERS,
-    ParameterSpec('order', Type.STRING, 'auto',
+    ParameterSpec('order', 'string', 'auto',
                   "Model orders: 'auto' (selection by the fit errors), 'N,L' or 'N L' (N play "
                   'operators in H, L dead-zone operators in S)'),
-    ParameterSpec('target_node', Type.STRING, '/compensator',
+    ParameterSpec('target_node', 'string', '/compensator',
                   'Fully qualified name of the node that receives the model'),
-    ParameterSpec('push', Type.BOOL, True,
+    ParameterSpec('push', 'bool', True,
                   'Push the fitted model to target_node (false: only fit and report)'),
-    ParameterSpec('service_timeout', Type.DOUBLE, 10.0,
+    ParameterSpec('service_timeout', 'double', 10.0,
                   'Longest wait for the target parameter service, and again for its answer',
                   's', value_range=(0.0, 3600.0)),
-    ParameterSpec('params_file', Type.STRING, '',
+    ParameterSpec('params_file', 'string', '',
                   'Also write the model as a parameter YAML keyed by the compensator node '
                   'name (empty: do not write)'),
     replace(AXES, description=(
@@ -125,7 +125,7 @@ PARAMETERS = (
         'Float64MultiArray topics with one element per axis (one sample or a chunk of '
         'samples x axes per message), every axis fitted and all models pushed to a '
         'multi-axis compensator in one request'), read_only=False),
-    ParameterSpec('workers', Type.INTEGER, 0,
+    ParameterSpec('workers', 'integer', 0,
                   'axes > 1: processes fitting axes in parallel (0: one per CPU, at most '
                   'one per axis; 1: in this process)', value_range=(0, 1024)),
 )

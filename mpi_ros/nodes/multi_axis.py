@@ -97,7 +97,6 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
-from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -105,31 +104,31 @@ from .compensator_base import (
     AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
     ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
 )
-from .parameters import (
-    declare_parameters, extension_parameters, loop_qos_parameters, MODEL_PARAMETERS,
-    parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
-)
+from .parameters import declare_parameters, parameter_values
 from ..array_layout import (
     ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
 )
 from ..compensation import kind_of, MultiAxisCompensator
 from ..compensation.multi_axis import chunk_times, joint_names
+from ..compensation.parameters import (
+    extension_parameters, loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec, specs_by_name,
+)
 from ..compensation.screening import FAULT_KEYS
 from ..compensation.updates import (
     apply, axis_key, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
+from ..errors import ParameterRejected
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
 
-Type = Parameter.Type
 
 #: Most array messages served in one subscription callback.
 _DRAIN_LIMIT = DRAIN_LIMIT
 
 #: The joint name of each axis (ros2_control); read-only.
 JOINTS = ParameterSpec(
-    'joints', Type.STRING_ARRAY, None,
+    'joints', 'string_array', None,
     'Joint name of each axis, in axis order: the joints parameter of the ros2_control '
     'forward_command_controller that takes current_commands (output_layout flat), and the '
     'names input_message joint_state maps by; unset: no names',
@@ -137,7 +136,7 @@ JOINTS = ParameterSpec(
 
 #: What current_commands carries; read-only.
 OUTPUT_LAYOUT = ParameterSpec(
-    'output_layout', Type.STRING, 'samples_x_axes',
+    'output_layout', 'string', 'samples_x_axes',
     'Layout of current_commands: samples_x_axes (one message per input message, '
     'layout.dim = [samples, axes]) or flat (what ros2_control forward_command_controller '
     'takes on ~/commands: one message per sample holding one value per axis in axis (joints) '
@@ -146,7 +145,7 @@ OUTPUT_LAYOUT = ParameterSpec(
 
 #: What the node subscribes to; read-only.
 INPUT_MESSAGE = ParameterSpec(
-    'input_message', Type.STRING, 'array',
+    'input_message', 'string', 'array',
     'Input: array (std_msgs/Float64MultiArray, samples x axes, on desired_displacements) '
     'or joint_state (sensor_msgs/JointState on desired_joint_states: the position [m] of '
     'each joint, mapped by name to the joints order; needs joints; a message missing a '

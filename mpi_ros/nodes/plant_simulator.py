@@ -64,22 +64,24 @@ from std_msgs.msg import Float64, Float64MultiArray
 
 from .multi_axis import AXES
 from .parameters import (
-    check_parameters, declare_parameters, harden_parameter_services, loop_qos_parameters,
-    MODEL_KEYS, MODEL_PARAMETERS, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
-    ParameterSpec, specs_by_name,
+    check_parameters, declare_parameters, harden_parameter_services, parameter_values,
 )
 from .qos import loop_qos
 from .spinning import run_node_main
 from ..actuator import ActuatorConfig, MagnetostrictiveActuator
 from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray
+from ..compensation.parameters import (
+    loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec, specs_by_name,
+)
 from ..diagnosis.signatures import diagnostic_excitation
+from ..errors import ParameterRejected
 from ..excitation import identification_excitation
 from ..model import MPIModel
+from ..params import MODEL_KEYS, OPERATING_POINT_KEYS
 from ..recordings import BagRecorder
 
 __all__ = ['PlantSimulatorNode', 'PARAMETERS', 'main']
 
-Type = Parameter.Type
 
 #: ActuatorConfig fields that the node sets itself instead of an ``actuator.*`` parameter.
 _NODE_OWNED_FIELDS = {'noise_std_m': 'noise_std'}
@@ -93,7 +95,7 @@ def _actuator_parameters() -> Tuple[ParameterSpec, ...]:
         if field.name in _NODE_OWNED_FIELDS:
             continue
         default = defaults[field.name]
-        type_ = Type.INTEGER if isinstance(default, int) else Type.DOUBLE
+        type_ = 'integer' if isinstance(default, int) else 'double'
         specs.append(ParameterSpec(
             f'actuator.{field.name}', type_, default,
             f'Built-in actuator (truth:=builtin): {descriptions[field.name]}',
@@ -102,65 +104,65 @@ def _actuator_parameters() -> Tuple[ParameterSpec, ...]:
 
 
 PARAMETERS = (
-    ParameterSpec('truth', Type.STRING, 'builtin',
+    ParameterSpec('truth', 'string', 'builtin',
                   'What the simulated plant is: the built-in magnetostrictive actuator '
                   '(actuator.*) or an MPI model (model.*)',
                   choices=('builtin', 'mpi'), read_only=True),
     *(replace(spec, description=f'truth:=mpi: {spec.description}', read_only=True)
       for spec in MODEL_PARAMETERS),
     *_actuator_parameters(),
-    ParameterSpec('noise_std', Type.DOUBLE, 0.0,
+    ParameterSpec('noise_std', 'double', 0.0,
                   'Standard deviation of additive Gaussian sensor noise, 0 = off', 'm',
                   value_range=(0.0, 1.0), read_only=True),
-    ParameterSpec('seed', Type.INTEGER, 0, 'Seed of the sensor-noise generator',
+    ParameterSpec('seed', 'integer', 0, 'Seed of the sensor-noise generator',
                   value_range=(0, 2 ** 62), read_only=True),
-    ParameterSpec('excitation.enabled', Type.BOOL, False,
+    ParameterSpec('excitation.enabled', 'bool', False,
                   'Drive the plant with the identification excitation and publish it on '
                   'current_command', read_only=True),
-    ParameterSpec('excitation.duration', Type.DOUBLE, 20.0,
+    ParameterSpec('excitation.duration', 'double', 20.0,
                   'Length of the identification excitation', 's',
                   value_range=(0.01, 86400.0), read_only=True),
-    ParameterSpec('excitation.sample_rate', Type.DOUBLE, 1000.0,
+    ParameterSpec('excitation.sample_rate', 'double', 1000.0,
                   'Sample rate of the identification excitation', 'Hz',
                   value_range=(1.0, 100000.0), read_only=True),
-    ParameterSpec('excitation.bias', Type.DOUBLE, 1.0,
+    ParameterSpec('excitation.bias', 'double', 1.0,
                   'Centre current of the identification excitation', 'A',
                   value_range=(-1.0e3, 1.0e3), read_only=True),
-    ParameterSpec('excitation.amplitude', Type.DOUBLE, 0.8,
+    ParameterSpec('excitation.amplitude', 'double', 0.8,
                   'Largest deviation of the excitation current from its centre', 'A',
                   value_range=(0.0, 1.0e3), read_only=True),
-    ParameterSpec('excitation.holds', Type.BOOL, True,
+    ParameterSpec('excitation.holds', 'bool', True,
                   'Include constant-current holds (expose creep) in the excitation',
                   read_only=True),
-    ParameterSpec('excitation.bursts', Type.BOOL, True,
+    ParameterSpec('excitation.bursts', 'bool', True,
                   'Include high-frequency bursts (expose rate dependence) in the excitation',
                   read_only=True),
-    ParameterSpec('excitation.signal', Type.STRING, 'identification',
+    ParameterSpec('excitation.signal', 'string', 'identification',
                   'Excitation signal: identification (decaying loops, holds, bursts; '
                   'excitation.duration long) or diagnostic (the validation record of '
                   'mpi-ros diagnose: major loops, paired holds, bursts at 5-40 Hz; its '
                   'length follows from excitation.repeats and excitation.hold_duration)',
                   choices=('identification', 'diagnostic'), read_only=True),
-    ParameterSpec('excitation.hold_duration', Type.DOUBLE, 2.0,
+    ParameterSpec('excitation.hold_duration', 'double', 2.0,
                   'Length of each constant-current hold of the excitation', 's',
                   value_range=(0.0, 3600.0), read_only=True),
-    ParameterSpec('excitation.repeats', Type.INTEGER, 2,
+    ParameterSpec('excitation.repeats', 'integer', 2,
                   'excitation.signal:=diagnostic: number of loop-and-hold blocks',
                   value_range=(1, 100), read_only=True),
-    ParameterSpec('excitation.exit_when_done', Type.BOOL, True,
+    ParameterSpec('excitation.exit_when_done', 'bool', True,
                   'Stop the node when the excitation is done (false: go on as a plant)',
                   read_only=True),
-    ParameterSpec('record.path', Type.STRING, '',
+    ParameterSpec('record.path', 'string', '',
                   'Record current_command and displacement into a new rosbag2 bag here '
                   '(empty: no recording)', read_only=True),
-    ParameterSpec('record.storage', Type.STRING, 'sqlite3', 'rosbag2 storage plugin',
+    ParameterSpec('record.storage', 'string', 'sqlite3', 'rosbag2 storage plugin',
                   choices=('sqlite3', 'mcap'), read_only=True),
     *loop_qos_parameters('current_command and displacement'),
     replace(AXES, description=(
         'Number of simulated actuators: 1 = current_command / displacement (Float64); '
         'N > 1 = N independent plants on current_commands / displacements '
         '(Float64MultiArray, samples x axes)')),
-    ParameterSpec('sample_period', Type.DOUBLE, 1.0e-3,
+    ParameterSpec('sample_period', 'double', 1.0e-3,
                   'axes > 1: interval between the samples of one chunk (a message with '
                   'several samples per axis)', 's', value_range=(1.0e-7, 10.0),
                   read_only=True),
