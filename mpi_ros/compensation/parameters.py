@@ -14,18 +14,23 @@ rejects every type but the declared one (and an unset value) with a reason that 
 the key.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 import re
 from typing import Any, Iterable, List, Mapping, Optional, Tuple
 
 import yaml
 
+from .updates import axis_key
 from ..errors import ParameterRejected
 from ..extensions import EFFECTS
-from ..params import (INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN)
+from ..params import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN
 
 __all__ = [
+    'AUTOSTART', 'AXES', 'DIAGNOSTICS_PERIOD', 'ENABLED', 'INPUT_MESSAGE', 'JOINTS',
+    'LIMIT_PARAMETERS', 'MESSAGE_TIME', 'OUTPUT_LAYOUT', 'SAMPLE_PERIOD', 'WIRING',
+    'axis_limit_parameters', 'axis_parameters', 'compensator_parameters',
+    'multi_axis_parameters',
     'ARRAY_KINDS', 'MODEL_PARAMETERS', 'NULL_STRINGS', 'RCLPY_PARAMETERS', 'RELIABILITIES',
     'ParameterSpec', 'check_value', 'check_values', 'extension_parameters', 'is_null',
     'loop_qos_parameters', 'normalized', 'plain_value', 'specs_by_name',
@@ -218,6 +223,177 @@ def loop_qos_parameters(topics: str) -> Tuple[ParameterSpec, ParameterSpec]:
                       'best_effort publisher does not reach a reliable subscription)',
                       choices=RELIABILITIES, read_only=True),
     )
+
+
+#: The compensator nodes' own parameters.
+
+#: The ``axes`` parameter, declared by both compensator nodes.
+AXES = ParameterSpec(
+    'axes', 'integer', 1,
+    'Number of actuators this node serves: 1 = one actuator on the Float64 topics '
+    'desired_displacement / current_command with the model.* keys; N > 1 = N actuators on '
+    'the Float64MultiArray topics desired_displacements / current_commands (samples x '
+    'axes) with the keys axis0.model.* ... axis<N-1>.model.*',
+    value_range=(1, 1024), read_only=True)
+
+#: ``output.min`` and ``output.max``: the safe current range of every command.
+LIMIT_PARAMETERS = (
+    ParameterSpec(
+        'output.min', 'double', 0.0,
+        'Lowest current command ever published (safe actuator range); '
+        'must be below output.max', 'A', value_range=(-1.0e3, 1.0e3)),
+    ParameterSpec(
+        'output.max', 'double', 2.0,
+        'Highest current command ever published (safe actuator range); '
+        'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
+)
+
+AUTOSTART = ParameterSpec(
+    'autostart', 'bool', True,
+    'Managed (lifecycle) node: true = configure and activate at start-up (a plain node '
+    'to ros2 run and launch); false = start unconfigured and wait for the lifecycle '
+    'transitions (ros2 lifecycle set <node> configure, then activate; a lifecycle manager)',
+    read_only=True)
+
+ENABLED = ParameterSpec(
+    'enabled', 'bool', True,
+    'true: invert the MPI model (27); false: pass the best linear map of the '
+    'model instead, for comparison')
+
+DIAGNOSTICS_PERIOD = ParameterSpec(
+    'diagnostics_period', 'double', 1.0,
+    'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0))
+
+SAMPLE_PERIOD = ParameterSpec(
+    'sample_period', 'double', 1.0e-3,
+    'Nominal interval between desired displacements; extended models (creep, rate '
+    'dependence, thermal drift) use it when a message has no usable time',
+    's', value_range=(1.0e-6, 10.0))
+
+MESSAGE_TIME = ParameterSpec(
+    'message_time', 'string', 'arrival',
+    'Time of each desired displacement for the lags of extended models: arrival '
+    '(steady clock when the message is served, as the plant simulator does; the last '
+    'sample of an array chunk of K, the earlier ones sample_period apart before it, or '
+    'closer when messages come faster) or nominal (sample_period apart, for a stream at a '
+    'fixed rate)',
+    choices=('arrival', 'nominal'), read_only=True)
+
+#: The joint name of each axis (ros2_control); read-only.
+JOINTS = ParameterSpec(
+    'joints', 'string_array', None,
+    'Joint name of each axis, in axis order: the joints parameter of the ros2_control '
+    'forward_command_controller that takes current_commands (output_layout flat), and the '
+    'names input_message joint_state maps by; unset: no names',
+    read_only=True, constraints='as many unique, non-empty names as axes')
+
+#: What current_commands carries; read-only.
+OUTPUT_LAYOUT = ParameterSpec(
+    'output_layout', 'string', 'samples_x_axes',
+    'Layout of current_commands: samples_x_axes (one message per input message, '
+    'layout.dim = [samples, axes]) or flat (what ros2_control forward_command_controller '
+    'takes on ~/commands: one message per sample holding one value per axis in axis (joints) '
+    'order, empty layout.dim, data_offset 0)',
+    choices=('samples_x_axes', 'flat'), read_only=True)
+
+#: What the node subscribes to; read-only.
+INPUT_MESSAGE = ParameterSpec(
+    'input_message', 'string', 'array',
+    'Input: array (std_msgs/Float64MultiArray, samples x axes, on desired_displacements) '
+    'or joint_state (sensor_msgs/JointState on desired_joint_states: the position [m] of '
+    'each joint, mapped by name to the joints order; needs joints; a message missing a '
+    'joint is refused and counted, missing_joints)',
+    choices=('array', 'joint_state'), read_only=True)
+
+#: The ros2_control options, declared by the multi-axis node only.
+WIRING = (JOINTS, OUTPUT_LAYOUT, INPUT_MESSAGE)
+
+
+def compensator_parameters() -> Tuple[ParameterSpec, ...]:
+    """
+    Return the node's parameter specs, the effect keys read from the registry now.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        Gamma and the operating point, every registered effect's keys, the limits and
+        the node's switches (also as the module attribute ``PARAMETERS``).
+
+    """
+    return MODEL_PARAMETERS + extension_parameters() + LIMIT_PARAMETERS + (
+        ENABLED,
+        SAMPLE_PERIOD,
+        MESSAGE_TIME,
+        DIAGNOSTICS_PERIOD,
+        *loop_qos_parameters('desired_displacement and current_command'),
+        AXES,
+        AUTOSTART,
+    )
+
+
+def multi_axis_parameters() -> Tuple[ParameterSpec, ...]:
+    """
+    Return the multi-axis node's node-wide specs (the single-axis node's, less its model keys).
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        The limits, the switches, the loop QoS and ``autostart``.
+
+    """
+    return LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_PERIOD) + (
+        loop_qos_parameters('desired_displacements and current_commands')) + (AUTOSTART,)
+
+
+def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
+    """
+    Return the specs of every axis's model keys.
+
+    Parameters
+    ----------
+    axes : int
+        Number of axes.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        ``MODEL_PARAMETERS`` (Gamma and the operating point) and the effect registry's keys
+        (unset, read from the registry now) once per axis, renamed.
+
+    """
+    specs = MODEL_PARAMETERS + extension_parameters()
+    return tuple(replace(spec, name=axis_key(k, spec.name),
+                         description=f'Axis {k}: {spec.description}')
+                 for k in range(axes) for spec in specs)
+
+
+def axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
+    """
+    Return ``axis<k>.output.min`` / ``.max`` per axis: unset (node-wide) by default.
+
+    Parameters
+    ----------
+    axes : int
+        Number of axes.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        Two specs per axis.
+
+    """
+    words = {'output.min': ('lowest', 'below'), 'output.max': ('highest', 'above')}
+    specs = []
+    for k in range(axes):
+        for spec in LIMIT_PARAMETERS:
+            word, side = words[spec.name]
+            other = 'output.max' if spec.name == 'output.min' else 'output.min'
+            specs.append(replace(
+                spec, name=axis_key(k, spec.name), default=None,
+                description=(f'Axis {k}: {word} current command of this axis (its '
+                             f'safe actuator range); unset: {spec.name}; must be {side} '
+                             f'axis{k}.{other} (or {other} when that is unset)')))
+    return tuple(specs)
 
 
 def is_null(spec: ParameterSpec, kind: str, value: Any) -> bool:

@@ -99,50 +99,23 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from .compensator_base import (
-    AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
-    ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
-)
+from .compensator_base import CompensatorNodeBase, describe_faults, DRAIN_LIMIT, new_faults
 from .multi_axis import MultiAxisCompensatorNode
 from .parameters import declare_parameters, parameter_values
 from .spinning import run_node_main
 from ..compensation import Compensator
-from ..compensation.parameters import (
-    extension_parameters, loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec, specs_by_name,
-)
+from ..compensation.parameters import compensator_parameters, specs_by_name
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
 
-__all__ = ['CompensatorNode', 'main', 'make_node', 'parameters']
-
-
-def parameters() -> Tuple[ParameterSpec, ...]:
-    """
-    Return the node's parameter specs, the effect keys read from the registry now.
-
-    Returns
-    -------
-    tuple of ParameterSpec
-        Gamma and the operating point, every registered effect's keys, the limits and
-        the node's switches (also as the module attribute ``PARAMETERS``).
-
-    """
-    return MODEL_PARAMETERS + extension_parameters() + LIMIT_PARAMETERS + (
-        ENABLED,
-        SAMPLE_PERIOD,
-        MESSAGE_TIME,
-        DIAGNOSTICS_PERIOD,
-        *loop_qos_parameters('desired_displacement and current_command'),
-        AXES,
-        AUTOSTART,
-    )
+__all__ = ['CompensatorNode', 'main', 'make_node']
 
 
 def __getattr__(name: str) -> Any:
     """Give ``PARAMETERS`` as :func:`parameters` returns it when asked (not at import)."""
     if name == 'PARAMETERS':
-        return parameters()
+        return compensator_parameters()
     msg = f'module {__name__!r} has no attribute {name!r}'
     raise AttributeError(msg)
 
@@ -178,7 +151,7 @@ class CompensatorNode(CompensatorNodeBase):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        specs = parameters()
+        specs = compensator_parameters()
         self._specs = specs_by_name(specs)
         # Keys set together within one set_parameters request (set_parameters_in_groups).
         self._groups = (model_keys(), LIMIT_KEYS)

@@ -73,71 +73,12 @@ from ..compensation.updates import (
 from ..errors import MPIError, ParameterRejected
 
 __all__ = [
-    'AUTOSTART',
-    'AXES',
     'CompensatorNodeBase',
-    'DIAGNOSTICS_PERIOD',
     'DRAIN_LIMIT',
-    'ENABLED',
-    'LIMIT_PARAMETERS',
-    'MESSAGE_TIME',
-    'SAMPLE_PERIOD',
     'describe_faults',
     'new_faults',
 ]
 
-
-#: The ``axes`` parameter, declared by both compensator nodes.
-AXES = ParameterSpec(
-    'axes', 'integer', 1,
-    'Number of actuators this node serves: 1 = one actuator on the Float64 topics '
-    'desired_displacement / current_command with the model.* keys; N > 1 = N actuators on '
-    'the Float64MultiArray topics desired_displacements / current_commands (samples x '
-    'axes) with the keys axis0.model.* ... axis<N-1>.model.*',
-    value_range=(1, 1024), read_only=True)
-
-#: ``output.min`` and ``output.max``: the safe current range of every command.
-LIMIT_PARAMETERS = (
-    ParameterSpec(
-        'output.min', 'double', 0.0,
-        'Lowest current command ever published (safe actuator range); '
-        'must be below output.max', 'A', value_range=(-1.0e3, 1.0e3)),
-    ParameterSpec(
-        'output.max', 'double', 2.0,
-        'Highest current command ever published (safe actuator range); '
-        'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
-)
-
-AUTOSTART = ParameterSpec(
-    'autostart', 'bool', True,
-    'Managed (lifecycle) node: true = configure and activate at start-up (a plain node '
-    'to ros2 run and launch); false = start unconfigured and wait for the lifecycle '
-    'transitions (ros2 lifecycle set <node> configure, then activate; a lifecycle manager)',
-    read_only=True)
-
-ENABLED = ParameterSpec(
-    'enabled', 'bool', True,
-    'true: invert the MPI model (27); false: pass the best linear map of the '
-    'model instead, for comparison')
-
-DIAGNOSTICS_PERIOD = ParameterSpec(
-    'diagnostics_period', 'double', 1.0,
-    'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0))
-
-SAMPLE_PERIOD = ParameterSpec(
-    'sample_period', 'double', 1.0e-3,
-    'Nominal interval between desired displacements; extended models (creep, rate '
-    'dependence, thermal drift) use it when a message has no usable time',
-    's', value_range=(1.0e-6, 10.0))
-
-MESSAGE_TIME = ParameterSpec(
-    'message_time', 'string', 'arrival',
-    'Time of each desired displacement for the lags of extended models: arrival '
-    '(steady clock when the message is served, as the plant simulator does; the last '
-    'sample of an array chunk of K, the earlier ones sample_period apart before it, or '
-    'closer when messages come faster) or nominal (sample_period apart, for a stream at a '
-    'fixed rate)',
-    choices=('arrival', 'nominal'), read_only=True)
 
 #: Most messages served in one subscription callback (a flood still lets a stop through).
 DRAIN_LIMIT = 1000
@@ -478,7 +419,7 @@ class CompensatorNodeBase(LifecycleNode):
             completed = complete(self._current(prefix), completed, prefix)
         original = {p.name: p for p in given}
         return [original[name] if name in request and value is request[name]
-                else Parameter(name, specs[name].type_, value)
+                else Parameter(name, Parameter.Type[specs[name].type_.upper()], value)
                 for name, value in completed.items()]
 
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:

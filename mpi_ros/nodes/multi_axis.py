@@ -91,7 +91,6 @@ Model updates
     (diagnostics WARN).
 """
 
-from dataclasses import replace
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
@@ -100,10 +99,7 @@ import numpy as np
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from .compensator_base import (
-    AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
-    ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
-)
+from .compensator_base import CompensatorNodeBase, describe_faults, DRAIN_LIMIT, new_faults
 from .parameters import declare_parameters, parameter_values
 from ..array_layout import (
     ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
@@ -111,7 +107,8 @@ from ..array_layout import (
 from ..compensation import kind_of, MultiAxisCompensator
 from ..compensation.multi_axis import chunk_times, joint_names
 from ..compensation.parameters import (
-    extension_parameters, loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec, specs_by_name,
+    AXES, axis_limit_parameters, axis_parameters, INPUT_MESSAGE, JOINTS, multi_axis_parameters,
+    OUTPUT_LAYOUT, specs_by_name, WIRING,
 )
 from ..compensation.screening import FAULT_KEYS
 from ..compensation.updates import (
@@ -126,63 +123,10 @@ __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPU
 #: Most array messages served in one subscription callback.
 _DRAIN_LIMIT = DRAIN_LIMIT
 
-#: The joint name of each axis (ros2_control); read-only.
-JOINTS = ParameterSpec(
-    'joints', 'string_array', None,
-    'Joint name of each axis, in axis order: the joints parameter of the ros2_control '
-    'forward_command_controller that takes current_commands (output_layout flat), and the '
-    'names input_message joint_state maps by; unset: no names',
-    read_only=True, constraints='as many unique, non-empty names as axes')
-
-#: What current_commands carries; read-only.
-OUTPUT_LAYOUT = ParameterSpec(
-    'output_layout', 'string', 'samples_x_axes',
-    'Layout of current_commands: samples_x_axes (one message per input message, '
-    'layout.dim = [samples, axes]) or flat (what ros2_control forward_command_controller '
-    'takes on ~/commands: one message per sample holding one value per axis in axis (joints) '
-    'order, empty layout.dim, data_offset 0)',
-    choices=('samples_x_axes', 'flat'), read_only=True)
-
-#: What the node subscribes to; read-only.
-INPUT_MESSAGE = ParameterSpec(
-    'input_message', 'string', 'array',
-    'Input: array (std_msgs/Float64MultiArray, samples x axes, on desired_displacements) '
-    'or joint_state (sensor_msgs/JointState on desired_joint_states: the position [m] of '
-    'each joint, mapped by name to the joints order; needs joints; a message missing a '
-    'joint is refused and counted, missing_joints)',
-    choices=('array', 'joint_state'), read_only=True)
-
-#: The ros2_control options, declared by the multi-axis node only.
-_WIRING = (JOINTS, OUTPUT_LAYOUT, INPUT_MESSAGE)
 #: At most this many JointState name orders are remembered (their index arrays).
 _NAME_ORDERS = 64
-#: The node-wide parameters (the single-axis node's, less its model keys).
-_COMMON = LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_PERIOD) + (
-    loop_qos_parameters('desired_displacements and current_commands')) + (AUTOSTART,)
 #: The core's counters on /diagnostics, summed over the axes (bad_time: effect axes' lags).
 _CORE_COUNTERS = FAULT_KEYS + ('bad_time',)
-
-
-def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
-    """
-    Return the specs of every axis's model keys.
-
-    Parameters
-    ----------
-    axes : int
-        Number of axes.
-
-    Returns
-    -------
-    tuple of ParameterSpec
-        ``MODEL_PARAMETERS`` (Gamma and the operating point) and the effect registry's keys
-        (unset, read from the registry now) once per axis, renamed.
-
-    """
-    specs = MODEL_PARAMETERS + extension_parameters()
-    return tuple(replace(spec, name=axis_key(k, spec.name),
-                         description=f'Axis {k}: {spec.description}')
-                 for k in range(axes) for spec in specs)
 
 
 class MultiAxisCompensatorNode(CompensatorNodeBase):
@@ -205,10 +149,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        self._specs = dict(specs_by_name((AXES,) + _COMMON + _WIRING))
+        self._specs = dict(specs_by_name((AXES,) + multi_axis_parameters() + WIRING))
         declare_parameters(self, (AXES,))
         self.axes = int(self.get_parameter('axes').value)
-        per_axis = axis_parameters(self.axes) + _axis_limit_parameters(self.axes)
+        per_axis = axis_parameters(self.axes) + axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
         self._prefixes = tuple(axis_key(k, '') for k in range(self.axes))
         self._limit_keys = [(axis_key(k, 'output.min'), axis_key(k, 'output.max'))
@@ -218,7 +162,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         # Models and limits of one set_parameters request succeed or fail together.
         self._groups = (tuple(prefix + key for prefix in self._prefixes
                               for key in model_keys()) + self._all_limit_keys,)
-        declare_parameters(self, per_axis + _COMMON + _WIRING)
+        declare_parameters(self, per_axis + multi_axis_parameters() + WIRING)
         self._declared()
         self.joints = joint_names(self.get_parameter('joints').value, self.axes)
         self._flat = self.get_parameter('output_layout').value == 'flat'
@@ -544,19 +488,3 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                     values[axis_key(axis, 'slow_state')] = ' '.join(
                         f'{v:.6g}' for v in compensator.slow_state)
         return values
-
-
-def _axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
-    """Return ``axis<k>.output.min`` / ``.max`` per axis: unset (node-wide) by default."""
-    words = {'output.min': ('lowest', 'below'), 'output.max': ('highest', 'above')}
-    specs = []
-    for k in range(axes):
-        for spec in LIMIT_PARAMETERS:
-            word, side = words[spec.name]
-            other = 'output.max' if spec.name == 'output.min' else 'output.min'
-            specs.append(replace(
-                spec, name=axis_key(k, spec.name), default=None,
-                description=(f'Axis {k}: {word} current command of this axis (its '
-                             f'safe actuator range); unset: {spec.name}; must be {side} '
-                             f'axis{k}.{other} (or {other} when that is unset)')))
-    return tuple(specs)
