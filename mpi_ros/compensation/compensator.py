@@ -95,9 +95,9 @@ def inverse_step_of(model: Any, inverse: MPIModel | None = None) -> 'InverseStep
     make = getattr(model, 'inverse_step', None)
     if make is None:
         return None
-    if inverse is not None and 'inverse' in inspect.signature(make).parameters:
-        return make(inverse=inverse)
-    return make()
+    takes = inverse is not None and 'inverse' in inspect.signature(make).parameters
+    step: InverseStep | None = make(inverse=inverse) if takes else make()
+    return step
 
 
 def kind_of(model: Any) -> str:
