@@ -95,16 +95,16 @@ import struct
 import time
 from typing import Any, Dict, List, Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from .compensator_base import CompensatorNodeBase, describe_faults, DRAIN_LIMIT, new_faults
+from .compensator_base import CompensatorNodeBase, DRAIN_LIMIT
 from .multi_axis import MultiAxisCompensatorNode
 from .parameters import declare_parameters, parameter_values
 from .spinning import run_node_main
 from ..compensation import Compensator
 from ..compensation.parameters import compensator_parameters, specs_by_name
+from ..compensation.status import single_axis_status
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
@@ -307,28 +307,10 @@ class CompensatorNode(CompensatorNodeBase):
         return f'{self.get_name()}: feedforward'
 
     def _status(self, losses: List[str], counters: Dict[str, int],
-                before: Dict[str, int]) -> Tuple[Any, str]:
-        """
-        Return the level and message of a diagnostics period.
-
-        WARN after a period in which desired displacements were lost
-        (``messages_lost``) or a peer with incompatible QoS appeared, or in which more than
-        half of ``qos_depth`` messages waited at once (``max_backlog``); WARN while
-        unconfigured (``no model``) and after a period with non-finite, out-of-range or
-        clamped inputs; else OK.
-        """
-        faults = new_faults(counters, before)
-        if losses:
-            return DiagnosticStatus.WARN, '; '.join(losses)
-        if self._compensator is None:
-            return DiagnosticStatus.WARN, (
-                'no model: unconfigured, no commands published; give all five model.* keys '
-                'of Gamma in one request (ros2 param load, set_parameters_atomically)')
-        if any(faults.values()):
-            return DiagnosticStatus.WARN, f'{describe_faults(faults)} in the last period'
-        if not self.get_parameter('enabled').value:
-            return DiagnosticStatus.OK, 'compensation disabled: best linear map'
-        return DiagnosticStatus.OK, 'compensating'
+                before: Dict[str, int]) -> Tuple[int, str]:
+        return single_axis_status(losses, counters, before,
+                                  has_model=self._compensator is not None,
+                                  enabled=self.get_parameter('enabled').value)
 
     def _status_values(self) -> Dict[str, Any]:
         compensator = self._compensator

@@ -67,6 +67,7 @@ from .parameters import (
 from .qos import loop_qos
 from ..compensation.parameters import ParameterSpec, plain_value
 from ..compensation.screening import describe_faults, FAULT_KEYS, new_faults
+from ..compensation.status import lifecycle_status, status_values
 from ..compensation.updates import (
     complete, LIMIT_KEYS, model_keys, PLAIN_KEYS, prepare, Prepared, uncompensated,
 )
@@ -494,8 +495,8 @@ class CompensatorNodeBase(LifecycleNode):
         raise NotImplementedError
 
     def _status(self, losses: List[str], counters: Dict[str, int],
-                before: Dict[str, int]) -> Tuple[Any, str]:
-        """Return the diagnostics level and message of the period."""
+                before: Dict[str, int]) -> Tuple[int, str]:
+        """Return the diagnostics level and message of the period (compensation.status)."""
         raise NotImplementedError
 
     def _status_values(self) -> Dict[str, Any]:
@@ -569,27 +570,17 @@ class CompensatorNodeBase(LifecycleNode):
         depth = self.get_parameter('qos_depth').value
         losses = self._loss.period(counters, before, depth, self._what)
         state = self.lifecycle_state
-        if self._configured:
-            status.level, status.message = self._status(losses, counters, before)
-        else:
-            status.level, status.message = DiagnosticStatus.OK, 'no model loaded'
-        if state != 'active':
-            note = f'lifecycle state {state}: no commands published'
-            status.message = note if status.level == DiagnosticStatus.OK else (
-                f'{note}; {status.message}')
-        values: Dict[str, Any] = dict(counters)
-        values['lifecycle_state'] = state
-        values['last_rejected_update'] = self._last_rejection
-        values.update(
-            rate_hz=round(rate, 3),
-            max_backlog=self._loss.last_backlog,
-            qos_depth=depth,
+        level, status.message = lifecycle_status(
+            self._status(losses, counters, before) if self._configured else None, state)
+        status.level = bytes([level])
+        values = status_values(
+            counters, self._status_values(), lifecycle_state=state,
+            last_rejected_update=self._last_rejection, rate_hz=round(rate, 3),
+            max_backlog=self._loss.last_backlog, qos_depth=depth,
             input_publishers=self._loss.publishers,
             enabled=self.get_parameter('enabled').value,
             output_min=self.get_parameter('output.min').value,
-            output_max=self.get_parameter('output.max').value,
-        )
-        values.update(self._status_values())
+            output_max=self.get_parameter('output.max').value)
         status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
         array = DiagnosticArray()
         array.header.stamp = self.get_clock().now().to_msg()

@@ -94,12 +94,11 @@ Model updates
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from .compensator_base import CompensatorNodeBase, describe_faults, DRAIN_LIMIT, new_faults
+from .compensator_base import CompensatorNodeBase, DRAIN_LIMIT
 from .parameters import declare_parameters, parameter_values
 from ..array_layout import (
     ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
@@ -111,6 +110,7 @@ from ..compensation.parameters import (
     OUTPUT_LAYOUT, specs_by_name, WIRING,
 )
 from ..compensation.screening import FAULT_KEYS
+from ..compensation.status import multi_axis_status
 from ..compensation.updates import (
     apply, axis_key, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
@@ -439,33 +439,11 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return f'{self.get_name()}: feedforward ({self.axes} axes)'
 
     def _status(self, losses: List[str], counters: Dict[str, int],
-                before: Dict[str, int]) -> Tuple[Any, str]:
-        """
-        Return the level and message of a diagnostics period.
-
-        WARN after a period with lost messages, incompatible peers, a queue more than half
-        full, malformed arrays, JointStates missing a joint or non-finite / out-of-range /
-        clamped inputs, and while an axis has no model; else OK.
-        """
-        problems = list(losses)
-        malformed = counters['malformed'] - before.get('malformed', 0)
-        if malformed:
-            problems.append(f'{malformed} malformed {self._what} in the last period (last: '
-                            f'{self._last_malformed})')
-        missing_joints = counters.get('missing_joints', 0) - before.get('missing_joints', 0)
-        if missing_joints:
-            problems.append(f'{missing_joints} JointState messages missing a joint of joints '
-                            f'in the last period, refused (last: {self._last_missing})')
-        faults = new_faults(counters, before)
-        if any(faults.values()):
-            problems.append(f'{describe_faults(faults)} in the last period')
-        missing = [str(axis) for axis, model in enumerate(self._models) if model is None]
-        if missing:
-            problems.append(f'no model for axis {", ".join(missing)}: unconfigured, no '
-                            'commands published; give every axis its axis<k>.model.* keys')
-        if problems:
-            return DiagnosticStatus.WARN, '; '.join(problems)
-        return DiagnosticStatus.OK, 'compensating'
+                before: Dict[str, int]) -> Tuple[int, str]:
+        return multi_axis_status(
+            losses, counters, before, what=self._what, last_malformed=self._last_malformed,
+            last_missing=self._last_missing,
+            missing_axes=[axis for axis, model in enumerate(self._models) if model is None])
 
     def _status_values(self) -> Dict[str, Any]:
         values: Dict[str, Any] = {
