@@ -371,15 +371,7 @@ def axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
     """
     Return ``axis<k>.output.min`` / ``.max`` per axis: unset (node-wide) by default.
 
-    Parameters
-    ----------
-    axes : int
-        Number of axes.
-
-    Returns
-    -------
-    tuple of ParameterSpec
-        Two specs per axis.
+    ``axes`` is the number of axes; two specs per axis are returned.
 
     """
     words = {'output.min': ('lowest', 'below'), 'output.max': ('highest', 'above')}
@@ -442,12 +434,8 @@ def normalized(spec: ParameterSpec, kind: str, value: Any) -> Tuple[str, Any]:
 
     Parameters
     ----------
-    spec : ParameterSpec
-        The declared spec of the parameter.
-    kind : str
-        The incoming value's type name.
-    value : object
-        The incoming value.
+    spec, kind, value
+        As for :func:`is_null`.
 
     Returns
     -------
@@ -482,12 +470,8 @@ def check_value(spec: ParameterSpec, kind: str, value: Any, *,
 
     Parameters
     ----------
-    spec : ParameterSpec
-        The declared spec of the parameter.
-    kind : str
-        The incoming value's type name (``'not_set'`` when unset).
-    value : object
-        The incoming value.
+    spec, kind, value
+        As for :func:`is_null`.
     allow_unset : bool
         Accept an unset value (only while declaring a parameter without default).
 

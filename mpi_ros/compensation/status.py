@@ -119,10 +119,8 @@ def multi_axis_status(losses: Sequence[str], counters: Mapping[str, int],
 
     Parameters
     ----------
-    losses : sequence of str
-        :func:`loss_problems` of the period.
-    counters, before : mapping of str to int
-        The node's counters now and at the start of the period.
+    losses, counters, before
+        As for :func:`single_axis_status`.
     what : str
         What the messages carry.
     last_malformed, last_missing : str
@@ -132,10 +130,8 @@ def multi_axis_status(losses: Sequence[str], counters: Mapping[str, int],
 
     Returns
     -------
-    level : int
-        :data:`OK` or :data:`WARN`.
-    message : str
-        What the period showed.
+    (int, str)
+        Level and message, as :func:`single_axis_status`.
 
     """
     problems = list(losses)

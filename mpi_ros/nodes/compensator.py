@@ -111,6 +111,9 @@ from ..compensation.updates import (
 
 __all__ = ['CompensatorNode', 'main', 'make_node']
 
+#: Most messages served in one subscription callback (patched by tests).
+_DRAIN_LIMIT = DRAIN_LIMIT
+
 
 def __getattr__(name: str) -> Any:
     """Give ``PARAMETERS`` as :func:`parameters` returns it when asked (not at import)."""
@@ -120,8 +123,6 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(msg)
 
 
-#: Most desired displacements served in one subscription callback.
-_DRAIN_LIMIT = DRAIN_LIMIT
 #: CDR of a Float64: 4-byte encapsulation header (byte 1: 1 = little-endian), the double.
 _LITTLE = struct.Struct('<d').unpack_from
 _BIG = struct.Struct('>d').unpack_from
@@ -213,40 +214,23 @@ class CompensatorNode(CompensatorNodeBase):
         # subscription is raw: each message arrives as its CDR bytes (a 4-byte
         # encapsulation header, then the double), is decoded with one struct call and
         # answered with 12 bytes packed by another, published raw: no Float64 object is
-        # built either way.  Every message already queued is served in this one callback
-        # (rclpy rebuilds its wait set on every spin, which alone would cap the node far
-        # below 10 kHz), one by one, in order, each with its own command and, for an
-        # extended model, its own arrival time.  At most _DRAIN_LIMIT messages per call,
-        # so that a flood that outruns the node still lets the spin loop see a stop request
-        # (the messages left queued keep their events and come in the next calls).  The
-        # messages taken here carry the publisher's sequence number: a jump counts lost
-        # desired displacements (a keep-last queue that overflowed), which DDS itself does
-        # not report (mpi_ros.nodes.loss).
-        take = self._subscription.handle.take_message
+        # built either way.  Every queued message is served in this callback (_drain), one
+        # by one, in order, each with its own command and, for an extended model, its own
+        # arrival time.
         publish = self._publisher.handle.publish_raw
-        loss = self._loss
-        loss.delivered()
-        served = 0
-        while True:
+
+        def serve(data: bytes) -> None:
             value = (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0]
-            self._messages_in += 1
             compensator = self._live
             if compensator is None:
                 self._drop()          # no model, or not active: nothing published
-            else:
-                current = (compensator.command(value, time=self._stamp()) if self._extended
-                           else compensator.command(value))
-                publish(_PACK(_CDR_LE, current))
-                self._messages_out += 1
-            served += 1
-            if served >= _DRAIN_LIMIT:
-                break
-            taken = take(Float64, True)
-            if taken is None:
-                break
-            data, info = taken
-            loss.taken(info['publication_sequence_number'])
-        loss.served(served)
+                return
+            current = (compensator.command(value, time=self._stamp()) if self._extended
+                       else compensator.command(value))
+            publish(_PACK(_CDR_LE, current))
+            self._messages_out += 1
+
+        self._drain(data, Float64, serve, raw=True, limit=_DRAIN_LIMIT)
 
     # -- parameters ---------------------------------------------------------------------
     def _running(self, prefix: str) -> bool:
@@ -326,16 +310,9 @@ def main(args: Optional[List[str]] = None) -> int:
     """
     Run the compensator node (``ros2 run mpi_ros compensator --ros-args ...``).
 
-    Parameters
-    ----------
-    args : list of str, optional
-        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
-
-    Returns
-    -------
-    int
-        Exit status: 0 on shutdown (a signal, or the lifecycle transition ``shutdown``),
-        1 when the configured model or limits are invalid (with ``autostart``).
+    ``args`` is the command line for ``rclpy.init`` (program name first; ``sys.argv`` if
+    None).  Returns the exit status: 0 on shutdown (a signal, or the lifecycle transition
+    ``shutdown``), 1 when the configured model or limits are invalid (with ``autostart``).
 
     """
     return run_node_main(make_node, 'compensator', args, until=_finalized)

@@ -377,6 +377,48 @@ class CompensatorNodeBase(LifecycleNode):
         counters.update(self._node_counters())
         return counters
 
+    def _drain(self, first: Any, message_type: Any, serve: Callable[[Any], None], *,
+               raw: bool, limit: int = DRAIN_LIMIT) -> None:
+        """
+        Serve ``first`` and the messages queued behind it, in order, in this one callback.
+
+        rclpy rebuilds its wait set on every spin, which alone would cap a node far below
+        10 kHz, so every message already queued is taken here (at most ``limit``, so that
+        a flood still lets the spin loop see a stop request; the ones left keep their
+        events).  The messages taken here carry the publisher's
+        sequence number: a jump counts lost messages (:mod:`mpi_ros.nodes.loss`).
+
+        Parameters
+        ----------
+        first : object
+            The message the subscription delivered (CDR bytes when ``raw``).
+        message_type : type
+            Its type, to take the queued ones.
+        serve : callable
+            Serves one message (counting and publishing what it must).
+        raw : bool
+            Take the queued messages as CDR bytes.
+        limit : int
+            Most messages served in this call.
+
+        """
+        take = self._subscription.handle.take_message
+        loss = self._loss
+        loss.delivered()
+        served, message = 0, first
+        while True:
+            self._messages_in += 1
+            serve(message)
+            served += 1
+            if served >= limit:
+                break
+            taken = take(message_type, raw)
+            if taken is None:
+                break
+            message, info = taken
+            loss.taken(info['publication_sequence_number'])
+        loss.served(served)
+
     # -- parameters ---------------------------------------------------------------------
     def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
         """

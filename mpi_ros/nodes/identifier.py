@@ -194,16 +194,9 @@ def main(args: Optional[List[str]] = None) -> int:
     """
     Run the identifier once (``ros2 run mpi_ros identifier --ros-args -p bag:=PATH``).
 
-    Parameters
-    ----------
-    args : list of str, optional
-        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
-
-    Returns
-    -------
-    int
-        0 when the model was fitted and (if asked) accepted, and on a stop by SIGINT or
-        SIGTERM (however many); 1 on any failure.
+    ``args`` is the command line for ``rclpy.init`` (program name first; ``sys.argv`` if
+    None).  Returns the exit status: 0 when the model was fitted and (if asked) accepted,
+    and on a stop by SIGINT or SIGTERM (however many); 1 on any failure.
 
     """
     with StopSignals(interrupt=True) as stop:

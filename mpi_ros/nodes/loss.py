@@ -142,20 +142,9 @@ class LossMonitor:
         """
         Describe the losses of a diagnostics period; restart ``max_backlog``.
 
-        Parameters
-        ----------
-        counters, before : dict
-            The node's counters now and at the start of the period.
-        depth : int
-            ``qos_depth``.
-        what : str
-            What the messages carry, e.g. ``desired displacements``.
-
-        Returns
-        -------
-        list of str
-            One sentence per problem (empty: none): lost messages, incompatible peers,
-            a queue more than half full.  Any of them makes the period WARN.
+        The sentences are :func:`mpi_ros.compensation.status.loss_problems` of the
+        period's counters (``counters``, ``before``), ``depth`` (``qos_depth``), the
+        largest backlog and ``what`` the messages carry.
 
         """
         backlog, self.max_backlog = self.max_backlog, 0

@@ -119,9 +119,9 @@ from ..errors import ParameterRejected
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
 
-
-#: Most array messages served in one subscription callback.
+#: Most messages served in one subscription callback (patched by tests).
 _DRAIN_LIMIT = DRAIN_LIMIT
+
 
 #: At most this many JointState name orders are remembered (their index arrays).
 _NAME_ORDERS = 64
@@ -233,67 +233,29 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         # As the single-axis node: raw messages, every queued one served here, sequence
         # numbers of the ones taken here checked for gaps.  A block is decoded by one
         # numpy view of the bytes and answered by one tobytes (mpi_ros.array_layout).
-        take = self._subscription.handle.take_message
-        publish = self._publisher.handle.publish_raw
-        loss = self._loss
-        loss.delivered()
-        served = 0
-        while True:
-            self._messages_in += 1
+        def serve(data: bytes) -> None:
             try:
                 block = block_of(data, self.axes)
             except ArrayLayoutError as err:
                 self._malformed += 1
                 self._last_malformed = str(err)
-            else:
-                self._samples_in += block.shape[0]
-                compensator = self._live
-                if compensator is None:
-                    self._drop()      # an axis without a model, or not active
-                else:
-                    if self._timed:
-                        commands = self._timed_command(compensator, block)
-                    else:
-                        commands = compensator.command(block)
-                    if self._flat:        # ros2_control: one message per sample
-                        for row in commands:
-                            publish(encode_flat_float64_multiarray(row))
-                        self._messages_out += commands.shape[0]
-                    else:
-                        publish(encode_float64_multiarray(commands))
-                        self._messages_out += 1
-            served += 1
-            if served >= _DRAIN_LIMIT:
-                break
-            taken = take(Float64MultiArray, True)
-            if taken is None:
-                break
-            data, info = taken
-            loss.taken(info['publication_sequence_number'])
-        loss.served(served)
+                return
+            self._samples_in += block.shape[0]
+            self._serve(block)
+
+        self._drain(data, Float64MultiArray, serve, raw=True, limit=_DRAIN_LIMIT)
 
     def _on_joint_states(self, msg: Any) -> None:
         # input_message joint_state: JointState objects (rclpy deserialises them), each
         # one sample of every axis; queued ones taken here as in the array loop.
-        take = self._subscription.handle.take_message
-        loss = self._loss
-        loss.delivered()
-        served = 0
-        while True:
-            self._messages_in += 1
-            block = self._joint_block(msg)
-            if block is not None:
-                self._samples_in += 1
-                self._serve(block)
-            served += 1
-            if served >= _DRAIN_LIMIT:
-                break
-            taken = take(JointState, False)
-            if taken is None:
-                break
-            msg, info = taken
-            loss.taken(info['publication_sequence_number'])
-        loss.served(served)
+        self._drain(msg, JointState, self._serve_joint_state, raw=False,
+                    limit=_DRAIN_LIMIT)
+
+    def _serve_joint_state(self, msg: Any) -> None:
+        block = self._joint_block(msg)
+        if block is not None:
+            self._samples_in += 1
+            self._serve(block)
 
     def _joint_block(self, msg: Any) -> Any:
         """Return the 1 x N block of a JointState in axis order, or None (refused, counted)."""
@@ -325,7 +287,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return np.asarray(position, dtype=np.float64)[index].reshape(1, -1)
 
     def _serve(self, block: Any) -> None:
-        """Command one block and publish it in the output layout (the JointState path)."""
+        """Command one block and publish it in the output layout (no model or inactive: drop)."""
         compensator = self._live
         if compensator is None:
             self._drop()

@@ -123,10 +123,8 @@ def normalized(spec: ParameterSpec, parameter: Parameter) -> Parameter:
 
     Parameters
     ----------
-    spec : ParameterSpec
-        The declared spec of ``parameter.name``.
-    parameter : rclpy.parameter.Parameter
-        Incoming value.
+    spec, parameter
+        As for :func:`is_null`.
 
     Returns
     -------
@@ -149,10 +147,8 @@ def check_parameter(spec: ParameterSpec, parameter: Parameter, *,
 
     Parameters
     ----------
-    spec : ParameterSpec
-        The declared spec of ``parameter.name``.
-    parameter : rclpy.parameter.Parameter
-        Incoming value.
+    spec, parameter
+        As for :func:`is_null`.
     allow_unset : bool
         Accept an unset value (only while declaring a parameter without default).
 

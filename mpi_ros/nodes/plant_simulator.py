@@ -344,15 +344,9 @@ def main(args: Optional[List[str]] = None) -> int:
     """
     Run the plant simulator (``ros2 run mpi_ros plant_simulator --ros-args ...``).
 
-    Parameters
-    ----------
-    args : list of str, optional
-        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
-
-    Returns
-    -------
-    int
-        0 on shutdown or after the excitation; 1 when the truth cannot be built.
+    ``args`` is the command line for ``rclpy.init`` (program name first; ``sys.argv`` if
+    None).  Returns the exit status: 0 on shutdown or after the excitation; 1 when the
+    truth cannot be built.
 
     """
     return run_node_main(
