@@ -6,13 +6,14 @@ import sys
 
 from mpi_ros.bag_identification import check_identifier_value, identify
 from mpi_ros.bag_identification import PARAMETERS as IDENTIFIER_PARAMETERS
+from mpi_ros.compensation.multi_axis import JointOrder
 from mpi_ros.compensation.parameters import (
     axis_limit_parameters, axis_parameters, check_value, check_values, compensator_parameters,
     is_null, MODEL_PARAMETERS, normalized, specs_by_name,
 )
 from mpi_ros.compensation.status import (
-    lifecycle_status, loss_problems, multi_axis_status, OK, single_axis_status, status_values,
-    WARN,
+    lifecycle_status, loss_problems, multi_axis_status, multi_axis_values, OK,
+    single_axis_status, single_axis_values, status_values, WARN,
 )
 from mpi_ros.errors import DataError, MPIError, ParameterRejected
 from mpi_ros.params import INPUT_OFFSET, MODEL_KEYS, OUTPUT_SIGN
@@ -123,3 +124,26 @@ def test_the_identifier_checks_its_values_and_needs_a_bag():
     values = {spec.name: spec.default for spec in IDENTIFIER_PARAMETERS}
     with pytest.raises(DataError, match='no bag given'):
         identify(values, info=print, error=print)
+
+
+def test_joint_states_are_put_in_axis_order_or_refused_with_a_reason():
+    order = JointOrder(['a', 'b'])
+    block, fault, reason = order.block(['b', 'x', 'a'], [2.0, 9.0, 1.0])
+    assert fault == reason == '' and block.tolist() == [[1.0, 2.0]]
+    block, fault, reason = order.block(['b'], [2.0])
+    assert block is None and fault == 'missing_joints' and reason.startswith('JointState '
+                                                                             'without a')
+    assert order.block(['a', 'b', 'a'], [1.0, 2.0, 3.0])[1:] == (
+        'malformed', 'JointState names a joint more than once')
+    assert order.block(['a', 'b'], [1.0])[1] == 'malformed'
+
+
+def test_the_nodes_own_diagnostics_values():
+    assert single_axis_values('creep', [1e-7, 2.0]) == {'extension': 'creep',
+                                                        'slow_state': '1e-07 2'}
+    values = multi_axis_values([None, None], model_versions=[0, 0], joints=['j0', 'j1'],
+                               flat=True, limits=([0.0, 0.0], [2.0, 1.5]),
+                               slow_states=[None, [0.5]])
+    assert values == {'axes': 2, 'model_versions': '0 0', 'joints': 'j0 j1',
+                      'output_layout': 'flat', 'output_min': 0.0, 'output_max': '2.0 1.5',
+                      'extension': '- -', 'axis1.slow_state': '0.5'}

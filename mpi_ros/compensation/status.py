@@ -8,13 +8,15 @@ Computed from plain counters and values; the ROS side only wraps the result in a
 half full, bad inputs or a missing model; else it is OK.
 """
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
+from .compensator import kind_of
 from .screening import describe_faults, new_faults
+from .updates import axis_key
 
-__all__ = ['LOSS_ADVICE', 'OK', 'WARN', 'lifecycle_status', 'loss_problems',
-           'multi_axis_status', 'single_axis_status', 'status_values']
+__all__ = ['LOSS_ADVICE', 'OK', 'WARN', 'lifecycle_status', 'loss_problems', 'multi_axis_status',
+           'multi_axis_values', 'single_axis_status', 'single_axis_values', 'status_values']
 
 #: diagnostic_msgs/DiagnosticStatus levels.
 OK = 0
@@ -206,4 +208,77 @@ def status_values(counters: Mapping[str, int], own: Mapping[str, Any], **common:
     values: dict[str, Any] = dict(counters)
     values.update(common)
     values.update(own)
+    return values
+
+
+def single_axis_values(kind: str, slow_state: Iterable[float] | None) -> dict[str, Any]:
+    """
+    Return a single-axis compensator's own diagnostics values (with a model installed).
+
+    Parameters
+    ----------
+    kind : str
+        The model's effect (:func:`mpi_ros.compensation.kind_of`).
+    slow_state : iterable of float or None
+        The effect's slow states; None without an effect.
+
+    Returns
+    -------
+    dict
+        ``extension`` and, with an effect, ``slow_state``.
+
+    """
+    values: dict[str, Any] = {'extension': kind}
+    if slow_state is not None:
+        values['slow_state'] = ' '.join(f'{v:.6g}' for v in slow_state)
+    return values
+
+
+def multi_axis_values(models: Sequence[Any], *, model_versions: Sequence[int],
+                      joints: Sequence[str], flat: bool,
+                      limits: tuple[Sequence[float], Sequence[float]],
+                      slow_states: Sequence[Iterable[float] | None]) -> dict[str, Any]:
+    """
+    Return a multi-axis compensator's own diagnostics values.
+
+    Parameters
+    ----------
+    models : sequence
+        Each axis's model, None for an axis without one.
+    model_versions : sequence of int
+        Each axis's model version.
+    joints : sequence of str
+        The ``joints`` parameter (empty: none).
+    flat : bool
+        ``output_layout`` is ``flat``.
+    limits : (sequence of float, sequence of float)
+        Each axis's effective ``output.min`` and ``output.max``.
+    slow_states : sequence
+        Each axis's slow states (None without an effect); empty while no core runs.
+
+    Returns
+    -------
+    dict
+        ``axes``, ``model_versions``, ``joints``, ``output_layout``, ``output_min``,
+        ``output_max`` (one value when all axes share it), ``extension``,
+        ``not_compensated`` and ``axis<k>.slow_state``.
+
+    """
+    values: dict[str, Any] = {
+        'axes': len(models), 'model_versions': ' '.join(map(str, model_versions))}
+    if joints:
+        values['joints'] = ' '.join(joints)
+    values['output_layout'] = 'flat' if flat else 'samples_x_axes'
+    for key, limit in zip(('output_min', 'output_max'), limits):
+        values[key] = limit[0] if len(set(limit)) == 1 else ' '.join(map(str, limit))
+    causes = ['-' if model is None else getattr(model, 'cause', 'none').replace(' + ', '+')
+              for model in models]
+    values['extension'] = ' '.join(causes)
+    uncompensated = [str(axis) for axis, model in enumerate(models)
+                     if model is not None and kind_of(model).endswith('(not compensated)')]
+    if uncompensated:
+        values['not_compensated'] = ' '.join(uncompensated)
+    for axis, slow_state in enumerate(slow_states):
+        if slow_state is not None:
+            values[axis_key(axis, 'slow_state')] = ' '.join(f'{v:.6g}' for v in slow_state)
     return values

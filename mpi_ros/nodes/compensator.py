@@ -104,7 +104,7 @@ from .parameters import declare_parameters, parameter_values
 from .spinning import run_node_main
 from ..compensation import Compensator
 from ..compensation.parameters import compensator_parameters, specs_by_name
-from ..compensation.status import single_axis_status
+from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
@@ -300,10 +300,8 @@ class CompensatorNode(CompensatorNodeBase):
         compensator = self._compensator
         if compensator is None:
             return {}
-        values: Dict[str, Any] = {'extension': self._model_kind}
-        if compensator.has_effect:
-            values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
-        return values
+        return single_axis_values(
+            self._model_kind, compensator.slow_state if compensator.has_effect else None)
 
 
 def main(args: Optional[List[str]] = None) -> int:

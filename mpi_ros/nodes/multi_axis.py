@@ -104,13 +104,13 @@ from ..array_layout import (
     ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
 )
 from ..compensation import kind_of, MultiAxisCompensator
-from ..compensation.multi_axis import chunk_times, joint_names
+from ..compensation.multi_axis import chunk_times, joint_names, JointOrder
 from ..compensation.parameters import (
     AXES, axis_limit_parameters, axis_parameters, INPUT_MESSAGE, JOINTS, multi_axis_parameters,
     OUTPUT_LAYOUT, specs_by_name, WIRING,
 )
 from ..compensation.screening import FAULT_KEYS
-from ..compensation.status import multi_axis_status
+from ..compensation.status import multi_axis_status, multi_axis_values
 from ..compensation.updates import (
     apply, axis_key, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
@@ -123,8 +123,6 @@ __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPU
 _DRAIN_LIMIT = DRAIN_LIMIT
 
 
-#: At most this many JointState name orders are remembered (their index arrays).
-_NAME_ORDERS = 64
 #: The core's counters on /diagnostics, summed over the axes (bad_time: effect axes' lags).
 _CORE_COUNTERS = FAULT_KEYS + ('bad_time',)
 
@@ -187,8 +185,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._last_malformed = ''
         self._missing_joints = 0
         self._last_missing = ''
-        #: JointState name order -> index of each axis's joint in it.
-        self._joint_index: Dict[Tuple[str, ...], Any] = {}
+        self._joint_order = JointOrder(self.joints or ())
         # Last: with autostart, configure (_load: the models) and activate run here.
         if joint_state:
             self._open_topics(Float64MultiArray, 'desired_joint_states', 'current_commands',
@@ -259,32 +256,14 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     def _joint_block(self, msg: Any) -> Any:
         """Return the 1 x N block of a JointState in axis order, or None (refused, counted)."""
-        names = tuple(msg.name)
-        index = self._joint_index.get(names)
-        if index is None:
-            position_of = {name: i for i, name in enumerate(names)}
-            missing = [joint for joint in self.joints if joint not in position_of]
-            if missing:
-                self._missing_joints += 1
-                self._last_missing = (
-                    f'JointState without {", ".join(missing)} (it names '
-                    f'{", ".join(names[:8]) or "no joint"}{" ..." if len(names) > 8 else ""})')
-                return None
-            if len(position_of) != len(names):
-                self._malformed += 1
-                self._last_malformed = 'JointState names a joint more than once'
-                return None
-            if len(self._joint_index) >= _NAME_ORDERS:
-                self._joint_index.clear()
-            index = np.array([position_of[joint] for joint in self.joints], dtype=np.intp)
-            self._joint_index[names] = index
-        position = msg.position
-        if len(position) != len(names):
+        block, fault, reason = self._joint_order.block(msg.name, msg.position)
+        if fault == 'missing_joints':
+            self._missing_joints += 1
+            self._last_missing = reason
+        elif fault:
             self._malformed += 1
-            self._last_malformed = (f'JointState with {len(names)} names and {len(position)} '
-                                    'positions; each joint needs its position')
-            return None
-        return np.asarray(position, dtype=np.float64)[index].reshape(1, -1)
+            self._last_malformed = reason
+        return block
 
     def _serve(self, block: Any) -> None:
         """Command one block and publish it in the output layout (no model or inactive: drop)."""
@@ -408,23 +387,9 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             missing_axes=[axis for axis, model in enumerate(self._models) if model is None])
 
     def _status_values(self) -> Dict[str, Any]:
-        values: Dict[str, Any] = {
-            'axes': self.axes, 'model_versions': ' '.join(map(str, self._model_versions))}
-        if self.joints:
-            values['joints'] = ' '.join(self.joints)
-        values['output_layout'] = 'flat' if self._flat else 'samples_x_axes'
-        for key, limits in zip(('output_min', 'output_max'), self._effective_limits()):
-            values[key] = limits[0] if len(set(limits)) == 1 else ' '.join(map(str, limits))
-        causes = ['-' if model is None else getattr(model, 'cause', 'none').replace(' + ', '+')
-                  for model in self._models]
-        values['extension'] = ' '.join(causes)
-        uncompensated = [str(axis) for axis, model in enumerate(self._models)
-                         if model is not None and kind_of(model).endswith('(not compensated)')]
-        if uncompensated:
-            values['not_compensated'] = ' '.join(uncompensated)
-        if self._compensator is not None:
-            for axis, compensator in enumerate(self._compensator.axes):
-                if compensator.has_effect:
-                    values[axis_key(axis, 'slow_state')] = ' '.join(
-                        f'{v:.6g}' for v in compensator.slow_state)
-        return values
+        compensator = self._compensator
+        slow_states = [] if compensator is None else [
+            axis.slow_state if axis.has_effect else None for axis in compensator.axes]
+        return multi_axis_values(
+            self._models, model_versions=self._model_versions, joints=self.joints or (),
+            flat=self._flat, limits=self._effective_limits(), slow_states=slow_states)
