@@ -95,7 +95,7 @@ def test_config_file_is_keyed_by_the_node_and_names_its_parameters(node):
     assert parameters
     for name, value in parameters.items():
         assert name in specs, f'{node}.yaml sets undeclared parameter {name}'
-        expected = specs[name].type_.name
+        expected = specs[name].type_.upper()
         found = {bool: 'BOOL', int: 'INTEGER', float: 'DOUBLE', str: 'STRING'}[type(value)]
         assert found == expected, f'{node}.yaml: {name} is {found}, the node wants {expected}'
 

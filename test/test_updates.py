@@ -185,6 +185,26 @@ def test_gamma_inverse_is_built_once_per_push(monkeypatch):
     assert len(calls) == 2
 
 
+def test_gamma_inverse_is_built_once_per_push_of_a_creep_model(monkeypatch):
+    # The creep's per-step inverse takes the Gamma^-1 prepare built (issue 19).
+    comp = Compensator(MPIModel.from_params(GAMMA), output_min=0.0, output_max=2.0)
+    comp.command(1e-5)
+    calls = _counting_inverse(monkeypatch)
+    prepared = prepare(values(GAMMA), dict(OTHER, **CREEP))
+    assert prepared.model.cause == 'creep'
+    assert apply(prepared, comp) is None
+    assert len(calls) == 1
+    assert comp.model is prepared.model and comp.has_effect
+    # Fed the prepared inverse or none, the creep step commands the same currents.
+    again = Compensator(prepared.model, output_min=0.0, output_max=2.0)
+    assert len(calls) == 2
+    built = Compensator(prepared.model, output_min=0.0, output_max=2.0,
+                        inverse=prepared.inverse)
+    assert len(calls) == 2
+    for k, desired in enumerate(np.linspace(0.0, 2e-5, 20)):
+        assert again.command(desired, time=1e-3 * k) == built.command(desired, time=1e-3 * k)
+
+
 def test_apply_swaps_limits_switches_and_model():
     comp = Compensator(MPIModel.from_params(GAMMA), output_min=0.0, output_max=2.0)
     request = dict(OTHER, **{'output.min': 0.2, 'output.max': 1.5, 'enabled': False,

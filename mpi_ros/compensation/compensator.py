@@ -7,6 +7,7 @@ per-step inverse (:class:`InverseStep`).
 """
 
 from collections.abc import Callable
+import inspect
 import math
 from typing import Any, Protocol
 
@@ -73,10 +74,30 @@ def gamma_of(model: Any) -> MPIModel:
     return gamma.inverse() if gamma.is_inverse else gamma
 
 
-def inverse_step_of(model: Any) -> 'InverseStep | None':
-    """Return an extended model's per-step inverse, or None (plain, or not invertible)."""
+def inverse_step_of(model: Any, inverse: MPIModel | None = None) -> 'InverseStep | None':
+    """
+    Return an extended model's per-step inverse, or None (plain, or not invertible).
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        A model.
+    inverse : MPIModel, optional
+        Gamma^-1 of the model, already built: handed to a step that takes it
+        (``inverse_step(inverse=...)``), so it is built once.
+
+    Returns
+    -------
+    InverseStep or None
+        The step; None for a plain model or an effect without a causal inverse.
+
+    """
     make = getattr(model, 'inverse_step', None)
-    return None if make is None else make()
+    if make is None:
+        return None
+    takes = inverse is not None and 'inverse' in inspect.signature(make).parameters
+    step: InverseStep | None = make(inverse=inverse) if takes else make()
+    return step
 
 
 def kind_of(model: Any) -> str:
@@ -168,11 +189,11 @@ class Compensator:
     def _install(self, model: Any, *, replay: bool, inverse: MPIModel | None) -> None:
         self._changing()
         gamma = gamma_of(model)
-        step = inverse_step_of(model)
-        if step is not None and not step.carry(self._step):
-            step.start(self.last_command)
         if inverse is None:
             inverse = gamma.inverse()                  # (12)-(14), (22)-(25)
+        step = inverse_step_of(model, inverse)
+        if step is not None and not step.carry(self._step):
+            step.start(self.last_command)
         h, s_inv, h_inv = gamma.hysteresis, inverse.superposition, inverse.hysteresis
         z_h = np.array(h.initial_states, dtype=np.float64)
         if replay and len(self.memory):

@@ -22,7 +22,7 @@ from ..errors import DataError, ModelError, ParameterRejected
 from ..memory import TurningPointMemory
 from ..model import MPIModel
 
-__all__ = ['MultiAxisCompensator', 'chunk_times', 'joint_names']
+__all__ = ['JointOrder', 'MultiAxisCompensator', 'chunk_times', 'joint_names']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -346,3 +346,67 @@ def _per_axis(value: float | Sequence[float], count: int, name: str) -> list[flo
         msg = f'{name} must be one value or one per axis ({count}); found {len(values)}'
         raise ModelError(msg)
     return values
+
+
+class JointOrder:
+    """
+    Put the positions of a ``sensor_msgs/JointState`` in axis (``joints``) order.
+
+    The index of each axis's joint is kept per name order (at most :attr:`MEMORY` orders,
+    then forgotten at once), so a stream in one order costs one lookup per message.
+
+    Parameters
+    ----------
+    joints : sequence of str
+        The joint of each axis, in axis order.
+
+    """
+
+    #: At most this many name orders are remembered (their index arrays).
+    MEMORY = 64
+
+    def __init__(self, joints: Sequence[str]) -> None:
+        self.joints = tuple(joints)
+        self._index: dict[tuple[str, ...], npt.NDArray[np.intp]] = {}
+
+    def block(self, names: Sequence[str], position: Sequence[float],
+              ) -> tuple[FloatArray | None, str, str]:
+        """
+        Return the 1 x N block of one JointState, or why it is refused.
+
+        Parameters
+        ----------
+        names, position : sequence
+            The message's ``name`` and ``position``.
+
+        Returns
+        -------
+        block : ndarray of float, shape (1, N), or None
+            The positions in axis order; None when refused.
+        fault : str
+            ``''``, ``'missing_joints'`` (a joint of ``joints`` is not named) or
+            ``'malformed'`` (a joint named twice, or not one position per name).
+        reason : str
+            What was wrong, for ``/diagnostics``.
+
+        """
+        names = tuple(names)
+        index = self._index.get(names)
+        if index is None:
+            position_of = {name: i for i, name in enumerate(names)}
+            missing = [joint for joint in self.joints if joint not in position_of]
+            if missing:
+                return None, 'missing_joints', (
+                    f'JointState without {", ".join(missing)} (it names '
+                    f'{", ".join(names[:8]) or "no joint"}{" ..." if len(names) > 8 else ""})')
+            if len(position_of) != len(names):
+                return None, 'malformed', 'JointState names a joint more than once'
+            if len(self._index) >= self.MEMORY:
+                self._index.clear()
+            index = np.array([position_of[joint] for joint in self.joints], dtype=np.intp)
+            self._index[names] = index
+        if len(position) != len(names):
+            return None, 'malformed', (f'JointState with {len(names)} names and '
+                                       f'{len(position)} positions; each joint needs its '
+                                       'position')
+        return np.asarray(position, dtype=np.float64)[index].reshape(1, -1), '', ''

@@ -142,9 +142,23 @@ class CreepModel(ExtendedModelBase):
         g: FloatArray = self.model.superposition.apply(h)
         return g
 
-    def inverse_step(self) -> 'CreepInverse':
-        """Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses."""
-        return CreepInverse(self)
+    def inverse_step(self, inverse: MPIModel | None = None) -> 'CreepInverse':
+        """
+        Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses.
+
+        Parameters
+        ----------
+        inverse : MPIModel, optional
+            Gamma^-1 when the caller built it already (it is not built again); None:
+            built here.
+
+        Returns
+        -------
+        CreepInverse
+            The step.
+
+        """
+        return CreepInverse(self, inverse)
 
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
@@ -169,17 +183,22 @@ class CreepInverse:
     ----------
     model : CreepModel
         The extended model.
+    inverse : MPIModel, optional
+        Gamma^-1, when already built (e.g. by :func:`mpi_ros.compensation.updates.prepare`);
+        None: built here by (12)-(14), (22)-(25).
 
     """
 
-    def __init__(self, model: CreepModel) -> None:
+    def __init__(self, model: CreepModel, inverse: MPIModel | None = None) -> None:
         self.model = model
         gamma = model.model
-        forward, inverse = gamma.superposition, gamma.inverse().superposition
+        if inverse is None:
+            inverse = gamma.inverse()
+        forward = gamma.superposition
         self._s = (np.ascontiguousarray(forward.thresholds),
                    np.ascontiguousarray(forward.weights))
-        self._s_inv = (np.ascontiguousarray(inverse.thresholds),
-                       np.ascontiguousarray(inverse.weights))
+        self._s_inv = (np.ascontiguousarray(inverse.superposition.thresholds),
+                       np.ascontiguousarray(inverse.superposition.weights))
         self.state = np.zeros(model.time_constants.size)   # the lags C_j[G] [m]
         self._last = 0.0                                   # G of the last applied current [m]
         self._b = np.ones(self.state.size)

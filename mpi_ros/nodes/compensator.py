@@ -95,60 +95,34 @@ import struct
 import time
 from typing import Any, Dict, List, Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from .compensator_base import (
-    AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
-    ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
-)
+from .compensator_base import CompensatorNodeBase, DRAIN_LIMIT
 from .multi_axis import MultiAxisCompensatorNode
-from .parameters import (
-    declare_parameters, extension_parameters, loop_qos_parameters, MODEL_PARAMETERS,
-    parameter_values, ParameterSpec, specs_by_name,
-)
+from .parameters import declare_parameters, parameter_values
 from .spinning import run_node_main
 from ..compensation import Compensator
+from ..compensation.parameters import compensator_parameters, specs_by_name
+from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
 
-__all__ = ['CompensatorNode', 'main', 'make_node', 'parameters']
+__all__ = ['CompensatorNode', 'main', 'make_node']
 
-
-def parameters() -> Tuple[ParameterSpec, ...]:
-    """
-    Return the node's parameter specs, the effect keys read from the registry now.
-
-    Returns
-    -------
-    tuple of ParameterSpec
-        Gamma and the operating point, every registered effect's keys, the limits and
-        the node's switches (also as the module attribute ``PARAMETERS``).
-
-    """
-    return MODEL_PARAMETERS + extension_parameters() + LIMIT_PARAMETERS + (
-        ENABLED,
-        SAMPLE_PERIOD,
-        MESSAGE_TIME,
-        DIAGNOSTICS_PERIOD,
-        *loop_qos_parameters('desired_displacement and current_command'),
-        AXES,
-        AUTOSTART,
-    )
+#: Most messages served in one subscription callback (patched by tests).
+_DRAIN_LIMIT = DRAIN_LIMIT
 
 
 def __getattr__(name: str) -> Any:
     """Give ``PARAMETERS`` as :func:`parameters` returns it when asked (not at import)."""
     if name == 'PARAMETERS':
-        return parameters()
+        return compensator_parameters()
     msg = f'module {__name__!r} has no attribute {name!r}'
     raise AttributeError(msg)
 
 
-#: Most desired displacements served in one subscription callback.
-_DRAIN_LIMIT = DRAIN_LIMIT
 #: CDR of a Float64: 4-byte encapsulation header (byte 1: 1 = little-endian), the double.
 _LITTLE = struct.Struct('<d').unpack_from
 _BIG = struct.Struct('>d').unpack_from
@@ -178,7 +152,7 @@ class CompensatorNode(CompensatorNodeBase):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        specs = parameters()
+        specs = compensator_parameters()
         self._specs = specs_by_name(specs)
         # Keys set together within one set_parameters request (set_parameters_in_groups).
         self._groups = (model_keys(), LIMIT_KEYS)
@@ -240,40 +214,23 @@ class CompensatorNode(CompensatorNodeBase):
         # subscription is raw: each message arrives as its CDR bytes (a 4-byte
         # encapsulation header, then the double), is decoded with one struct call and
         # answered with 12 bytes packed by another, published raw: no Float64 object is
-        # built either way.  Every message already queued is served in this one callback
-        # (rclpy rebuilds its wait set on every spin, which alone would cap the node far
-        # below 10 kHz), one by one, in order, each with its own command and, for an
-        # extended model, its own arrival time.  At most _DRAIN_LIMIT messages per call,
-        # so that a flood that outruns the node still lets the spin loop see a stop request
-        # (the messages left queued keep their events and come in the next calls).  The
-        # messages taken here carry the publisher's sequence number: a jump counts lost
-        # desired displacements (a keep-last queue that overflowed), which DDS itself does
-        # not report (mpi_ros.nodes.loss).
-        take = self._subscription.handle.take_message
+        # built either way.  Every queued message is served in this callback (_drain), one
+        # by one, in order, each with its own command and, for an extended model, its own
+        # arrival time.
         publish = self._publisher.handle.publish_raw
-        loss = self._loss
-        loss.delivered()
-        served = 0
-        while True:
+
+        def serve(data: bytes) -> None:
             value = (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0]
-            self._messages_in += 1
             compensator = self._live
             if compensator is None:
                 self._drop()          # no model, or not active: nothing published
-            else:
-                current = (compensator.command(value, time=self._stamp()) if self._extended
-                           else compensator.command(value))
-                publish(_PACK(_CDR_LE, current))
-                self._messages_out += 1
-            served += 1
-            if served >= _DRAIN_LIMIT:
-                break
-            taken = take(Float64, True)
-            if taken is None:
-                break
-            data, info = taken
-            loss.taken(info['publication_sequence_number'])
-        loss.served(served)
+                return
+            current = (compensator.command(value, time=self._stamp()) if self._extended
+                       else compensator.command(value))
+            publish(_PACK(_CDR_LE, current))
+            self._messages_out += 1
+
+        self._drain(data, Float64, serve, raw=True, limit=_DRAIN_LIMIT)
 
     # -- parameters ---------------------------------------------------------------------
     def _running(self, prefix: str) -> bool:
@@ -334,53 +291,26 @@ class CompensatorNode(CompensatorNodeBase):
         return f'{self.get_name()}: feedforward'
 
     def _status(self, losses: List[str], counters: Dict[str, int],
-                before: Dict[str, int]) -> Tuple[Any, str]:
-        """
-        Return the level and message of a diagnostics period.
-
-        WARN after a period in which desired displacements were lost
-        (``messages_lost``) or a peer with incompatible QoS appeared, or in which more than
-        half of ``qos_depth`` messages waited at once (``max_backlog``); WARN while
-        unconfigured (``no model``) and after a period with non-finite, out-of-range or
-        clamped inputs; else OK.
-        """
-        faults = new_faults(counters, before)
-        if losses:
-            return DiagnosticStatus.WARN, '; '.join(losses)
-        if self._compensator is None:
-            return DiagnosticStatus.WARN, (
-                'no model: unconfigured, no commands published; give all five model.* keys '
-                'of Gamma in one request (ros2 param load, set_parameters_atomically)')
-        if any(faults.values()):
-            return DiagnosticStatus.WARN, f'{describe_faults(faults)} in the last period'
-        if not self.get_parameter('enabled').value:
-            return DiagnosticStatus.OK, 'compensation disabled: best linear map'
-        return DiagnosticStatus.OK, 'compensating'
+                before: Dict[str, int]) -> Tuple[int, str]:
+        return single_axis_status(losses, counters, before,
+                                  has_model=self._compensator is not None,
+                                  enabled=self.get_parameter('enabled').value)
 
     def _status_values(self) -> Dict[str, Any]:
         compensator = self._compensator
         if compensator is None:
             return {}
-        values: Dict[str, Any] = {'extension': self._model_kind}
-        if compensator.has_effect:
-            values['slow_state'] = ' '.join(f'{v:.6g}' for v in compensator.slow_state)
-        return values
+        return single_axis_values(
+            self._model_kind, compensator.slow_state if compensator.has_effect else None)
 
 
 def main(args: Optional[List[str]] = None) -> int:
     """
     Run the compensator node (``ros2 run mpi_ros compensator --ros-args ...``).
 
-    Parameters
-    ----------
-    args : list of str, optional
-        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
-
-    Returns
-    -------
-    int
-        Exit status: 0 on shutdown (a signal, or the lifecycle transition ``shutdown``),
-        1 when the configured model or limits are invalid (with ``autostart``).
+    ``args`` is the command line for ``rclpy.init`` (program name first; ``sys.argv`` if
+    None).  Returns the exit status: 0 on shutdown (a signal, or the lifecycle transition
+    ``shutdown``), 1 when the configured model or limits are invalid (with ``autostart``).
 
     """
     return run_node_main(make_node, 'compensator', args, until=_finalized)

@@ -62,82 +62,24 @@ from rclpy.task import Future
 from .loss import LossMonitor
 from .parameters import (
     check_parameters, harden_parameter_services, is_null, normalized, parameter_values,
-    ParameterRejected, ParameterSpec, plain_value, set_parameters_in_groups,
+    set_parameters_in_groups,
 )
 from .qos import loop_qos
+from ..compensation.parameters import ParameterSpec, plain_value
 from ..compensation.screening import describe_faults, FAULT_KEYS, new_faults
+from ..compensation.status import lifecycle_status, status_values
 from ..compensation.updates import (
     complete, LIMIT_KEYS, model_keys, PLAIN_KEYS, prepare, Prepared, uncompensated,
 )
-from ..errors import MPIError
+from ..errors import MPIError, ParameterRejected
 
 __all__ = [
-    'AUTOSTART',
-    'AXES',
     'CompensatorNodeBase',
-    'DIAGNOSTICS_PERIOD',
     'DRAIN_LIMIT',
-    'ENABLED',
-    'LIMIT_PARAMETERS',
-    'MESSAGE_TIME',
-    'SAMPLE_PERIOD',
     'describe_faults',
     'new_faults',
 ]
 
-Type = Parameter.Type
-
-#: The ``axes`` parameter, declared by both compensator nodes.
-AXES = ParameterSpec(
-    'axes', Type.INTEGER, 1,
-    'Number of actuators this node serves: 1 = one actuator on the Float64 topics '
-    'desired_displacement / current_command with the model.* keys; N > 1 = N actuators on '
-    'the Float64MultiArray topics desired_displacements / current_commands (samples x '
-    'axes) with the keys axis0.model.* ... axis<N-1>.model.*',
-    value_range=(1, 1024), read_only=True)
-
-#: ``output.min`` and ``output.max``: the safe current range of every command.
-LIMIT_PARAMETERS = (
-    ParameterSpec(
-        'output.min', Type.DOUBLE, 0.0,
-        'Lowest current command ever published (safe actuator range); '
-        'must be below output.max', 'A', value_range=(-1.0e3, 1.0e3)),
-    ParameterSpec(
-        'output.max', Type.DOUBLE, 2.0,
-        'Highest current command ever published (safe actuator range); '
-        'must be above output.min', 'A', value_range=(-1.0e3, 1.0e3)),
-)
-
-AUTOSTART = ParameterSpec(
-    'autostart', Type.BOOL, True,
-    'Managed (lifecycle) node: true = configure and activate at start-up (a plain node '
-    'to ros2 run and launch); false = start unconfigured and wait for the lifecycle '
-    'transitions (ros2 lifecycle set <node> configure, then activate; a lifecycle manager)',
-    read_only=True)
-
-ENABLED = ParameterSpec(
-    'enabled', Type.BOOL, True,
-    'true: invert the MPI model (27); false: pass the best linear map of the '
-    'model instead, for comparison')
-
-DIAGNOSTICS_PERIOD = ParameterSpec(
-    'diagnostics_period', Type.DOUBLE, 1.0,
-    'Period of the DiagnosticArray on /diagnostics', 's', value_range=(0.01, 3600.0))
-
-SAMPLE_PERIOD = ParameterSpec(
-    'sample_period', Type.DOUBLE, 1.0e-3,
-    'Nominal interval between desired displacements; extended models (creep, rate '
-    'dependence, thermal drift) use it when a message has no usable time',
-    's', value_range=(1.0e-6, 10.0))
-
-MESSAGE_TIME = ParameterSpec(
-    'message_time', Type.STRING, 'arrival',
-    'Time of each desired displacement for the lags of extended models: arrival '
-    '(steady clock when the message is served, as the plant simulator does; the last '
-    'sample of an array chunk of K, the earlier ones sample_period apart before it, or '
-    'closer when messages come faster) or nominal (sample_period apart, for a stream at a '
-    'fixed rate)',
-    choices=('arrival', 'nominal'), read_only=True)
 
 #: Most messages served in one subscription callback (a flood still lets a stop through).
 DRAIN_LIMIT = 1000
@@ -435,6 +377,48 @@ class CompensatorNodeBase(LifecycleNode):
         counters.update(self._node_counters())
         return counters
 
+    def _drain(self, first: Any, message_type: Any, serve: Callable[[Any], None], *,
+               raw: bool, limit: int = DRAIN_LIMIT) -> None:
+        """
+        Serve ``first`` and the messages queued behind it, in order, in this one callback.
+
+        rclpy rebuilds its wait set on every spin, which alone would cap a node far below
+        10 kHz, so every message already queued is taken here (at most ``limit``, so that
+        a flood still lets the spin loop see a stop request; the ones left keep their
+        events).  The messages taken here carry the publisher's
+        sequence number: a jump counts lost messages (:mod:`mpi_ros.nodes.loss`).
+
+        Parameters
+        ----------
+        first : object
+            The message the subscription delivered (CDR bytes when ``raw``).
+        message_type : type
+            Its type, to take the queued ones.
+        serve : callable
+            Serves one message (counting and publishing what it must).
+        raw : bool
+            Take the queued messages as CDR bytes.
+        limit : int
+            Most messages served in this call.
+
+        """
+        take = self._subscription.handle.take_message
+        loss = self._loss
+        loss.delivered()
+        served, message = 0, first
+        while True:
+            self._messages_in += 1
+            serve(message)
+            served += 1
+            if served >= limit:
+                break
+            taken = take(message_type, raw)
+            if taken is None:
+                break
+            message, info = taken
+            loss.taken(info['publication_sequence_number'])
+        loss.served(served)
+
     # -- parameters ---------------------------------------------------------------------
     def set_parameters(self, parameter_list: List[Parameter]) -> List[SetParametersResult]:
         """
@@ -478,7 +462,7 @@ class CompensatorNodeBase(LifecycleNode):
             completed = complete(self._current(prefix), completed, prefix)
         original = {p.name: p for p in given}
         return [original[name] if name in request and value is request[name]
-                else Parameter(name, specs[name].type_, value)
+                else Parameter(name, Parameter.Type[specs[name].type_.upper()], value)
                 for name, value in completed.items()]
 
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
@@ -553,8 +537,8 @@ class CompensatorNodeBase(LifecycleNode):
         raise NotImplementedError
 
     def _status(self, losses: List[str], counters: Dict[str, int],
-                before: Dict[str, int]) -> Tuple[Any, str]:
-        """Return the diagnostics level and message of the period."""
+                before: Dict[str, int]) -> Tuple[int, str]:
+        """Return the diagnostics level and message of the period (compensation.status)."""
         raise NotImplementedError
 
     def _status_values(self) -> Dict[str, Any]:
@@ -628,27 +612,17 @@ class CompensatorNodeBase(LifecycleNode):
         depth = self.get_parameter('qos_depth').value
         losses = self._loss.period(counters, before, depth, self._what)
         state = self.lifecycle_state
-        if self._configured:
-            status.level, status.message = self._status(losses, counters, before)
-        else:
-            status.level, status.message = DiagnosticStatus.OK, 'no model loaded'
-        if state != 'active':
-            note = f'lifecycle state {state}: no commands published'
-            status.message = note if status.level == DiagnosticStatus.OK else (
-                f'{note}; {status.message}')
-        values: Dict[str, Any] = dict(counters)
-        values['lifecycle_state'] = state
-        values['last_rejected_update'] = self._last_rejection
-        values.update(
-            rate_hz=round(rate, 3),
-            max_backlog=self._loss.last_backlog,
-            qos_depth=depth,
+        level, status.message = lifecycle_status(
+            self._status(losses, counters, before) if self._configured else None, state)
+        status.level = bytes([level])
+        values = status_values(
+            counters, self._status_values(), lifecycle_state=state,
+            last_rejected_update=self._last_rejection, rate_hz=round(rate, 3),
+            max_backlog=self._loss.last_backlog, qos_depth=depth,
             input_publishers=self._loss.publishers,
             enabled=self.get_parameter('enabled').value,
             output_min=self.get_parameter('output.min').value,
-            output_max=self.get_parameter('output.max').value,
-        )
-        values.update(self._status_values())
+            output_max=self.get_parameter('output.max').value)
         status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
         array = DiagnosticArray()
         array.header.stamp = self.get_clock().now().to_msg()

@@ -46,10 +46,9 @@ any failure: unreadable bag, refused or failed fit, target missing, push rejecte
 unanswered.
 """
 
-from dataclasses import replace
 import sys
 import time
-from typing import Any, Dict, List, Mapping, Optional
+from typing import Any, List, Mapping, Optional
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
@@ -61,17 +60,12 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 
-from .multi_axis import AXES, axis_key
-from .parameters import (
-    check_parameters, declare_parameters, harden_parameter_services, ParameterRejected,
-    ParameterSpec, specs_by_name,
-)
+from .parameters import check_parameters, declare_parameters, harden_parameter_services
 from .spinning import shutdown, StopSignals
-from ..errors import DataError, IdentificationError, MPIError, ParameterPushError
-from ..order import format_order, Order
-from ..params import write_params_yaml
+from ..bag_identification import check_identifier_value, DATA_PARAMETERS, identify, PARAMETERS
+from ..compensation.parameters import specs_by_name
+from ..errors import MPIError, ParameterPushError, ParameterRejected
 from ..pipeline import BagFit, fit_bag, fit_bag_axes, parse_order
-from ..recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS
 
 __all__ = [
     'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS', 'DATA_PARAMETERS',
@@ -80,58 +74,7 @@ __all__ = [
 
 Type = Parameter.Type
 
-_KINDS = {'str': Type.STRING, 'optional_str': Type.STRING, 'choice': Type.STRING,
-          'optional_int': Type.INTEGER, 'optional_float': Type.DOUBLE, 'float': Type.DOUBLE,
-          'bool': Type.BOOL}
-_UNSET = {'optional_str': "''", 'optional_int': '-1', 'optional_float': '0'}
-
-
-def _data_parameter(option: DataOption) -> ParameterSpec:
-    """Return the node parameter of one shared data option."""
-    description = option.description[0].upper() + option.description[1:]
-    if option.kind.startswith('optional'):
-        description = description.replace('(unset:', f'({_UNSET[option.kind]}:')
-    if option.applies != 'any':
-        description += f'; {option.applies} only'
-    return ParameterSpec(
-        option.name, _KINDS[option.kind], option.parameter_default, description, option.unit,
-        value_range=(-1, 2**31 - 1) if option.kind == 'optional_int' else None,
-        choices=JOINT_FIELDS if option.kind == 'choice' else ())
-
-
-#: The data parameters: one per shared data option, in the command line's order.
-DATA_PARAMETERS = tuple(_data_parameter(option) for option in DATA_OPTIONS)
-
-PARAMETERS = (
-    ParameterSpec('bag', Type.STRING, '',
-                  'Path of the rosbag2 bag (directory, or .mcap/.db3 file) to identify from '
-                  '(a .csv file is read with the CSV data parameters)'),
-    *DATA_PARAMETERS,
-    ParameterSpec('order', Type.STRING, 'auto',
-                  "Model orders: 'auto' (selection by the fit errors), 'N,L' or 'N L' (N play "
-                  'operators in H, L dead-zone operators in S)'),
-    ParameterSpec('target_node', Type.STRING, '/compensator',
-                  'Fully qualified name of the node that receives the model'),
-    ParameterSpec('push', Type.BOOL, True,
-                  'Push the fitted model to target_node (false: only fit and report)'),
-    ParameterSpec('service_timeout', Type.DOUBLE, 10.0,
-                  'Longest wait for the target parameter service, and again for its answer',
-                  's', value_range=(0.0, 3600.0)),
-    ParameterSpec('params_file', Type.STRING, '',
-                  'Also write the model as a parameter YAML keyed by the compensator node '
-                  'name (empty: do not write)'),
-    replace(AXES, description=(
-        'Number of actuators in the bag: 1 = one input and one output signal; N > 1 = '
-        'Float64MultiArray topics with one element per axis (one sample or a chunk of '
-        'samples x axes per message), every axis fitted and all models pushed to a '
-        'multi-axis compensator in one request'), read_only=False),
-    ParameterSpec('workers', Type.INTEGER, 0,
-                  'axes > 1: processes fitting axes in parallel (0: one per CPU, at most '
-                  'one per axis; 1: in this process)', value_range=(0, 1024)),
-)
-
 _SPECS = specs_by_name(PARAMETERS)
-_DATA_NAMES = frozenset(spec.name for spec in DATA_PARAMETERS)
 
 
 class IdentifierNode(Node):
@@ -157,11 +100,7 @@ class IdentifierNode(Node):
         try:
             check_parameters(_SPECS, parameters)
             for parameter in parameters:
-                if parameter.name == 'order':
-                    parse_order(parameter.value)
-                elif parameter.name in _DATA_NAMES:
-                    DataOptions.from_mapping({parameter.name: parameter.value},
-                                             spelling='parameter')
+                check_identifier_value(parameter.name, parameter.value)
         except (ParameterRejected, MPIError) as err:
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
@@ -181,66 +120,16 @@ class IdentifierNode(Node):
             ``DataError`` (bag), ``IdentificationError`` (fit), ``ParameterPushError``.
 
         """
-        value = self.get_parameter
-        bag = value('bag').value
-        if not bag:
-            msg = 'no bag given; run with --ros-args -p bag:=PATH'
-            raise DataError(msg)
+        values = {name: self.get_parameter(name).value for name in _SPECS}
         logger = self.get_logger()
-        options = DataOptions.from_mapping(
-            {name: value(name).value for name in _DATA_NAMES}, spelling='parameter')
-        order = parse_order(value('order').value)
-        if value('axes').value > 1:
-            return self._run_axes(bag, options, order)
-        logger.info(f'identifying from {bag} ({options.input_topic} -> '
-                    f'{options.output_topic}, order {format_order(order)})')
-        try:
-            fit = fit_bag(bag, options=options, order=order)
-        except IdentificationError as err:
-            logger.error(f'identification refused the data of {bag}: {err}; no model was '
-                         'written or pushed')
-            raise
-        logger.info(fit.summary())
-        params_file = value('params_file').value
-        if params_file:
-            write_params_yaml(params_file, fit.parameters, node_name='compensator',
-                              header=f'mpi_ros identifier: {fit.summary()}\nbag: {bag}')
-            logger.info(f'wrote {params_file}')
-        if value('push').value:
-            target = value('target_node').value
-            push_model_parameters(self, target, fit.parameters,
-                                  timeout=value('service_timeout').value)
-            logger.info(f'{target} accepted the model')
-        return fit
-
-    def _run_axes(self, bag: str, options: DataOptions, order: Order) -> List[BagFit]:
-        value = self.get_parameter
-        logger = self.get_logger()
-        axes = value('axes').value
-        logger.info(f'identifying {axes} axes from {bag}, order {format_order(order)}')
-        try:
-            fits = fit_bag_axes(bag, axes, options=options, order=order,
-                                workers=value('workers').value)
-        except IdentificationError as err:
-            logger.error(f'identification refused the data of {bag}: {err}; no model was '
-                         'written or pushed')
-            raise
-        parameters: Dict[str, Any] = {}
-        for axis, fit in enumerate(fits):
-            logger.info(f'axis {axis}: {fit.summary()}')
-            parameters.update({axis_key(axis, key): v for key, v in fit.parameters.items()})
-        params_file = value('params_file').value
-        if params_file:
-            write_params_yaml(params_file, dict(parameters, axes=axes),
-                              node_name='compensator',
-                              header=f'mpi_ros identifier: {axes} axes\nbag: {bag}')
-            logger.info(f'wrote {params_file}')
-        if value('push').value:
-            target = value('target_node').value
-            push_model_parameters(self, target, parameters,
-                                  timeout=value('service_timeout').value)
-            logger.info(f'{target} accepted the models of all {axes} axes')
-        return fits
+        fitted, parameters = identify(values, info=logger.info, error=logger.error)
+        if values['push']:
+            target = values['target_node']
+            push_model_parameters(self, target, parameters, timeout=values['service_timeout'])
+            axes = values['axes']
+            logger.info(f'{target} accepted the models of all {axes} axes' if axes > 1
+                        else f'{target} accepted the model')
+        return fitted
 
 
 def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str, Any], *,
@@ -305,16 +194,9 @@ def main(args: Optional[List[str]] = None) -> int:
     """
     Run the identifier once (``ros2 run mpi_ros identifier --ros-args -p bag:=PATH``).
 
-    Parameters
-    ----------
-    args : list of str, optional
-        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
-
-    Returns
-    -------
-    int
-        0 when the model was fitted and (if asked) accepted, and on a stop by SIGINT or
-        SIGTERM (however many); 1 on any failure.
+    ``args`` is the command line for ``rclpy.init`` (program name first; ``sys.argv`` if
+    None).  Returns the exit status: 0 when the model was fitted and (if asked) accepted,
+    and on a stop by SIGINT or SIGTERM (however many); 1 on any failure.
 
     """
     with StopSignals(interrupt=True) as stop:

@@ -28,15 +28,12 @@ from typing import Any, Callable, Dict, List, Optional
 
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 
+from ..compensation.status import LOSS_ADVICE, loss_problems
+
 __all__ = ['LOG_PERIOD_S', 'LOSS_ADVICE', 'LossMonitor']
 
 #: At most one log line about lost messages per this period [s].
 LOG_PERIOD_S = 5.0
-
-#: What to do about lost messages (diagnostics and log).
-LOSS_ADVICE = ('the node did not keep up and its input queue (qos_depth) overflowed, or the '
-               'publisher dropped them; raise qos_depth, give the node a core of its own '
-               '(taskset), or send chunks of samples (docs/reliability.md)')
 
 
 class LossMonitor:
@@ -145,38 +142,14 @@ class LossMonitor:
         """
         Describe the losses of a diagnostics period; restart ``max_backlog``.
 
-        Parameters
-        ----------
-        counters, before : dict
-            The node's counters now and at the start of the period.
-        depth : int
-            ``qos_depth``.
-        what : str
-            What the messages carry, e.g. ``desired displacements``.
-
-        Returns
-        -------
-        list of str
-            One sentence per problem (empty: none): lost messages, incompatible peers,
-            a queue more than half full.  Any of them makes the period WARN.
+        The sentences are :func:`mpi_ros.compensation.status.loss_problems` of the
+        period's counters (``counters``, ``before``), ``depth`` (``qos_depth``), the
+        largest backlog and ``what`` the messages carry.
 
         """
         backlog, self.max_backlog = self.max_backlog, 0
         self.last_backlog = backlog
-        lost = counters['messages_lost'] - before.get('messages_lost', 0)
-        incompatible = counters['incompatible_qos'] - before.get('incompatible_qos', 0)
-        parts = []
-        if lost > 0:
-            parts.append(f'{lost} {what} lost in the last period '
-                         f'({counters["messages_lost"]} in all): {LOSS_ADVICE}')
-        if incompatible > 0:
-            parts.append(f'{incompatible} peers with incompatible QoS in the last period '
-                         '(they exchange nothing with this node; see the log)')
-        if not parts and depth > 1 and backlog > depth // 2:
-            parts.append(f'input queue more than half full ({backlog} of qos_depth={depth} '
-                         'messages waiting at once): the node is falling behind; messages '
-                         'are lost when it fills')
-        return parts
+        return loss_problems(counters, before, depth, backlog, what)
 
     last_backlog = 0
 

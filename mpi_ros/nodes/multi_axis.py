@@ -13,7 +13,7 @@ Topics (relative names, ``std_msgs/msg/Float64MultiArray``, SI units)
     ``desired_displacements`` [m] in, ``current_commands`` [A] out, row-major
     ``samples x axes``: one message carries one sample of every axis or a chunk of K
     samples (``layout.dim = [samples, axes]``, or no ``dim`` and a length that is a multiple
-    of N, see :mod:`mpi_ros.nodes.arrays`).  Each input message gives one output message
+    of N, see :mod:`mpi_ros.array_layout`).  Each input message gives one output message
     of the same shape; column k is exactly what a single-axis compensator with axis k's
     model gives for that column (:class:`mpi_ros.compensation.MultiAxisCompensator`, one
     compiled loop over every axis and sample of a message).  ``/diagnostics`` as the
@@ -91,99 +91,40 @@ Model updates
     (diagnostics WARN).
 """
 
-from dataclasses import replace
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
-from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from .arrays import (
+from .compensator_base import CompensatorNodeBase, DRAIN_LIMIT
+from .parameters import declare_parameters, parameter_values
+from ..array_layout import (
     ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
 )
-from .compensator_base import (
-    AUTOSTART, AXES, CompensatorNodeBase, describe_faults, DIAGNOSTICS_PERIOD, DRAIN_LIMIT,
-    ENABLED, LIMIT_PARAMETERS, MESSAGE_TIME, new_faults, SAMPLE_PERIOD,
-)
-from .parameters import (
-    declare_parameters, extension_parameters, loop_qos_parameters, MODEL_PARAMETERS,
-    parameter_values, ParameterRejected, ParameterSpec, specs_by_name,
-)
 from ..compensation import kind_of, MultiAxisCompensator
-from ..compensation.multi_axis import chunk_times, joint_names
+from ..compensation.multi_axis import chunk_times, joint_names, JointOrder
+from ..compensation.parameters import (
+    AXES, axis_limit_parameters, axis_parameters, INPUT_MESSAGE, JOINTS, multi_axis_parameters,
+    OUTPUT_LAYOUT, specs_by_name, WIRING,
+)
 from ..compensation.screening import FAULT_KEYS
+from ..compensation.status import multi_axis_status, multi_axis_values
 from ..compensation.updates import (
     apply, axis_key, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
+from ..errors import ParameterRejected
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
 
-Type = Parameter.Type
-
-#: Most array messages served in one subscription callback.
+#: Most messages served in one subscription callback (patched by tests).
 _DRAIN_LIMIT = DRAIN_LIMIT
 
-#: The joint name of each axis (ros2_control); read-only.
-JOINTS = ParameterSpec(
-    'joints', Type.STRING_ARRAY, None,
-    'Joint name of each axis, in axis order: the joints parameter of the ros2_control '
-    'forward_command_controller that takes current_commands (output_layout flat), and the '
-    'names input_message joint_state maps by; unset: no names',
-    read_only=True, constraints='as many unique, non-empty names as axes')
 
-#: What current_commands carries; read-only.
-OUTPUT_LAYOUT = ParameterSpec(
-    'output_layout', Type.STRING, 'samples_x_axes',
-    'Layout of current_commands: samples_x_axes (one message per input message, '
-    'layout.dim = [samples, axes]) or flat (what ros2_control forward_command_controller '
-    'takes on ~/commands: one message per sample holding one value per axis in axis (joints) '
-    'order, empty layout.dim, data_offset 0)',
-    choices=('samples_x_axes', 'flat'), read_only=True)
-
-#: What the node subscribes to; read-only.
-INPUT_MESSAGE = ParameterSpec(
-    'input_message', Type.STRING, 'array',
-    'Input: array (std_msgs/Float64MultiArray, samples x axes, on desired_displacements) '
-    'or joint_state (sensor_msgs/JointState on desired_joint_states: the position [m] of '
-    'each joint, mapped by name to the joints order; needs joints; a message missing a '
-    'joint is refused and counted, missing_joints)',
-    choices=('array', 'joint_state'), read_only=True)
-
-#: The ros2_control options, declared by the multi-axis node only.
-_WIRING = (JOINTS, OUTPUT_LAYOUT, INPUT_MESSAGE)
-#: At most this many JointState name orders are remembered (their index arrays).
-_NAME_ORDERS = 64
-#: The node-wide parameters (the single-axis node's, less its model keys).
-_COMMON = LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_PERIOD) + (
-    loop_qos_parameters('desired_displacements and current_commands')) + (AUTOSTART,)
 #: The core's counters on /diagnostics, summed over the axes (bad_time: effect axes' lags).
 _CORE_COUNTERS = FAULT_KEYS + ('bad_time',)
-
-
-def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
-    """
-    Return the specs of every axis's model keys.
-
-    Parameters
-    ----------
-    axes : int
-        Number of axes.
-
-    Returns
-    -------
-    tuple of ParameterSpec
-        ``MODEL_PARAMETERS`` (Gamma and the operating point) and the effect registry's keys
-        (unset, read from the registry now) once per axis, renamed.
-
-    """
-    specs = MODEL_PARAMETERS + extension_parameters()
-    return tuple(replace(spec, name=axis_key(k, spec.name),
-                         description=f'Axis {k}: {spec.description}')
-                 for k in range(axes) for spec in specs)
 
 
 class MultiAxisCompensatorNode(CompensatorNodeBase):
@@ -206,10 +147,10 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
     def __init__(self, node_name: str = 'compensator', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        self._specs = dict(specs_by_name((AXES,) + _COMMON + _WIRING))
+        self._specs = dict(specs_by_name((AXES,) + multi_axis_parameters() + WIRING))
         declare_parameters(self, (AXES,))
         self.axes = int(self.get_parameter('axes').value)
-        per_axis = axis_parameters(self.axes) + _axis_limit_parameters(self.axes)
+        per_axis = axis_parameters(self.axes) + axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
         self._prefixes = tuple(axis_key(k, '') for k in range(self.axes))
         self._limit_keys = [(axis_key(k, 'output.min'), axis_key(k, 'output.max'))
@@ -219,7 +160,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         # Models and limits of one set_parameters request succeed or fail together.
         self._groups = (tuple(prefix + key for prefix in self._prefixes
                               for key in model_keys()) + self._all_limit_keys,)
-        declare_parameters(self, per_axis + _COMMON + _WIRING)
+        declare_parameters(self, per_axis + multi_axis_parameters() + WIRING)
         self._declared()
         self.joints = joint_names(self.get_parameter('joints').value, self.axes)
         self._flat = self.get_parameter('output_layout').value == 'flat'
@@ -244,8 +185,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._last_malformed = ''
         self._missing_joints = 0
         self._last_missing = ''
-        #: JointState name order -> index of each axis's joint in it.
-        self._joint_index: Dict[Tuple[str, ...], Any] = {}
+        self._joint_order = JointOrder(self.joints or ())
         # Last: with autostart, configure (_load: the models) and activate run here.
         if joint_state:
             self._open_topics(Float64MultiArray, 'desired_joint_states', 'current_commands',
@@ -289,100 +229,44 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
     def _on_desired_displacements(self, data: bytes) -> None:
         # As the single-axis node: raw messages, every queued one served here, sequence
         # numbers of the ones taken here checked for gaps.  A block is decoded by one
-        # numpy view of the bytes and answered by one tobytes (mpi_ros.nodes.arrays).
-        take = self._subscription.handle.take_message
-        publish = self._publisher.handle.publish_raw
-        loss = self._loss
-        loss.delivered()
-        served = 0
-        while True:
-            self._messages_in += 1
+        # numpy view of the bytes and answered by one tobytes (mpi_ros.array_layout).
+        def serve(data: bytes) -> None:
             try:
                 block = block_of(data, self.axes)
             except ArrayLayoutError as err:
                 self._malformed += 1
                 self._last_malformed = str(err)
-            else:
-                self._samples_in += block.shape[0]
-                compensator = self._live
-                if compensator is None:
-                    self._drop()      # an axis without a model, or not active
-                else:
-                    if self._timed:
-                        commands = self._timed_command(compensator, block)
-                    else:
-                        commands = compensator.command(block)
-                    if self._flat:        # ros2_control: one message per sample
-                        for row in commands:
-                            publish(encode_flat_float64_multiarray(row))
-                        self._messages_out += commands.shape[0]
-                    else:
-                        publish(encode_float64_multiarray(commands))
-                        self._messages_out += 1
-            served += 1
-            if served >= _DRAIN_LIMIT:
-                break
-            taken = take(Float64MultiArray, True)
-            if taken is None:
-                break
-            data, info = taken
-            loss.taken(info['publication_sequence_number'])
-        loss.served(served)
+                return
+            self._samples_in += block.shape[0]
+            self._serve(block)
+
+        self._drain(data, Float64MultiArray, serve, raw=True, limit=_DRAIN_LIMIT)
 
     def _on_joint_states(self, msg: Any) -> None:
         # input_message joint_state: JointState objects (rclpy deserialises them), each
         # one sample of every axis; queued ones taken here as in the array loop.
-        take = self._subscription.handle.take_message
-        loss = self._loss
-        loss.delivered()
-        served = 0
-        while True:
-            self._messages_in += 1
-            block = self._joint_block(msg)
-            if block is not None:
-                self._samples_in += 1
-                self._serve(block)
-            served += 1
-            if served >= _DRAIN_LIMIT:
-                break
-            taken = take(JointState, False)
-            if taken is None:
-                break
-            msg, info = taken
-            loss.taken(info['publication_sequence_number'])
-        loss.served(served)
+        self._drain(msg, JointState, self._serve_joint_state, raw=False,
+                    limit=_DRAIN_LIMIT)
+
+    def _serve_joint_state(self, msg: Any) -> None:
+        block = self._joint_block(msg)
+        if block is not None:
+            self._samples_in += 1
+            self._serve(block)
 
     def _joint_block(self, msg: Any) -> Any:
         """Return the 1 x N block of a JointState in axis order, or None (refused, counted)."""
-        names = tuple(msg.name)
-        index = self._joint_index.get(names)
-        if index is None:
-            position_of = {name: i for i, name in enumerate(names)}
-            missing = [joint for joint in self.joints if joint not in position_of]
-            if missing:
-                self._missing_joints += 1
-                self._last_missing = (
-                    f'JointState without {", ".join(missing)} (it names '
-                    f'{", ".join(names[:8]) or "no joint"}{" ..." if len(names) > 8 else ""})')
-                return None
-            if len(position_of) != len(names):
-                self._malformed += 1
-                self._last_malformed = 'JointState names a joint more than once'
-                return None
-            if len(self._joint_index) >= _NAME_ORDERS:
-                self._joint_index.clear()
-            index = np.array([position_of[joint] for joint in self.joints], dtype=np.intp)
-            self._joint_index[names] = index
-        position = msg.position
-        if len(position) != len(names):
+        block, fault, reason = self._joint_order.block(msg.name, msg.position)
+        if fault == 'missing_joints':
+            self._missing_joints += 1
+            self._last_missing = reason
+        elif fault:
             self._malformed += 1
-            self._last_malformed = (f'JointState with {len(names)} names and {len(position)} '
-                                    'positions; each joint needs its position')
-            return None
-        return np.asarray(position, dtype=np.float64)[index].reshape(1, -1)
+            self._last_malformed = reason
+        return block
 
     def _serve(self, block: Any) -> None:
-        """Command one block and publish it in the output layout (the JointState path)."""
+        """Command one block and publish it in the output layout (no model or inactive: drop)."""
         compensator = self._live
         if compensator is None:
             self._drop()
@@ -496,68 +380,16 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return f'{self.get_name()}: feedforward ({self.axes} axes)'
 
     def _status(self, losses: List[str], counters: Dict[str, int],
-                before: Dict[str, int]) -> Tuple[Any, str]:
-        """
-        Return the level and message of a diagnostics period.
-
-        WARN after a period with lost messages, incompatible peers, a queue more than half
-        full, malformed arrays, JointStates missing a joint or non-finite / out-of-range /
-        clamped inputs, and while an axis has no model; else OK.
-        """
-        problems = list(losses)
-        malformed = counters['malformed'] - before.get('malformed', 0)
-        if malformed:
-            problems.append(f'{malformed} malformed {self._what} in the last period (last: '
-                            f'{self._last_malformed})')
-        missing_joints = counters.get('missing_joints', 0) - before.get('missing_joints', 0)
-        if missing_joints:
-            problems.append(f'{missing_joints} JointState messages missing a joint of joints '
-                            f'in the last period, refused (last: {self._last_missing})')
-        faults = new_faults(counters, before)
-        if any(faults.values()):
-            problems.append(f'{describe_faults(faults)} in the last period')
-        missing = [str(axis) for axis, model in enumerate(self._models) if model is None]
-        if missing:
-            problems.append(f'no model for axis {", ".join(missing)}: unconfigured, no '
-                            'commands published; give every axis its axis<k>.model.* keys')
-        if problems:
-            return DiagnosticStatus.WARN, '; '.join(problems)
-        return DiagnosticStatus.OK, 'compensating'
+                before: Dict[str, int]) -> Tuple[int, str]:
+        return multi_axis_status(
+            losses, counters, before, what=self._what, last_malformed=self._last_malformed,
+            last_missing=self._last_missing,
+            missing_axes=[axis for axis, model in enumerate(self._models) if model is None])
 
     def _status_values(self) -> Dict[str, Any]:
-        values: Dict[str, Any] = {
-            'axes': self.axes, 'model_versions': ' '.join(map(str, self._model_versions))}
-        if self.joints:
-            values['joints'] = ' '.join(self.joints)
-        values['output_layout'] = 'flat' if self._flat else 'samples_x_axes'
-        for key, limits in zip(('output_min', 'output_max'), self._effective_limits()):
-            values[key] = limits[0] if len(set(limits)) == 1 else ' '.join(map(str, limits))
-        causes = ['-' if model is None else getattr(model, 'cause', 'none').replace(' + ', '+')
-                  for model in self._models]
-        values['extension'] = ' '.join(causes)
-        uncompensated = [str(axis) for axis, model in enumerate(self._models)
-                         if model is not None and kind_of(model).endswith('(not compensated)')]
-        if uncompensated:
-            values['not_compensated'] = ' '.join(uncompensated)
-        if self._compensator is not None:
-            for axis, compensator in enumerate(self._compensator.axes):
-                if compensator.has_effect:
-                    values[axis_key(axis, 'slow_state')] = ' '.join(
-                        f'{v:.6g}' for v in compensator.slow_state)
-        return values
-
-
-def _axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
-    """Return ``axis<k>.output.min`` / ``.max`` per axis: unset (node-wide) by default."""
-    words = {'output.min': ('lowest', 'below'), 'output.max': ('highest', 'above')}
-    specs = []
-    for k in range(axes):
-        for spec in LIMIT_PARAMETERS:
-            word, side = words[spec.name]
-            other = 'output.max' if spec.name == 'output.min' else 'output.min'
-            specs.append(replace(
-                spec, name=axis_key(k, spec.name), default=None,
-                description=(f'Axis {k}: {word} current command of this axis (its '
-                             f'safe actuator range); unset: {spec.name}; must be {side} '
-                             f'axis{k}.{other} (or {other} when that is unset)')))
-    return tuple(specs)
+        compensator = self._compensator
+        slow_states = [] if compensator is None else [
+            axis.slow_state if axis.has_effect else None for axis in compensator.axes]
+        return multi_axis_values(
+            self._models, model_versions=self._model_versions, joints=self.joints or (),
+            flat=self._flat, limits=self._effective_limits(), slow_states=slow_states)

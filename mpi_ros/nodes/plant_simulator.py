@@ -40,7 +40,7 @@ Several actuators (``axes`` > 1, read-only; default 1: the Float64 topics above)
     ``seed + 1``, ...; or the ``model.*`` MPI model for every axis), driven through
     ``current_commands`` [A] and answering on ``displacements`` [m], both
     ``std_msgs/msg/Float64MultiArray`` blocks of samples x axes as the multi-axis
-    compensator publishes them (:mod:`mpi_ros.nodes.arrays`): one displacement block of
+    compensator publishes them (:mod:`mpi_ros.array_layout`): one displacement block of
     the same shape per command block.  The K samples of a chunk are taken
     ``sample_period`` apart, the last one at the block's arrival.  A non-finite current
     is not applied (the source holds the axis's last current) and is counted.  Excitation
@@ -52,7 +52,6 @@ Recording (``record.path``)
     when the node stops cleanly (written beside it and renamed).
 """
 
-from dataclasses import replace
 import math
 import time
 from typing import Any, Dict, List, Optional, Tuple
@@ -64,57 +63,21 @@ from rclpy.parameter import Parameter
 from rclpy.task import Future
 from std_msgs.msg import Float64, Float64MultiArray
 
-from .arrays import ArrayLayoutError, block_of, encode_float64_multiarray
-from .multi_axis import AXES
 from .parameters import (
-    check_parameters, declare_parameters, harden_parameter_services, loop_qos_parameters,
-    MODEL_KEYS, MODEL_PARAMETERS, OPERATING_POINT_KEYS, parameter_values, ParameterRejected,
-    ParameterSpec, specs_by_name,
+    check_parameters, declare_parameters, harden_parameter_services, parameter_values,
 )
 from .qos import loop_qos
 from .spinning import run_node_main
-from ..actuator import ActuatorConfig, MagnetostrictiveActuator
-from ..diagnosis.signatures import diagnostic_excitation
-from ..excitation import identification_excitation
-from ..extensions.effect import plant_effects
-from ..model import MPIModel
+from ..actuator import MagnetostrictiveActuator
+from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray
+from ..compensation.parameters import specs_by_name
+from ..errors import ParameterRejected
+from ..plant import build_truth, describe_truth, excitation_schedule, plant_parameters
 from ..recordings import BagRecorder
 
 __all__ = ['PlantSimulatorNode', 'plant_parameters', 'main']
 
-Type = Parameter.Type
 
-#: ActuatorConfig fields that the node sets itself instead of an ``actuator.*`` parameter.
-_NODE_OWNED_FIELDS = {'noise_std_m': 'noise_std'}
-
-
-def _actuator_parameters() -> Tuple[ParameterSpec, ...]:
-    """Return the ``actuator.*`` specs: the actuator's fields, read from the registry now."""
-    specs = []
-    for field in ActuatorConfig.parameters():
-        if field.name in _NODE_OWNED_FIELDS:
-            continue
-        type_ = Type.INTEGER if isinstance(field.default, int) else Type.DOUBLE
-        specs.append(ParameterSpec(
-            f'actuator.{field.name}', type_, field.default,
-            f'Built-in actuator (truth:=builtin): {field.text}', read_only=True))
-    return tuple(specs)
-
-
-def plant_parameters() -> Tuple[ParameterSpec, ...]:
-    """
-    Return every parameter of the node, the effects' ``actuator.*`` ones as registered now.
-
-    Returns
-    -------
-    tuple of ParameterSpec
-        The node's own parameters with the ``actuator.*`` specs (the hysteresis core's,
-        the sensor's and the registered effects') after the ``model.*`` ones.  The module
-        attribute ``PARAMETERS`` is this, computed when it is read.
-
-    """
-    return (_OWN_PARAMETERS[:_ACTUATOR_AT] + _actuator_parameters()
-            + _OWN_PARAMETERS[_ACTUATOR_AT:])
 
 
 def __getattr__(name: str) -> Any:
@@ -123,76 +86,6 @@ def __getattr__(name: str) -> Any:
         return plant_parameters()
     msg = f'module {__name__!r} has no attribute {name!r}'
     raise AttributeError(msg)
-
-
-#: The node's parameters besides the ``actuator.*`` ones, which come from the effect
-#: registry when the node is built (:func:`plant_parameters`).
-_OWN_PARAMETERS = (
-    ParameterSpec('truth', Type.STRING, 'builtin',
-                  'What the simulated plant is: the built-in magnetostrictive actuator '
-                  '(actuator.*) or an MPI model (model.*)',
-                  choices=('builtin', 'mpi'), read_only=True),
-    *(replace(spec, description=f'truth:=mpi: {spec.description}', read_only=True)
-      for spec in MODEL_PARAMETERS),
-    ParameterSpec('noise_std', Type.DOUBLE, 0.0,
-                  'Standard deviation of additive Gaussian sensor noise, 0 = off', 'm',
-                  value_range=(0.0, 1.0), read_only=True),
-    ParameterSpec('seed', Type.INTEGER, 0, 'Seed of the sensor-noise generator',
-                  value_range=(0, 2 ** 62), read_only=True),
-    ParameterSpec('excitation.enabled', Type.BOOL, False,
-                  'Drive the plant with the identification excitation and publish it on '
-                  'current_command', read_only=True),
-    ParameterSpec('excitation.duration', Type.DOUBLE, 20.0,
-                  'Length of the identification excitation', 's',
-                  value_range=(0.01, 86400.0), read_only=True),
-    ParameterSpec('excitation.sample_rate', Type.DOUBLE, 1000.0,
-                  'Sample rate of the identification excitation', 'Hz',
-                  value_range=(1.0, 100000.0), read_only=True),
-    ParameterSpec('excitation.bias', Type.DOUBLE, 1.0,
-                  'Centre current of the identification excitation', 'A',
-                  value_range=(-1.0e3, 1.0e3), read_only=True),
-    ParameterSpec('excitation.amplitude', Type.DOUBLE, 0.8,
-                  'Largest deviation of the excitation current from its centre', 'A',
-                  value_range=(0.0, 1.0e3), read_only=True),
-    ParameterSpec('excitation.holds', Type.BOOL, True,
-                  'Include constant-current holds (expose creep) in the excitation',
-                  read_only=True),
-    ParameterSpec('excitation.bursts', Type.BOOL, True,
-                  'Include high-frequency bursts (expose rate dependence) in the excitation',
-                  read_only=True),
-    ParameterSpec('excitation.signal', Type.STRING, 'identification',
-                  'Excitation signal: identification (decaying loops, holds, bursts; '
-                  'excitation.duration long) or diagnostic (the validation record of '
-                  'mpi-ros diagnose: major loops, paired holds, bursts at 5-40 Hz; its '
-                  'length follows from excitation.repeats and excitation.hold_duration)',
-                  choices=('identification', 'diagnostic'), read_only=True),
-    ParameterSpec('excitation.hold_duration', Type.DOUBLE, 2.0,
-                  'Length of each constant-current hold of the excitation', 's',
-                  value_range=(0.0, 3600.0), read_only=True),
-    ParameterSpec('excitation.repeats', Type.INTEGER, 2,
-                  'excitation.signal:=diagnostic: number of loop-and-hold blocks',
-                  value_range=(1, 100), read_only=True),
-    ParameterSpec('excitation.exit_when_done', Type.BOOL, True,
-                  'Stop the node when the excitation is done (false: go on as a plant)',
-                  read_only=True),
-    ParameterSpec('record.path', Type.STRING, '',
-                  'Record current_command and displacement into a new rosbag2 bag here '
-                  '(empty: no recording)', read_only=True),
-    ParameterSpec('record.storage', Type.STRING, 'sqlite3', 'rosbag2 storage plugin',
-                  choices=('sqlite3', 'mcap'), read_only=True),
-    *loop_qos_parameters('current_command and displacement'),
-    replace(AXES, description=(
-        'Number of simulated actuators: 1 = current_command / displacement (Float64); '
-        'N > 1 = N independent plants on current_commands / displacements '
-        '(Float64MultiArray, samples x axes)')),
-    ParameterSpec('sample_period', Type.DOUBLE, 1.0e-3,
-                  'axes > 1: interval between the samples of one chunk (a message with '
-                  'several samples per axis)', 's', value_range=(1.0e-7, 10.0),
-                  read_only=True),
-)
-
-#: Where the ``actuator.*`` specs go in :func:`plant_parameters` (after ``model.*``).
-_ACTUATOR_AT = 1 + len(MODEL_PARAMETERS)
 
 #: Wall-clock period of the excitation timer; each tick publishes every due sample.
 _EXCITATION_TICK_S = 0.005
@@ -232,8 +125,8 @@ class PlantSimulatorNode(Node):
             msg = (f'axes={self.axes}: excitation.enabled and record.path are single-axis '
                    'only; set axes:=1, or leave excitation and recording off')
             raise ParameterRejected(msg)
-        self._plant = self._build_truth(values)
-        self._plants = [self._plant] + [self._build_truth(values, seed=values['seed'] + k)
+        self._plant = build_truth(values)
+        self._plants = [self._plant] + [build_truth(values, seed=values['seed'] + k)
                                         for k in range(1, self.axes)]
         self._held = np.zeros(self.axes)
         self.finished = Future()
@@ -259,7 +152,7 @@ class PlantSimulatorNode(Node):
         self._excitation_start: Optional[float] = None
         if values['excitation.enabled']:
             self._command_publisher = self.create_publisher(Float64, 'current_command', qos)
-            schedule_t, schedule_i = _excitation_schedule(values)
+            schedule_t, schedule_i = excitation_schedule(values)
             self._excitation = (np.asarray(schedule_t, dtype=float),
                                 np.asarray(schedule_i, dtype=float))
             self._excitation_index = 0
@@ -274,7 +167,7 @@ class PlantSimulatorNode(Node):
         if self._excitation is None:
             self._subscribe()
         self.get_logger().info(
-            f'simulating {_describe_truth(values)}'
+            f'simulating {describe_truth(values)}'
             + (f' x {self.axes} axes' if self.axes > 1 else '') + ': '
             f'{self.resolve_topic_name(self._input_topic)} [A] -> '
             f'{self._publisher.topic_name} [m]'
@@ -457,66 +350,16 @@ class PlantSimulatorNode(Node):
             return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
 
-    def _build_truth(self, values: Dict[str, Any], seed: Optional[int] = None) -> Any:
-        if values['truth'] == 'mpi':
-            missing = [key for key in MODEL_KEYS if values[key] is None]
-            if missing:
-                msg = f'truth:=mpi needs the model parameters; missing: {", ".join(missing)}'
-                raise ParameterRejected(msg)
-            return MPIModel.from_params(
-                {key: values[key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}).stream()
-        mapping = {name: value for name, value in values.items()
-                   if name.startswith('actuator.')}
-        for field_name in _NODE_OWNED_FIELDS:
-            mapping[f'actuator.{field_name}'] = 0.0
-        return MagnetostrictiveActuator(ActuatorConfig.from_mapping(mapping),
-                                        seed=values['seed'] if seed is None else seed)
-
 
 def main(args: Optional[List[str]] = None) -> int:
     """
     Run the plant simulator (``ros2 run mpi_ros plant_simulator --ros-args ...``).
 
-    Parameters
-    ----------
-    args : list of str, optional
-        Command line for ``rclpy.init`` (program name first); ``sys.argv`` if None.
-
-    Returns
-    -------
-    int
-        0 on shutdown or after the excitation; 1 when the truth cannot be built.
+    ``args`` is the command line for ``rclpy.init`` (program name first; ``sys.argv`` if
+    None).  Returns the exit status: 0 on shutdown or after the excitation; 1 when the
+    truth cannot be built.
 
     """
     return run_node_main(
         PlantSimulatorNode, 'plant_simulator', args,
         until=lambda node: node.finished if node.exits_when_done else None)
-
-
-def _describe_truth(values: Dict[str, Any]) -> str:
-    """Say in words what the node simulates (for its start-up log line)."""
-    if values['truth'] == 'mpi':
-        n = len(values['model.hysteresis.thresholds']) - 1
-        l_s = len(values['model.superposition.thresholds']) - 1
-        text = f'an MPI model (n={n}, l={l_s})'
-    else:
-        actuator = {name[len('actuator.'):]: value for name, value in values.items()
-                    if name.startswith('actuator.')}
-        effects = [plant.label for _, plant in plant_effects() if plant.is_on(actuator)]
-        text = ('the built-in magnetostrictive actuator (Preisach type'
-                + (f'; {", ".join(effects)}' if effects else '') + ')')
-    if values['noise_std'] > 0.0:
-        text += f' with {values["noise_std"]:g} m sensor noise'
-    return text
-
-
-def _excitation_schedule(values: Dict[str, Any]) -> Tuple[Any, Any]:
-    """Return the (time [s], current [A]) schedule of the excitation mode."""
-    common = {'sample_rate': values['excitation.sample_rate'],
-              'bias': values['excitation.bias'], 'amplitude': values['excitation.amplitude'],
-              'seed': values['seed'], 'hold_duration': values['excitation.hold_duration']}
-    if values['excitation.signal'] == 'diagnostic':
-        return diagnostic_excitation(repeats=values['excitation.repeats'], **common)
-    return identification_excitation(values['excitation.duration'],
-                                     holds=values['excitation.holds'],
-                                     bursts=values['excitation.bursts'], **common)

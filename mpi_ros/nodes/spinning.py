@@ -204,8 +204,7 @@ def run_node_main(make_node: Callable[[], Any], label: str, args: Optional[List[
         ``error:`` line on stderr.
 
     """
-    from ..errors import MPIError
-    from .parameters import ParameterRejected
+    from ..errors import MPIError, ParameterRejected
     with StopSignals() as stop:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         node = None

@@ -11,7 +11,7 @@ described by a :class:`Selection` (a joint and field of a
 ``Float64MultiArray``). The bag reader picks the reader by the topic's type
 as stored in the bag, through :data:`MESSAGE_READERS`.
 
-Chunked arrays (the multi-axis nodes' layout, :mod:`mpi_ros.nodes.arrays`)
+Chunked arrays (the multi-axis nodes' layout, :mod:`mpi_ros.array_layout`)
     A ``Float64MultiArray`` whose ``layout.dim`` has two entries is a block of
     ``dim[0].size`` = K samples x ``dim[1].size`` = N axes, row-major from
     ``layout.data_offset`` with the row stride ``dim[1].stride`` (N when it is

@@ -12,7 +12,7 @@ import time
 
 from mpi_ros.model import MPIModel
 from mpi_ros.nodes.identifier import push_model_parameters
-from mpi_ros.nodes.parameters import MODEL_KEYS, OPERATING_POINT_KEYS
+from mpi_ros.params import MODEL_KEYS, OPERATING_POINT_KEYS
 import numpy as np
 import pytest
 from std_msgs.msg import Float64

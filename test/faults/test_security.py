@@ -17,7 +17,7 @@ from pathlib import Path
 
 from mpi_ros.model import MPIModel
 from mpi_ros.nodes.compensator import PARAMETERS
-from mpi_ros.nodes.parameters import MODEL_KEYS
+from mpi_ros.params import MODEL_KEYS
 import numpy as np
 import pytest
 from rcl_interfaces.srv import ListParameters, SetParameters, SetParametersAtomically

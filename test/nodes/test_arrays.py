@@ -4,8 +4,8 @@
 import struct
 
 from hypothesis import event, given, HealthCheck, settings, strategies as st
-from mpi_ros.nodes import arrays
-from mpi_ros.nodes.arrays import (
+from mpi_ros import array_layout as arrays
+from mpi_ros.array_layout import (
     ArrayLayoutError, block_of, decode_float64_multiarray, encode_float64_multiarray,
 )
 import numpy as np

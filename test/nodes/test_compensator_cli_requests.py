@@ -20,7 +20,7 @@ import time
 from mpi_ros.compensation import Compensator
 from mpi_ros.model import MPIModel
 from mpi_ros.nodes.compensator import CompensatorNode
-from mpi_ros.nodes.parameters import MODEL_KEYS, OPERATING_POINT_KEYS
+from mpi_ros.params import MODEL_KEYS, OPERATING_POINT_KEYS
 from mpi_ros.params import write_params_yaml
 import numpy as np
 import pytest

@@ -12,8 +12,8 @@ import time
 from mpi_ros.compensation import Compensator
 from mpi_ros.extensions import extended_model_from_params
 from mpi_ros.nodes.compensator import CompensatorNode
-from mpi_ros.nodes.parameters import MODEL_KEYS
 from mpi_ros.nodes.spinning import events_executor
+from mpi_ros.params import MODEL_KEYS
 import numpy as np
 import pytest
 import rclpy
@@ -159,7 +159,7 @@ BAD_EXTENSIONS = {
     'thermal time constant 0 with a weight': ('model.thermal_drift.time_constant',
                                               {'model.thermal_drift.time_constant': 0.0,
                                                'model.thermal_drift.weight': 0.02}),
-    'two extensions': ('creep, rate_dependence', dict(CREEP, **RATE)),
+    'two extensions': ('creep, thermal_drift', dict(CREEP, **THERMAL)),
 }
 
 

@@ -19,9 +19,9 @@ import itertools
 import time
 
 from mpi_ros.compensation import Compensator
+from mpi_ros.errors import ParameterRejected
 from mpi_ros.extensions import extended_model_from_params
 from mpi_ros.nodes.multi_axis import axis_key, chunk_times, MultiAxisCompensatorNode
-from mpi_ros.nodes.parameters import ParameterRejected
 import numpy as np
 import pytest
 import rclpy

@@ -18,8 +18,8 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from mpi_ros.compensation import Compensator
+from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes.multi_axis import axis_key, MultiAxisCompensatorNode
-from mpi_ros.nodes.parameters import ParameterRejected
 import numpy as np
 import pytest
 import rclpy

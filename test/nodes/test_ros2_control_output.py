@@ -16,9 +16,9 @@ counted.  No timing is asserted; every wait is bounded.
 """
 
 from diagnostic_msgs.msg import DiagnosticStatus
+from mpi_ros.array_layout import encode_flat_float64_multiarray
 from mpi_ros.compensation import Compensator
 from mpi_ros.errors import ParameterRejected
-from mpi_ros.nodes.arrays import encode_flat_float64_multiarray
 from mpi_ros.nodes.compensator import make_node
 from mpi_ros.nodes.multi_axis import axis_key, MultiAxisCompensatorNode
 import numpy as np

@@ -1,0 +1,232 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The simulated plant as plain data: what the plant simulator node is given and builds.
+
+The node's parameter specs (:data:`PARAMETERS`), the plant they describe
+(:func:`build_truth`: the built-in magnetostrictive actuator or an MPI model), its
+description in words (:func:`describe_truth`) and the schedule of the excitation mode
+(:func:`excitation_schedule`).  The ROS side is :mod:`mpi_ros.nodes.plant_simulator`.
+"""
+
+from dataclasses import replace
+from typing import Any, Dict, Optional, Tuple
+
+from .actuator import ActuatorConfig, MagnetostrictiveActuator
+from .compensation.parameters import AXES, loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec
+from .diagnosis.signatures import diagnostic_excitation
+from .errors import ParameterRejected
+from .excitation import identification_excitation
+from .extensions.effect import plant_effects
+from .model import MPIModel
+from .params import MODEL_KEYS, OPERATING_POINT_KEYS
+
+__all__ = ['NODE_OWNED_FIELDS', 'actuator_parameters', 'plant_parameters', 'build_truth',
+           'describe_truth', 'excitation_schedule']
+
+
+#: ActuatorConfig fields that the node sets itself instead of an ``actuator.*`` parameter.
+NODE_OWNED_FIELDS = {'noise_std_m': 'noise_std'}
+
+
+def actuator_parameters() -> Tuple[ParameterSpec, ...]:
+    """
+    Return the ``actuator.*`` specs: the actuator's fields, the effects' read from the registry now.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        Read-only, with the config's defaults and descriptions (the hysteresis core's, the
+        sensor's and every registered effect's plant parameters).
+
+    """
+    specs = []
+    for field in ActuatorConfig.parameters():
+        if field.name in NODE_OWNED_FIELDS:
+            continue
+        type_ = 'integer' if isinstance(field.default, int) else 'double'
+        specs.append(ParameterSpec(
+            f'actuator.{field.name}', type_, field.default,
+            f'Built-in actuator (truth:=builtin): {field.text}', read_only=True))
+    return tuple(specs)
+
+
+def plant_parameters() -> Tuple[ParameterSpec, ...]:
+    """
+    Return the plant simulator node's parameters, the ``actuator.*`` ones as registered now.
+
+    Returns
+    -------
+    tuple of ParameterSpec
+        The node's own parameters with the ``actuator.*`` specs after the ``model.*`` ones.
+
+    """
+    return (_OWN_PARAMETERS[:_ACTUATOR_AT] + actuator_parameters()
+            + _OWN_PARAMETERS[_ACTUATOR_AT:])
+
+
+def __getattr__(name: str) -> Any:
+    """Return ``PARAMETERS``: the node's parameters, from the effect registry as it is now."""
+    if name == 'PARAMETERS':
+        return plant_parameters()
+    msg = f'module {__name__!r} has no attribute {name!r}'
+    raise AttributeError(msg)
+
+
+#: The node's parameters besides the ``actuator.*`` ones (see :func:`plant_parameters`).
+_OWN_PARAMETERS = (
+    ParameterSpec('truth', 'string', 'builtin',
+                  'What the simulated plant is: the built-in magnetostrictive actuator '
+                  '(actuator.*) or an MPI model (model.*)',
+                  choices=('builtin', 'mpi'), read_only=True),
+    *(replace(spec, description=f'truth:=mpi: {spec.description}', read_only=True)
+      for spec in MODEL_PARAMETERS),
+    ParameterSpec('noise_std', 'double', 0.0,
+                  'Standard deviation of additive Gaussian sensor noise, 0 = off', 'm',
+                  value_range=(0.0, 1.0), read_only=True),
+    ParameterSpec('seed', 'integer', 0, 'Seed of the sensor-noise generator',
+                  value_range=(0, 2 ** 62), read_only=True),
+    ParameterSpec('excitation.enabled', 'bool', False,
+                  'Drive the plant with the identification excitation and publish it on '
+                  'current_command', read_only=True),
+    ParameterSpec('excitation.duration', 'double', 20.0,
+                  'Length of the identification excitation', 's',
+                  value_range=(0.01, 86400.0), read_only=True),
+    ParameterSpec('excitation.sample_rate', 'double', 1000.0,
+                  'Sample rate of the identification excitation', 'Hz',
+                  value_range=(1.0, 100000.0), read_only=True),
+    ParameterSpec('excitation.bias', 'double', 1.0,
+                  'Centre current of the identification excitation', 'A',
+                  value_range=(-1.0e3, 1.0e3), read_only=True),
+    ParameterSpec('excitation.amplitude', 'double', 0.8,
+                  'Largest deviation of the excitation current from its centre', 'A',
+                  value_range=(0.0, 1.0e3), read_only=True),
+    ParameterSpec('excitation.holds', 'bool', True,
+                  'Include constant-current holds (expose creep) in the excitation',
+                  read_only=True),
+    ParameterSpec('excitation.bursts', 'bool', True,
+                  'Include high-frequency bursts (expose rate dependence) in the excitation',
+                  read_only=True),
+    ParameterSpec('excitation.signal', 'string', 'identification',
+                  'Excitation signal: identification (decaying loops, holds, bursts; '
+                  'excitation.duration long) or diagnostic (the validation record of '
+                  'mpi-ros diagnose: major loops, paired holds, bursts at 5-40 Hz; its '
+                  'length follows from excitation.repeats and excitation.hold_duration)',
+                  choices=('identification', 'diagnostic'), read_only=True),
+    ParameterSpec('excitation.hold_duration', 'double', 2.0,
+                  'Length of each constant-current hold of the excitation', 's',
+                  value_range=(0.0, 3600.0), read_only=True),
+    ParameterSpec('excitation.repeats', 'integer', 2,
+                  'excitation.signal:=diagnostic: number of loop-and-hold blocks',
+                  value_range=(1, 100), read_only=True),
+    ParameterSpec('excitation.exit_when_done', 'bool', True,
+                  'Stop the node when the excitation is done (false: go on as a plant)',
+                  read_only=True),
+    ParameterSpec('record.path', 'string', '',
+                  'Record current_command and displacement into a new rosbag2 bag here '
+                  '(empty: no recording)', read_only=True),
+    ParameterSpec('record.storage', 'string', 'sqlite3', 'rosbag2 storage plugin',
+                  choices=('sqlite3', 'mcap'), read_only=True),
+    *loop_qos_parameters('current_command and displacement'),
+    replace(AXES, description=(
+        'Number of simulated actuators: 1 = current_command / displacement (Float64); '
+        'N > 1 = N independent plants on current_commands / displacements '
+        '(Float64MultiArray, samples x axes)')),
+    ParameterSpec('sample_period', 'double', 1.0e-3,
+                  'axes > 1: interval between the samples of one chunk (a message with '
+                  'several samples per axis)', 's', value_range=(1.0e-7, 10.0),
+                  read_only=True),
+)
+#: Where the ``actuator.*`` specs go in :func:`plant_parameters` (after ``model.*``).
+_ACTUATOR_AT = 1 + len(MODEL_PARAMETERS)
+
+
+def build_truth(values: Dict[str, Any], seed: Optional[int] = None) -> Any:
+    """
+    Build the simulated plant the node's parameters describe.
+
+    Parameters
+    ----------
+    values : dict
+        The node's parameter values (``truth``, ``model.*``, ``actuator.*``, ``seed``).
+    seed : int, optional
+        Seed of the actuator's noise; None: ``values['seed']``.
+
+    Returns
+    -------
+    object
+        The streaming MPI model (``truth:=mpi``) or the built-in actuator.
+
+    Raises
+    ------
+    ParameterRejected
+        For ``truth:=mpi`` without the model's parameters, naming the missing keys.
+
+    """
+    if values['truth'] == 'mpi':
+        missing = [key for key in MODEL_KEYS if values[key] is None]
+        if missing:
+            msg = f'truth:=mpi needs the model parameters; missing: {", ".join(missing)}'
+            raise ParameterRejected(msg)
+        return MPIModel.from_params(
+            {key: values[key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}).stream()
+    mapping = {name: value for name, value in values.items()
+               if name.startswith('actuator.')}
+    for field_name in NODE_OWNED_FIELDS:
+        mapping[f'actuator.{field_name}'] = 0.0
+    return MagnetostrictiveActuator(ActuatorConfig.from_mapping(mapping),
+                                    seed=values['seed'] if seed is None else seed)
+
+
+def describe_truth(values: Dict[str, Any]) -> str:
+    """
+    Say in words what the plant simulator simulates (for its start-up log line).
+
+    Parameters
+    ----------
+    values : dict
+        The node's parameter values.
+
+    Returns
+    -------
+    str
+        E.g. ``'an MPI model (n=3, l=2) with 1e-08 m sensor noise'``.
+
+    """
+    if values['truth'] == 'mpi':
+        n = len(values['model.hysteresis.thresholds']) - 1
+        l_s = len(values['model.superposition.thresholds']) - 1
+        text = f'an MPI model (n={n}, l={l_s})'
+    else:
+        actuator = {name[len('actuator.'):]: value for name, value in values.items()
+                    if name.startswith('actuator.')}
+        effects = [plant.label for _, plant in plant_effects() if plant.is_on(actuator)]
+        text = ('the built-in magnetostrictive actuator (Preisach type'
+                + (f'; {", ".join(effects)}' if effects else '') + ')')
+    if values['noise_std'] > 0.0:
+        text += f' with {values["noise_std"]:g} m sensor noise'
+    return text
+
+
+def excitation_schedule(values: Dict[str, Any]) -> Tuple[Any, Any]:
+    """
+    Return the schedule of the plant simulator's excitation mode.
+
+    Parameters
+    ----------
+    values : dict
+        The node's parameter values (``excitation.*``, ``seed``).
+
+    Returns
+    -------
+    time, current : ndarray of float
+        Sample times [s] and currents [A].
+
+    """
+    common = {'sample_rate': values['excitation.sample_rate'],
+              'bias': values['excitation.bias'], 'amplitude': values['excitation.amplitude'],
+              'seed': values['seed'], 'hold_duration': values['excitation.hold_duration']}
+    if values['excitation.signal'] == 'diagnostic':
+        return diagnostic_excitation(repeats=values['excitation.repeats'], **common)
+    return identification_excitation(values['excitation.duration'],
+                                     holds=values['excitation.holds'],
+                                     bursts=values['excitation.bursts'], **common)
