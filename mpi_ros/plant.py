@@ -30,7 +30,7 @@ NODE_OWNED_FIELDS = {'noise_std_m': 'noise_std'}
 
 def actuator_parameters() -> Tuple[ParameterSpec, ...]:
     """
-    Return the ``actuator.*`` specs: the actuator's fields, the effects' read from the registry now.
+    Return the ``actuator.*`` specs: the actuator's fields, the effects' from the registry now.
 
     Returns
     -------

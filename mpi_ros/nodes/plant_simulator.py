@@ -78,14 +78,13 @@ from ..recordings import BagRecorder
 __all__ = ['PlantSimulatorNode', 'plant_parameters', 'main']
 
 
-
-
 def __getattr__(name: str) -> Any:
     """Return ``PARAMETERS``: every parameter, from the effect registry as it is now."""
     if name == 'PARAMETERS':
         return plant_parameters()
     msg = f'module {__name__!r} has no attribute {name!r}'
     raise AttributeError(msg)
+
 
 #: Wall-clock period of the excitation timer; each tick publishes every due sample.
 _EXCITATION_TICK_S = 0.005
