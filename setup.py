@@ -121,7 +121,7 @@ setup(
             'compensator = mpi_ros.nodes.compensator:main',
             'identifier = mpi_ros.nodes.identifier:main',
             'plant_simulator = mpi_ros.nodes.plant_simulator:main',
-            'mpi-ros = mpi_ros.cli:main',
+            'mpi-ros = mpi_ros.app.cli:main',
         ],
     },
 )

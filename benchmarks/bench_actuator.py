@@ -3,7 +3,7 @@
 """
 Actuator (plant simulation) speed benchmark (run on demand, not in the test suite).
 
-Measures :class:`mpi_ros.actuator.MagnetostrictiveActuator` on the machine this runs on:
+Measures :class:`mpi_ros.plant.actuator.MagnetostrictiveActuator` on the machine this runs on:
 batch ``simulate`` (samples per second, best of repeats) and the streaming ``step`` the
 plant simulator node calls once per command (median and p99 per sample), without effects
 and with every plant effect on, and ``advance`` with one sample (the general path, with the
@@ -18,7 +18,7 @@ import os
 import platform
 import time
 
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 import numpy as np
 
 #: Every effect of the built-in plant on (the strengths of the tests and the demo).

@@ -21,9 +21,10 @@ For every effect (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``,
 3. **Track.**  Per model, a fresh plant simulator process with the effect and a fresh
    compensator process loading the file (``--params-file``, ``output.min:=0.2``,
    ``output.max:=1.8``); the driver sends the desired displacement in real time at
-   ``--rate`` Hz in lock step (:meth:`mpi_ros.harness.LoopDriver.exchange_paced`: both nodes
+   ``--rate`` Hz in lock step (:meth:`mpi_ros.nodes.harness.LoopDriver.exchange_paced`: both nodes
    time a message by their steady clocks at its arrival): a 1 s lead from the record's
-   rest reading, then ``--track-duration`` s of :func:`mpi_ros.excitation.tracking_trajectory`
+   rest reading, then ``--track-duration`` s of
+   :func:`mpi_ros.plant.excitation.tracking_trajectory`
    in the middle 80 % of the recorded output range.
 4. **Score** the tracking part: RMS = rms(s - s_c) / max|s_c| and the control error (38)
    max|s - s_c| / max|s_c|, for plain and extended, and their ratios (extended / plain);
@@ -37,7 +38,7 @@ dead-time fit alone (the compensator warns); the row shows what that does, no wi
 DDS stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) on ``--domain-id``
 or on a free one of the benchmarks' domains 231-232 (claimed with a file lock); every
 process is stopped by its PID.  ``--offline`` runs the same protocol in this process
-without DDS (plant :class:`~mpi_ros.actuator.MagnetostrictiveActuator`, compensator
+without DDS (plant :class:`~mpi_ros.plant.actuator.MagnetostrictiveActuator`, compensator
 :class:`~mpi_ros.compensation.Compensator`, the node's core objects, with exact sample
 times).
 
@@ -57,17 +58,17 @@ import tempfile
 import time
 from typing import Any, Iterator
 
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.compensation import Compensator, gamma_of
 from mpi_ros.diagnosis import diagnose
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import MPIError
-from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.extensions import EFFECTS, extended_model_from_params
 from mpi_ros.extensions.effect import plant_switch
 from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error
 from mpi_ros.params import write_params_yaml
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.recordings import Recording
 import numpy as np
 
@@ -212,14 +213,14 @@ class DDSLoop:
     """The node processes of one benchmark run, each stopped by its PID."""
 
     def __init__(self, out, rate):
-        from mpi_ros.harness import LoopDriver
+        from mpi_ros.nodes.harness import LoopDriver
         self.out, self.rate = out, rate
         self.processes = []
         self.driver = LoopDriver('mpi_ros_bench_closed_loop_effects')
 
     def start(self, node, args, log):
         """Start a node process and remember it."""
-        from mpi_ros.harness import NodeProcess
+        from mpi_ros.nodes.harness import NodeProcess
         proc = NodeProcess(node, args, self.out / log)
         self.processes.append(proc)
         return proc

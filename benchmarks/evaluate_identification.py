@@ -26,11 +26,11 @@ from pathlib import Path
 import time
 
 from mpi_ros import IdentificationError, identify
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.excitation import identification_excitation
 from mpi_ros.identification import burn_in, fit_plain, identify_weights
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
+from mpi_ros.plant.synthetic import SYNTHETIC_KINDS, synthetic_record
 from mpi_ros.recordings import read_csv_signals
-from mpi_ros.synthetic import SYNTHETIC_KINDS, synthetic_record
 import numpy as np
 
 NOISE = 0.002                     # sensor noise, fraction of the output range
@@ -236,7 +236,8 @@ def evaluate_cross_rate(directory):
 
 def evaluate_synthetic(seeds=(1, 2, 3)):
     """Print part (d): issue 17's synthetic plants, identified whole."""
-    print('\n(d) synthetic plants (mpi_ros.synthetic; built-in actuator, 0.2 % noise, own zero'
+    print('\n(d) synthetic plants (mpi_ros.plant.synthetic; built-in actuator, 0.2 % noise,'
+          ' own zero'
           ' and sign), order auto with the time base: refusals, dynamics estimated (dead time'
           ' / lag, ms; the modelled one starred), the model from sample 0 (RMS %), the fitted'
           ' samples (ringing left out), the plain (14, 7) QP')

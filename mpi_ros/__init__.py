@@ -15,7 +15,7 @@ state of the sources), never in the package: see :mod:`mpi_ros._numba_cache`.
 from . import _numba_cache  # noqa: F401
 from .errors import DataError, IdentificationError, ModelError, MPIError, MPIWarning
 from .identification import IdentificationResult, identify
-from .model import MPIModel
+from .operators.model import MPIModel
 
 __all__ = ['MPIModel', 'identify', 'IdentificationResult', 'MPIError', 'ModelError',
            'IdentificationError', 'DataError', 'MPIWarning']

@@ -1,9 +1,9 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Random valid MPI models and signals shared by the core tests."""
 
-from mpi_ros.hysteresis import PIHysteresisOperator
-from mpi_ros.model import MPIModel
-from mpi_ros.superposition import PISuperpositionOperator
+from mpi_ros.operators.hysteresis import PIHysteresisOperator
+from mpi_ros.operators.model import MPIModel
+from mpi_ros.operators.superposition import PISuperpositionOperator
 import numpy as np
 
 

@@ -38,13 +38,13 @@ def node_command(executable):
     -------
     list of str
         The console script beside this Python (``pip install``), else
-        ``python -m mpi_ros.cli <node>`` (the same ``main``).
+        ``python -m mpi_ros.app.cli <node>`` (the same ``main``).
 
     """
     script = Path(sys.executable).with_name(executable)
     if script.is_file() and os.access(script, os.X_OK):
         return [str(script)]
-    return [sys.executable, '-m', 'mpi_ros.cli', _CLI_NAMES.get(executable, executable)]
+    return [sys.executable, '-m', 'mpi_ros.app.cli', _CLI_NAMES.get(executable, executable)]
 
 
 def bad_output(text):

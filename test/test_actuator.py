@@ -1,9 +1,9 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
-"""Tests of the simulated magnetostrictive actuator (mpi_ros.actuator)."""
+"""Tests of the simulated magnetostrictive actuator (mpi_ros.plant.actuator)."""
 
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.errors import DataError, ModelError
-from mpi_ros.excitation import identification_excitation
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 import numpy as np
 import pytest
 

@@ -11,7 +11,7 @@ test/data/make_actuator_reference.py, which also stores the inputs and each case
 import json
 from pathlib import Path
 
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 import numpy as np
 import pytest
 

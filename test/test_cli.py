@@ -5,7 +5,7 @@ import json
 import re
 
 from mpi_ros import identify, MPIModel
-from mpi_ros.cli import main
+from mpi_ros.app.cli import main
 from mpi_ros.params import read_params_yaml
 from mpi_ros.recordings import read_csv_table, write_bag_signals, write_csv_columns
 import numpy as np

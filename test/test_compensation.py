@@ -4,8 +4,8 @@
 from mpi_ros import MPIModel
 from mpi_ros.compensation import Compensator
 from mpi_ros.errors import ModelError
-from mpi_ros.hysteresis import PIHysteresisOperator
-from mpi_ros.memory import TurningPointMemory
+from mpi_ros.operators.hysteresis import PIHysteresisOperator
+from mpi_ros.operators.memory import TurningPointMemory
 import numpy as np
 import pytest
 
@@ -121,7 +121,7 @@ def test_bumpless_swap_starts_new_model_at_the_operating_point():
 
 
 def _inverse_state(model, z_h):
-    from mpi_ros.inverse import invert_hysteresis_initial_states
+    from mpi_ros.operators.inverse import invert_hysteresis_initial_states
     return invert_hysteresis_initial_states(z_h, model.hysteresis.weights)
 
 

@@ -6,7 +6,8 @@ import subprocess
 import sys
 
 CORE_MODULES = ['mpi_ros', 'mpi_ros.identification', 'mpi_ros.compensation', 'mpi_ros.params',
-                'mpi_ros.metrics', 'mpi_ros.memory', 'mpi_ros.inverse', 'mpi_ros.array_layout']
+                'mpi_ros.metrics', 'mpi_ros.operators.memory', 'mpi_ros.operators.inverse',
+                'mpi_ros.array_layout']
 
 
 def test_core_does_not_import_ros():
@@ -20,3 +21,31 @@ def test_core_does_not_import_ros():
     done = subprocess.run([sys.executable, '-c', code], cwd=root, capture_output=True,
                           text=True, timeout=120)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+#: Top-level packages that belong to ROS (rclpy and the generated message packages).
+ROS_PACKAGES = ('rclpy', 'rcl_interfaces', 'std_msgs', 'sensor_msgs', 'diagnostic_msgs',
+                'lifecycle_msgs', 'builtin_interfaces', 'rosidl_runtime_py', 'rosidl_parser',
+                'rosgraph_msgs', 'launch', 'launch_ros', 'ament_index_python', 'rosbag2_py')
+
+
+def _imported_packages(path):
+    import ast
+    tree = ast.parse(path.read_text(), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name.split('.')[0]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            yield node.lineno, node.module.split('.')[0]
+
+
+def test_no_module_outside_the_ros_side_imports_ros():
+    # Every module of the package (found on disk, not a hand-kept list) outside
+    # mpi_ros/nodes/, at any depth and in any function (lazy imports too).
+    package = Path(__file__).resolve().parents[1] / 'mpi_ros'
+    core = [p for p in package.rglob('*.py') if 'nodes' not in p.relative_to(package).parts]
+    assert len(core) > 40, core
+    found = [f'{p.relative_to(package.parent)}:{line} imports {name}'
+             for p in core for line, name in _imported_packages(p) if name in ROS_PACKAGES]
+    assert not found, '\n'.join(found)

@@ -1,7 +1,7 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """``mpi-ros demo``: which ROS_DOMAIN_ID it uses (the run itself: test/integration)."""
 
-from mpi_ros.demo import demo_domain_id
+from mpi_ros.app.demo import demo_domain_id
 from mpi_ros.errors import MPIError
 import pytest
 

@@ -1,8 +1,8 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
-"""Tests of the excitation signals (mpi_ros.excitation)."""
+"""Tests of the excitation signals (mpi_ros.plant.excitation)."""
 
 from mpi_ros.errors import DataError
-from mpi_ros.excitation import identification_excitation, tracking_trajectory
+from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
 import numpy as np
 import pytest
 

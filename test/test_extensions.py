@@ -3,11 +3,9 @@
 
 import warnings
 
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.compensation import Compensator
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import DataError, ModelError
-from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.extensions import CompositeModel, CreepModel, DeadTimeModel, EFFECTS, \
     extended_model_from_params, fit_composite, fit_creep, fit_dead_time, \
     fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
@@ -16,6 +14,8 @@ from mpi_ros.extensions._signals import delay, first_order_lag, lag_bank, \
 from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error, rms_range_error
 from mpi_ros.params import OPERATING_POINT_KEYS
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
 import numpy as np
 import pytest
 

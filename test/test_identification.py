@@ -3,12 +3,12 @@
 
 from mpi_ros import IdentificationError, identify, MPIModel
 from mpi_ros.errors import DataError
-from mpi_ros.hysteresis import PIHysteresisOperator
 from mpi_ros.identification import (fit_model, hysteresis_thresholds,
                                     inverse_superposition_thresholds, select_order)
-from mpi_ros.inverse import invert_superposition
+from mpi_ros.operators.hysteresis import PIHysteresisOperator
+from mpi_ros.operators.inverse import invert_superposition
+from mpi_ros.operators.superposition import PISuperpositionOperator
 from mpi_ros.params import check_model_parameters
-from mpi_ros.superposition import PISuperpositionOperator
 import numpy as np
 import pytest
 
@@ -113,8 +113,8 @@ def test_biased_current_and_positive_displacement_si_units():
 
 
 def test_error_table_falls_and_saturates_on_non_mpi_truth():
-    actuator = pytest.importorskip('mpi_ros.actuator')
-    excitation = pytest.importorskip('mpi_ros.excitation')
+    actuator = pytest.importorskip('mpi_ros.plant.actuator')
+    excitation = pytest.importorskip('mpi_ros.plant.excitation')
     t, x = excitation.identification_excitation(60.0, sample_rate=200.0, seed=1, holds=False,
                                                 bursts=False)
     s = actuator.MagnetostrictiveActuator(actuator.ActuatorConfig(), seed=1).simulate(t, x)

@@ -1,11 +1,11 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Analytic inverse: transformation laws (12)-(14), (22)-(25) and Gamma^-1 (27)."""
 
-from mpi_ros.hysteresis import PIHysteresisOperator
-from mpi_ros.inverse import (invert_hysteresis, invert_hysteresis_initial_states,
-                             invert_hysteresis_thresholds, invert_hysteresis_weights,
-                             invert_superposition)
-from mpi_ros.superposition import PISuperpositionOperator
+from mpi_ros.operators.hysteresis import PIHysteresisOperator
+from mpi_ros.operators.inverse import (invert_hysteresis, invert_hysteresis_initial_states,
+                                       invert_hysteresis_thresholds, invert_hysteresis_weights,
+                                       invert_superposition)
+from mpi_ros.operators.superposition import PISuperpositionOperator
 import numpy as np
 import pytest
 

@@ -5,7 +5,7 @@ from hypothesis import given, settings, strategies as st
 from mpi_ros.compensation import Compensator, MultiAxisCompensator
 from mpi_ros.errors import DataError, ModelError
 from mpi_ros.extensions import CreepModel, RateDependentModel
-from mpi_ros.memory import TurningPointMemory
+from mpi_ros.operators.memory import TurningPointMemory
 import numpy as np
 import pytest
 

@@ -17,8 +17,8 @@ from mpi_ros.compensation.status import (
 )
 from mpi_ros.errors import DataError, MPIError, ParameterRejected
 from mpi_ros.params import INPUT_OFFSET, MODEL_KEYS, OUTPUT_SIGN
-from mpi_ros.plant import build_truth, describe_truth, excitation_schedule
-from mpi_ros.plant import PARAMETERS as PLANT_PARAMETERS
+from mpi_ros.plant.simulator import build_truth, describe_truth, excitation_schedule
+from mpi_ros.plant.simulator import PARAMETERS as PLANT_PARAMETERS
 import numpy as np
 import pytest
 
@@ -29,7 +29,7 @@ LOSSLESS = {'messages_lost': 0, 'incompatible_qos': 0}
 
 def test_the_moved_modules_import_no_ros():
     code = ('import sys, mpi_ros.compensation.parameters, mpi_ros.compensation.status, '
-            'mpi_ros.plant, mpi_ros.bag_identification, mpi_ros.array_layout; '
+            'mpi_ros.plant.simulator, mpi_ros.bag_identification, mpi_ros.array_layout; '
             "sys.exit(any(m.split('.')[0] in ('rclpy', 'rcl_interfaces', 'std_msgs', "
             "'diagnostic_msgs') for m in sys.modules))")
     assert subprocess.run([sys.executable, '-c', code], check=False).returncode == 0

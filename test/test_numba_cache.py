@@ -23,7 +23,7 @@ PACKAGE = Path(mpi_ros.__file__).resolve().parent
 RUN_KERNEL = (
     'import numpy as np\n'
     'import mpi_ros\n'
-    'from mpi_ros.play import play_operator\n'
+    'from mpi_ros.operators.play import play_operator\n'
     'import numba\n'
     'play_operator(np.linspace(0.0, 1.0, 50), [0.0, 0.1], [0.0, 0.0])\n'
     'print(numba.config.CACHE_DIR)\n'

@@ -11,10 +11,10 @@ import functools
 
 from hypothesis import given, HealthCheck, settings, strategies as st
 from mpi_ros import IdentificationError, identify
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.compensation import Compensator
-from mpi_ros.excitation import identification_excitation, tracking_trajectory
 from mpi_ros.identification import burn_in, identify_weights
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
 import numpy as np
 import pytest
 

@@ -1,11 +1,11 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Elementary operators (2)-(4), (16)-(17), H (5), S (18), Gamma (26): batch == streaming."""
 
-from mpi_ros.deadzone import dead_zone_operator
 from mpi_ros.errors import ModelError
-from mpi_ros.hysteresis import PIHysteresisOperator
-from mpi_ros.play import play_operator, PlayOperatorStream
-from mpi_ros.superposition import PISuperpositionOperator
+from mpi_ros.operators.deadzone import dead_zone_operator
+from mpi_ros.operators.hysteresis import PIHysteresisOperator
+from mpi_ros.operators.play import play_operator, PlayOperatorStream
+from mpi_ros.operators.superposition import PISuperpositionOperator
 import numpy as np
 import pytest
 

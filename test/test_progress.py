@@ -9,12 +9,12 @@ import io
 import json
 import sys
 
-from mpi_ros.cli import main
+from mpi_ros.app.cli import main
+from mpi_ros.app.progress import Progress
 from mpi_ros.identification import identify
 import mpi_ros.identification.selection as selection
-from mpi_ros.progress import Progress
+from mpi_ros.plant.synthetic import synthetic_record
 from mpi_ros.recordings import write_csv_columns
-from mpi_ros.synthetic import synthetic_record
 import numpy as np
 import pytest
 

@@ -12,12 +12,12 @@ YAML's header, else the one the model's thresholds tell.
 import re
 
 from mpi_ros import identify, MPIModel
-from mpi_ros.cli import main
+from mpi_ros.app.cli import main
+from mpi_ros.app.ranges import identified_range, outside, recorded_range
 from mpi_ros.compensation import Compensator, operating_range
 from mpi_ros.params import read_params_yaml, write_params_yaml
-from mpi_ros.ranges import identified_range, outside, recorded_range
+from mpi_ros.plant.synthetic import synthetic_record
 from mpi_ros.recordings import read_csv_table, write_csv_columns
-from mpi_ros.synthetic import synthetic_record
 import numpy as np
 import pytest
 

@@ -8,11 +8,11 @@ spaced samples the reader must rebuild exactly the per-sample recording, whateve
 chunk sizes of the input and output topics.
 """
 
-from mpi_ros.actuator import MagnetostrictiveActuator
-from mpi_ros.cli import main
+from mpi_ros.app.cli import main
 from mpi_ros.errors import DataError
-from mpi_ros.excitation import identification_excitation
 from mpi_ros.params import read_params_yaml
+from mpi_ros.plant.actuator import MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import DataOptions, read_bag_signals, read_recording, read_signals
 from mpi_ros.recordings.messages import Float64MultiArrayReader, Selection, SelectionError
 import numpy as np

@@ -12,11 +12,11 @@ import json
 import math
 import re
 
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.cli import main
+from mpi_ros.app.cli import main
 from mpi_ros.diagnosis.report import data_units, markdown, summary_lines
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
-from mpi_ros.excitation import identification_excitation
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import write_csv_columns
 import numpy as np
 import pytest

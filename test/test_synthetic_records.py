@@ -5,7 +5,7 @@ Issue 17's synthetic plants: dynamics and any start, identified whole.
 Lag 0.5-5 ms at 1-10 kHz, dead time of 1-10 samples, 500-1000 Hz ringing after steps,
 starts at rest, virgin and mid-history, rising-amplitude sines, one 300-sample loop: the
 built-in actuator (not an MPI model) with 0.2 % noise, an arbitrary sensor zero and sign
-(:mod:`mpi_ros.synthetic`).  No record is refused; the lag or dead time is estimated within
+(:mod:`mpi_ros.plant.synthetic`).  No record is refused; the lag or dead time is estimated within
 20 %; the model simulated from the first sample is within the noise plus 0.5 points (the
 ringing records outside their ringing, which a rate-independent model cannot follow; over
 the whole record they are no worse than the plain (14, 7) QP).
@@ -13,7 +13,7 @@ the whole record they are no worse than the plain (14, 7) QP).
 
 from mpi_ros import identify
 from mpi_ros.identification import fit_plain
-from mpi_ros.synthetic import SYNTHETIC_KINDS, synthetic_record
+from mpi_ros.plant.synthetic import SYNTHETIC_KINDS, synthetic_record
 import numpy as np
 import pytest
 

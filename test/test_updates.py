@@ -9,7 +9,7 @@ from mpi_ros.compensation.updates import (
 )
 from mpi_ros.errors import ModelError, ParameterRejected
 from mpi_ros.extensions.effect import effect_off_values
-from mpi_ros.model import MPIModel
+from mpi_ros.operators.model import MPIModel
 from mpi_ros.params import MODEL_KEYS
 import numpy as np
 import pytest

@@ -10,8 +10,8 @@ mkdir -p "${WORKDIR:-/tmp/clicheck}" && cd "${WORKDIR:-/tmp/clicheck}"
 $V/python - <<'PY'
 import numpy as np
 from mpi_ros import identify
-from mpi_ros.actuator import MagnetostrictiveActuator
-from mpi_ros.excitation import identification_excitation
+from mpi_ros.plant.actuator import MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.params import write_params_yaml
 t, x = identification_excitation(20.0, sample_rate=200.0, seed=1, holds=False, bursts=False)
 y = 3e-4 - MagnetostrictiveActuator().simulate(t, x)          # sensor with its own zero, falling

@@ -14,8 +14,8 @@ ros2() { timeout 60 "$V/ros2" "$@" 2>&1; }
 # A model file from identify.
 $V/python - <<'PY'
 from mpi_ros import identify
-from mpi_ros.actuator import MagnetostrictiveActuator
-from mpi_ros.excitation import identification_excitation
+from mpi_ros.plant.actuator import MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.params import write_params_yaml
 t, x = identification_excitation(20.0, sample_rate=200.0, seed=1, holds=False, bursts=False)
 model = identify(x, MagnetostrictiveActuator().simulate(t, x), n=6, l=3).model

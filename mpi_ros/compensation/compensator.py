@@ -19,8 +19,8 @@ from .kernels import (
 )
 from .screening import best_linear_map, operating_range, screen_desired
 from ..errors import ModelError
-from ..memory import TurningPointMemory
-from ..model import _hysteresis_step, _superposition_value, MPIModel
+from ..operators.memory import TurningPointMemory
+from ..operators.model import _hysteresis_step, _superposition_value, MPIModel
 
 __all__ = ['Compensator', 'InverseStep', 'Pack', 'gamma_of', 'inverse_step_of', 'kind_of',
            'loop_block', 'pack']

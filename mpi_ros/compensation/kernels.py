@@ -6,7 +6,7 @@ One step (:func:`_compensate_step`); a samples x axes block with the screening, 
 and turning points in one compiled loop (:func:`_compensate_axes`: a chunk of one axis is a
 one-column block); and the per-step inverse of H with its first weight raised
 (:func:`_inverse_value`, for the effects' exact inverses).  The laws themselves are in
-:mod:`mpi_ros.inverse` and :mod:`mpi_ros.play`, once.
+:mod:`mpi_ros.operators.inverse` and :mod:`mpi_ros.operators.play`, once.
 """
 
 import numba
@@ -14,9 +14,9 @@ import numpy as np
 import numpy.typing as npt
 
 from .screening import SATURATION_RANGES
-from ..inverse import hysteresis_inverse_laws, hysteresis_inverse_states
-from ..memory import memory_push
-from ..model import _hysteresis_step, _superposition_value
+from ..operators.inverse import hysteresis_inverse_laws, hysteresis_inverse_states
+from ..operators.memory import memory_push
+from ..operators.model import _hysteresis_step, _superposition_value
 
 FloatArray = npt.NDArray[np.float64]
 

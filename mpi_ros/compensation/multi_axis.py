@@ -19,8 +19,8 @@ from .compensator import (
 )
 from .kernels import _compensate_axes, TABLE_COLUMNS
 from ..errors import DataError, ModelError, ParameterRejected
-from ..memory import TurningPointMemory
-from ..model import MPIModel
+from ..operators.memory import TurningPointMemory
+from ..operators.model import MPIModel
 
 __all__ = ['JointOrder', 'MultiAxisCompensator', 'chunk_times', 'joint_names']
 
@@ -55,7 +55,7 @@ class MultiAxisCompensator:
     sample_period : float
         Nominal command interval [s] (effects with lags only).
     memory_capacity : int
-        Turning points kept per axis (see :class:`~mpi_ros.memory.TurningPointMemory`).
+        Turning points kept per axis (see :class:`~mpi_ros.operators.memory.TurningPointMemory`).
     inverses : sequence of MPIModel or None, optional
         Gamma^-1 of each axis's model where already built (None: built here).
 

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['screen_desired', 'LinearMap', 'operating_range', 'best_linear_map', 'FAULT_KEYS',
            'new_faults', 'describe_faults']

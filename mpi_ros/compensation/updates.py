@@ -38,7 +38,7 @@ from .compensator import Compensator, gamma_of, inverse_step_of
 from ..errors import MPIError, ParameterRejected
 from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
-from ..model import MPIModel
+from ..operators.model import MPIModel
 from ..params import MODEL_KEYS, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS
 
 __all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'Prepared', 'apply', 'axis_key', 'complete',

@@ -7,7 +7,7 @@
 
 The data options (``--input-topic``, ``--input-joint``, ``--input-index``,
 ``--input-column``, ``--output-scale``, ...) are those of ``mpi-ros identify``
-(:func:`mpi_ros.cli_options.add_data_options`); they apply to DATA and to
+(:func:`mpi_ros.app.cli_options.add_data_options`); they apply to DATA and to
 ``--validate``.  The report names the data's units from the input and output column (or
 topic and joint) names and the scales (``volts`` -> V, ``D1_nm`` with ``--output-scale
 1e-9`` -> m; nothing named: A and m); ``--input-unit`` / ``--output-unit`` state them.
@@ -28,10 +28,10 @@ from .diagnose import diagnose
 from .report import data_units, INPUT_UNITS, OUTPUT_UNITS, report_facts, summary_lines, \
     write_extended_params, write_json, write_report
 from .signatures import diagnostic_excitation
-from ..cli_options import (
+from ..app.cli_options import (
     add_data_options, add_order_option, ArgumentParser, data_options, order_option)
+from ..app.progress import Progress
 from ..errors import DataError, MPIError
-from ..progress import Progress
 from ..recordings import DataOptions, join_recordings, read_recording, Recording, \
     write_csv_columns
 from ..recordings.reading import source_kind

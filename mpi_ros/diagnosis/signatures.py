@@ -43,7 +43,7 @@ import numpy.typing as npt
 from scipy import stats
 
 from .invertibility import _branches
-from ..excitation import diagnostic_excitation
+from ..plant.excitation import diagnostic_excitation
 
 __all__ = ['HoldSignature', 'BurstSignature', 'hold_signature', 'burst_signature',
            'hold_segments', 'burst_segments', 'diagnostic_excitation']

@@ -38,7 +38,7 @@ from .effect import Effect, EffectModel, EffectParameter, EFFECTS, effects_prese
     ExtendedModelBase, register_effect, unregister_effect
 from .rate_dependence import fit_rate_dependence, RateDependentModel
 from .thermal_drift import fit_thermal_drift, ThermalDriftModel
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeModel',
            'CompositeModel', 'ExtendedModel', 'fit_composite', 'fit_creep', 'fit_rate_dependence',

@@ -21,7 +21,7 @@ from ..errors import DataError, ModelError
 from ..identification import select_order
 from ..identification.procedure import fit_record, prepare_record
 from ..metrics import rms_range_error
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['AxisUnits', 'check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
            'Order', 'rate_cross_correlation', 'resolve_order',

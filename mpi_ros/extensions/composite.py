@@ -33,7 +33,7 @@ import numpy.typing as npt
 from ._common import check_series, Order
 from .effect import EFFECTS, effects_present, ExtendedModelBase
 from ..errors import ModelError
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['CompositeModel', 'CompositeInverse', 'fit_composite', 'composite_cause',
            'check_combination']

@@ -53,7 +53,7 @@ from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, Plan
 from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
-from ..model import _superposition_value, MPIModel
+from ..operators.model import _superposition_value, MPIModel
 
 __all__ = ['CreepModel', 'CreepInverse', 'creep_time_constants', 'fit_creep',
            'CREEP_TIME_CONSTANTS', 'CREEP_WEIGHTS']

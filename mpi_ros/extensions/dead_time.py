@@ -27,7 +27,7 @@ from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT,
     PlantEffect, PlantParameter
 from .plant_steps import delay_state, delay_stream
 from ..identification import select_order
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['DeadTimeModel', 'fit_dead_time', 'DEAD_TIME']
 

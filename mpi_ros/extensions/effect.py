@@ -18,7 +18,7 @@ One module per effect (``creep.py``, ``rate_dependence.py``, ``thermal_drift.py`
   parameters with defaults, units and ranges (:class:`PlantParameter`), how its state starts
   and a vectorised pass over a chunk of samples, at its place in the plant's signal chain
   (input side: on the current the material sees; output side: on the displacement).
-  :class:`mpi_ros.actuator.MagnetostrictiveActuator` composes the passes of the registered
+  :class:`mpi_ros.plant.actuator.MagnetostrictiveActuator` composes the passes of the registered
   effects around its compiled hysteresis core, and the plant simulator node declares their
   parameters.
 
@@ -37,7 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import ModelError
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFFECTS',
            'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values',
@@ -92,7 +92,7 @@ class EffectModel(Protocol):
 
 class ExtendedModelBase:
     """
-    The :class:`~mpi_ros.model.ActuatorModel` interface of an extended model.
+    The :class:`~mpi_ros.operators.model.ActuatorModel` interface of an extended model.
 
     An effect's model class (a frozen dataclass whose field ``model`` is its Gamma) derives
     from it and defines ``simulate(time, current)``; an effect that can be inverted causally
@@ -163,7 +163,7 @@ class EffectParameter:
 @dataclass(frozen=True)
 class PlantParameter:
     """
-    One parameter of the simulated plant (a field of :class:`mpi_ros.actuator.ActuatorConfig`).
+    One parameter of the simulated plant (an ``ActuatorConfig`` field).
 
     Attributes
     ----------
@@ -250,7 +250,7 @@ class PlantChunk(NamedTuple):
 @dataclass(frozen=True)
 class PlantEffect:
     """
-    An effect's step in the simulated plant (:class:`mpi_ros.actuator.MagnetostrictiveActuator`).
+    An effect's step in the simulated plant (the ``MagnetostrictiveActuator``).
 
     Attributes
     ----------
@@ -405,7 +405,8 @@ def register_effect(effect: Effect) -> Effect:
                if not hasattr(effect.model_class, name)]
     if missing:
         msg = (f'effect {effect.name!r}: its model class {effect.model_class.__name__} lacks'
-               f' {", ".join(missing)} of the model interface (mpi_ros.model.ActuatorModel);'
+               f' {", ".join(missing)} of the model interface'
+               ' (mpi_ros.operators.model.ActuatorModel);'
                ' derive it from mpi_ros.extensions.ExtendedModelBase')
         raise ModelError(msg)
     taken = set(effect_keys())
@@ -472,7 +473,7 @@ def plant_switch(name: str) -> str:
     Returns
     -------
     str
-        The field of :class:`mpi_ros.actuator.ActuatorConfig` (``'creep_gain'``); the plant
+        The field of :class:`mpi_ros.plant.actuator.ActuatorConfig` (``'creep_gain'``); the plant
         simulator node's parameter is ``actuator.<field>``.
 
     Raises

@@ -27,7 +27,7 @@ from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT,
     PlantEffect, PlantParameter
 from .plant_steps import lag_state, lag_stream
 from ..identification import select_order
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',
            'RATE_TIME_CONSTANT']

@@ -33,7 +33,7 @@ from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, Plan
     PlantParameter, SLOW_TIME_LIMIT
 from .plant_steps import lag_add, lag_state
 from ..identification import identify_weights
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = ['ThermalDriftModel', 'ThermalDriftInverse', 'fit_thermal_drift',
            'THERMAL_TIME_CONSTANT', 'THERMAL_WEIGHT']

@@ -85,7 +85,7 @@ from .qp import fit_generalized_error, fit_model, fit_plain, generalized_error_g
 from .selection import DEFAULT_ORDERS, select_order, select_record_order
 from .start_state import StartState
 from ..errors import DataError, IdentificationError
-from ..model import MPIModel
+from ..operators.model import MPIModel
 
 __all__ = [
     'IdentificationResult', 'identify', 'select_order', 'hysteresis_thresholds',
@@ -272,7 +272,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         diagnosis' baseline).
     progress : callable, optional
         Called with a line of text at each phase, each trial fit of the dynamics grid and
-        each order tried (for a progress display such as :class:`mpi_ros.progress.Progress`).
+        each order tried (for a progress display such as :class:`mpi_ros.app.progress.Progress`).
 
     Returns
     -------

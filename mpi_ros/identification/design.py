@@ -12,10 +12,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import DataError
-from ..hysteresis import PIHysteresisOperator
-from ..inverse import invert_superposition
-from ..model import MPIModel
-from ..superposition import PISuperpositionOperator
+from ..operators.hysteresis import PIHysteresisOperator
+from ..operators.inverse import invert_superposition
+from ..operators.model import MPIModel
+from ..operators.superposition import PISuperpositionOperator
 
 __all__ = ['ANCHORS', 'ScaledDesign', 'burn_in', 'hysteresis_thresholds',
            'inverse_superposition_thresholds', 'output_sign', 'scaled_design']

@@ -35,10 +35,10 @@ from .dynamics import analyse_dynamics, DynamicsAnalysis
 from .qp import fit_generalized_error, GramParts, regressor_gram
 from .start_state import determined_from, end_state, refine_memory, start_candidates, \
     StartState, turning_point_candidates
-from ..deadzone import dead_zone_operator
 from ..errors import DataError, IdentificationError
-from ..model import MPIModel
-from ..play import play_operator
+from ..operators.deadzone import dead_zone_operator
+from ..operators.model import MPIModel
+from ..operators.play import play_operator
 
 __all__ = ['DynamicsEstimate', 'InputDynamics', 'Segment', 'RecordFit', 'fit_record',
            'find_segments', 'prepare_record', 'PreparedRecord']

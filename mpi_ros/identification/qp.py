@@ -15,10 +15,10 @@ import osqp
 import scipy.sparse as sp
 
 from .design import _IDLE_PLAY, FloatArray, scaled_design, ScaledDesign
-from ..deadzone import _dead_zone, dead_zone_operator
 from ..errors import IdentificationError
-from ..model import MPIModel
-from ..play import play_clamp, play_operator
+from ..operators.deadzone import _dead_zone, dead_zone_operator
+from ..operators.model import MPIModel
+from ..operators.play import play_clamp, play_operator
 
 __all__ = ['SLOPE_FLOOR', 'GramParts', 'fit_generalized_error', 'fit_model', 'fit_plain',
            'generalized_error_gram', 'identify_weights', 'regressor_gram']

@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .design import burn_in, FloatArray
-from ..play import play_operator
+from ..operators.play import play_operator
 
 __all__ = ['StartState', 'estimate_start_state', 'refine_memory', 'start_candidates',
            'turning_point_candidates', 'with_initial_states', 'START_KINDS']
@@ -334,7 +334,7 @@ def with_initial_states(model: Any, states: FloatArray) -> Any:
 
     """
     from dataclasses import replace as replace_field
-    from ..hysteresis import PIHysteresisOperator
+    from ..operators.hysteresis import PIHysteresisOperator
     h = model.gamma.hysteresis
     return model.with_gamma(replace_field(
         model.gamma, hysteresis=PIHysteresisOperator(h.thresholds, h.weights, states)))

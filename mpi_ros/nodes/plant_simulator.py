@@ -14,9 +14,9 @@ Timing
     it); it is counted and logged, and no displacement is published for it.
 
 Truth (``truth``, read-only)
-    ``builtin``: :class:`mpi_ros.actuator.MagnetostrictiveActuator`, a Preisach-type
+    ``builtin``: :class:`mpi_ros.plant.actuator.MagnetostrictiveActuator`, a Preisach-type
     actuator that is *not* an MPI model, configured by the ``actuator.*`` parameters
-    (the fields of :class:`mpi_ros.actuator.ActuatorConfig`: the hysteresis core's, the
+    (the fields of :class:`mpi_ros.plant.actuator.ActuatorConfig`: the hysteresis core's, the
     sensor's and those of every registered effect with a plant step, read from the effect
     registry when the node is built; every effect is off at 0).
     ``mpi``: the MPI model given by the five ``model.*`` parameters of Gamma and its
@@ -26,7 +26,7 @@ Truth (``truth``, read-only)
     seeded Gaussian sensor noise to either truth.
 
 Excitation mode (``excitation.enabled:=true``)
-    The node drives itself with :func:`mpi_ros.excitation.identification_excitation`
+    The node drives itself with :func:`mpi_ros.plant.excitation.identification_excitation`
     (or, with ``excitation.signal:=diagnostic``, the validation record of the diagnosis,
     :func:`mpi_ros.diagnosis.signatures.diagnostic_excitation`):
     it publishes each sample's current on ``current_command`` and the plant's answer on
@@ -68,11 +68,11 @@ from .parameters import (
 )
 from .qos import loop_qos
 from .spinning import run_node_main
-from ..actuator import MagnetostrictiveActuator
 from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray
 from ..compensation.parameters import specs_by_name
 from ..errors import ParameterRejected
-from ..plant import build_truth, describe_truth, excitation_schedule, plant_parameters
+from ..plant.actuator import MagnetostrictiveActuator
+from ..plant.simulator import build_truth, describe_truth, excitation_schedule, plant_parameters
 from ..recordings import BagRecorder
 
 __all__ = ['PlantSimulatorNode', 'plant_parameters', 'main']

@@ -12,8 +12,8 @@ depends on nothing else of the old code.
 import json
 from pathlib import Path
 
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.excitation import identification_excitation
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 import numpy as np
 
 #: Case name -> ActuatorConfig keywords (every effect alone, all together, sensor zero).

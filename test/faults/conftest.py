@@ -5,11 +5,11 @@ Fixtures of the fault, load and security tests (helpers in ``helpers.py``).
 Every test that starts processes asserts at the end that none of them is left running.
 """
 
-from mpi_ros.actuator import MagnetostrictiveActuator
-from mpi_ros.excitation import identification_excitation
-from mpi_ros.harness import LoopDriver
+from mpi_ros.nodes.harness import LoopDriver
 from mpi_ros.nodes.identifier import fit_bag
 from mpi_ros.params import write_params_yaml
+from mpi_ros.plant.actuator import MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import write_bag_signals
 import pytest
 import rclpy

@@ -2,7 +2,7 @@
 """
 Helpers of the fault, load and security tests: node processes, lock-step driving, services.
 
-Every node runs in its own process (``python -m mpi_ros.cli <node> --ros-args ...``) on
+Every node runs in its own process (``python -m mpi_ros.app.cli <node> --ros-args ...``) on
 the module's own ``ROS_DOMAIN_ID`` with local-only discovery (``ros_env`` of
 ``test/conftest.py``) and is stopped by PID (SIGINT, then SIGKILL).
 """
@@ -10,8 +10,8 @@ the module's own ``ROS_DOMAIN_ID`` with local-only discovery (``ros_env`` of
 import time
 
 from mpi_ros.compensation import Compensator, operating_range
-from mpi_ros.harness import NodeProcess
-from mpi_ros.model import MPIModel
+from mpi_ros.nodes.harness import NodeProcess
+from mpi_ros.operators.model import MPIModel
 import numpy as np
 import pytest
 from rcl_interfaces.msg import ParameterType

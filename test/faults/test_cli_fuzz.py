@@ -12,11 +12,11 @@ output, reversed signs, extra columns, other delimiters, a BOM, CRLF, time in ms
 ... and `diagnose --validate` gets validation records of every length from 0 past the
 diagnosis' minimum, and across its residual lag window.
 
-The commands run in-process through :func:`mpi_ros.cli.main` (as the console script does)
+The commands run in-process through :func:`mpi_ros.app.cli.main` (as the console script does)
 so that several hundred runs take seconds.  The diagnosis' report plots are not rendered
 there (``report._save`` only closes the figure; the plotting code itself still runs):
 rendering six PNGs takes about 1.3 s per report.  A few cases run as real processes of
-``python -m mpi_ros.cli`` with the plots rendered.
+``python -m mpi_ros.app.cli`` with the plots rendered.
 """
 
 import contextlib
@@ -30,14 +30,14 @@ import sys
 import traceback
 
 from hypothesis import given, HealthCheck, settings, strategies as st
-from mpi_ros.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.cli import main
+from mpi_ros.app.cli import main
 from mpi_ros.diagnosis import report as diagnosis_report
 from mpi_ros.diagnosis.diagnose import CAUSES
 from mpi_ros.errors import DataError
-from mpi_ros.excitation import identification_excitation
-from mpi_ros.model import MPIModel
+from mpi_ros.operators.model import MPIModel
 from mpi_ros.params import read_params_yaml
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import read_csv_table, read_recording, write_bag_signals, \
     write_csv_columns
 import numpy as np
@@ -467,7 +467,7 @@ def test_fuzz_cases_as_processes(tmp_path, good_record, case):
         (tmp_path / 'semi.csv').write_text(_text(HEADER, _rows(t, x, y), sep=';'))
         argv = ['simulate', str(params), '--input', str(tmp_path / 'semi.csv'), '--output',
                 str(tmp_path / 'out.csv')]
-    done = subprocess.run([sys.executable, '-m', 'mpi_ros.cli', *argv], capture_output=True,
+    done = subprocess.run([sys.executable, '-m', 'mpi_ros.app.cli', *argv], capture_output=True,
                           text=True, timeout=300)
     assert contract_breach(done.returncode, done.stderr) is None, done.stderr
     if case.startswith('diagnose'):

@@ -13,9 +13,9 @@ from pathlib import Path
 import subprocess
 import sys
 
-from mpi_ros.actuator import MagnetostrictiveActuator
-from mpi_ros.cli import main
-from mpi_ros.excitation import identification_excitation
+from mpi_ros.app.cli import main
+from mpi_ros.plant.actuator import MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import write_bag_signals
 import numpy as np
 import pytest
@@ -180,7 +180,7 @@ def test_identify_exit_status_of_the_process(tmp_path):
     """The installed command's process exits with status 1 (not a traceback's)."""
     data = _raw_bag(tmp_path / 'single', {'/current_command': [(0, 1.0)],
                                           '/displacement': [(k, 1.0) for k in range(20)]})
-    done = subprocess.run([sys.executable, '-m', 'mpi_ros.cli', 'identify', str(data),
+    done = subprocess.run([sys.executable, '-m', 'mpi_ros.app.cli', 'identify', str(data),
                            '-o', str(tmp_path / 'p.yaml')], capture_output=True, text=True,
                           timeout=120)
     assert done.returncode == 1

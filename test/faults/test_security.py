@@ -15,8 +15,8 @@ A valid model pushed the same way is accepted (the services do reach the node).
 import math
 from pathlib import Path
 
-from mpi_ros.model import MPIModel
 from mpi_ros.nodes.compensator import PARAMETERS
+from mpi_ros.operators.model import MPIModel
 from mpi_ros.params import MODEL_KEYS
 import numpy as np
 import pytest

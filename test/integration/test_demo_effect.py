@@ -18,7 +18,7 @@ import yaml
 
 def test_extended_compensator_beats_plain_on_plant_with_rate_dependence(ros_env, tmp_path):
     out = tmp_path / 'demo'
-    cmd = [sys.executable, '-m', 'mpi_ros.cli', 'demo', '--effect', 'rate_dependence',
+    cmd = [sys.executable, '-m', 'mpi_ros.app.cli', 'demo', '--effect', 'rate_dependence',
            '--eddy-time-constant', '0.005', '--duration', '30', '--track-duration', '12',
            '--domain-id', str(ros_env), '--output', str(out)]
     wall_before = time.time()

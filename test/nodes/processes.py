@@ -5,7 +5,7 @@ Run nodes as separate processes in tests (the hook for the integration tests).
 >>> with NodeProcess(['compensator', '--ros-args', '-p', 'output.max:=1.8']) as node:
 ...     node.wait_for_output('unconfigured')          # doctest: +SKIP
 
-A :class:`NodeProcess` starts ``python -m mpi_ros.cli <node> ...`` (or any command) with
+A :class:`NodeProcess` starts ``python -m mpi_ros.app.cli <node> ...`` (or any command) with
 :func:`ros_env.ros_environment`, collects its merged stdout/stderr in a thread, and on exit
 stops it with SIGINT (then SIGTERM, then SIGKILL), so no test leaves a process behind.
 """
@@ -40,7 +40,7 @@ class NodeProcess:
     """
 
     def __init__(self, args, *, command=False, env=None, cwd=None):
-        self.argv = list(args) if command else [sys.executable, '-m', 'mpi_ros.cli', *args]
+        self.argv = list(args) if command else [sys.executable, '-m', 'mpi_ros.app.cli', *args]
         self.env = ros_environment() if env is None else env
         self.cwd = cwd
         self.lines = []

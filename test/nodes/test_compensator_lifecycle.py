@@ -13,8 +13,8 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from mpi_ros.compensation import Compensator
-from mpi_ros.model import MPIModel
 from mpi_ros.nodes.compensator import CompensatorNode
+from mpi_ros.operators.model import MPIModel
 import numpy as np
 import pytest
 import rclpy

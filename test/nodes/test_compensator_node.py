@@ -14,9 +14,9 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from mpi_ros.compensation import Compensator
 from mpi_ros.errors import ModelError
 from mpi_ros.errors import ParameterRejected
-from mpi_ros.model import MPIModel
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import ParameterPushError, push_model_parameters
+from mpi_ros.operators.model import MPIModel
 from mpi_ros.params import MODEL_KEYS
 import numpy as np
 import pytest

@@ -14,12 +14,12 @@ models.
 
 import threading
 
-from mpi_ros.actuator import MagnetostrictiveActuator
 from mpi_ros.errors import DataError, IdentificationError
-from mpi_ros.excitation import identification_excitation
 from mpi_ros.nodes.identifier import fit_bag, fit_bag_axes, IdentifierNode
 from mpi_ros.nodes.multi_axis import axis_key, MultiAxisCompensatorNode
 from mpi_ros.params import read_params_yaml
+from mpi_ros.plant.actuator import MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import DataOptions
 import numpy as np
 import pytest

@@ -4,15 +4,15 @@
 import threading
 
 from mpi_ros import identify
-from mpi_ros.actuator import MagnetostrictiveActuator
 from mpi_ros.errors import IdentificationError
 from mpi_ros.errors import ParameterRejected
-from mpi_ros.excitation import identification_excitation
 from mpi_ros.nodes import identifier
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import IdentifierNode, parse_order
 from mpi_ros.params import MODEL_KEYS, OPERATING_POINT_KEYS
 from mpi_ros.params import read_params_yaml
+from mpi_ros.plant.actuator import MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import read_bag_signals, write_bag_signals
 import numpy as np
 import pytest

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from ._arrays import frozen_vector
-from .errors import ModelError
 from .play import _play_batch
+from .._arrays import frozen_vector
+from ..errors import ModelError
 
 __all__ = ['PIHysteresisOperator']
 

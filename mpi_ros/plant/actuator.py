@@ -64,8 +64,8 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from .errors import DataError, ModelError
-from .extensions.effect import plant_effects, PlantChunk, PlantEffect, PlantParameter
+from ..errors import DataError, ModelError
+from ..extensions.effect import plant_effects, PlantChunk, PlantEffect, PlantParameter
 
 __all__ = ['ActuatorConfig', 'MagnetostrictiveActuator']
 

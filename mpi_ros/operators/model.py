@@ -5,7 +5,7 @@ Modified Prandtl-Ishlinskii operator Gamma = S o H (26) and its inverse (27).
 ``Gamma[x] = w_S^T S_rS[ w_H^T H_rH[x, z_H0] ]`` (26): a Prandtl-Ishlinskii
 hysteresis operator H followed by a Prandtl-Ishlinskii superposition
 operator S.  The inverse, obtained analytically by the laws in
-:mod:`mpi_ros.inverse`, is ``Gamma^-1 = H' o S'`` (27): the same two kinds of
+:mod:`mpi_ros.operators.inverse`, is ``Gamma^-1 = H' o S'`` (27): the same two kinds of
 operator in the opposite order.  :class:`MPIModel` represents both; the flag
 ``is_inverse`` says which order applies.
 
@@ -31,12 +31,12 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from . import params as _params
 from .deadzone import _dead_zone
 from .hysteresis import PIHysteresisOperator
 from .inverse import invert_hysteresis, invert_superposition
 from .play import play_clamp
 from .superposition import PISuperpositionOperator
+from .. import params as _params
 
 __all__ = ['ActuatorModel', 'MPIModel', 'MPIStream']
 

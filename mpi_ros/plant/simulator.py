@@ -12,13 +12,13 @@ from dataclasses import replace
 from typing import Any, Dict, Optional, Tuple
 
 from .actuator import ActuatorConfig, MagnetostrictiveActuator
-from .compensation.parameters import AXES, loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec
-from .diagnosis.signatures import diagnostic_excitation
-from .errors import ParameterRejected
 from .excitation import identification_excitation
-from .extensions.effect import plant_effects
-from .model import MPIModel
-from .params import MODEL_KEYS, OPERATING_POINT_KEYS
+from ..compensation.parameters import AXES, loop_qos_parameters, MODEL_PARAMETERS, ParameterSpec
+from ..diagnosis.signatures import diagnostic_excitation
+from ..errors import ParameterRejected
+from ..extensions.effect import plant_effects
+from ..operators.model import MPIModel
+from ..params import MODEL_KEYS, OPERATING_POINT_KEYS
 
 __all__ = ['NODE_OWNED_FIELDS', 'actuator_parameters', 'plant_parameters', 'build_truth',
            'describe_truth', 'excitation_schedule']

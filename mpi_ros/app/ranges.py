@@ -151,7 +151,7 @@ def identified_range(model: Any) -> IdentifiedRange:
         range (see the module docstring).
 
     """
-    from .compensation import gamma_of
+    from ..compensation import gamma_of
     gamma = gamma_of(model)
     s_inv = gamma.inverse().superposition
     r = np.asarray(s_inv.thresholds, dtype=np.float64)

@@ -3,7 +3,7 @@
 Synthetic rig records: the built-in actuator as a real rig shows it.
 
 For tests, benchmarks and a user's own checks of a pipeline: the magnetostrictive-like
-actuator of :mod:`mpi_ros.actuator` (not an MPI model) driven through an unrecorded history
+actuator of :mod:`mpi_ros.plant.actuator` (not an MPI model) driven through an unrecorded history
 before the record starts (at rest after a descent, virgin, or mid-history), with the rig's
 dynamics (an input lag, a dead time, a lightly damped mechanical resonance that rings after
 steps), sensor noise, an arbitrary sensor zero and sign.  Each record says what is in it
@@ -22,9 +22,9 @@ import numpy.typing as npt
 from scipy import signal
 
 from .actuator import ActuatorConfig, MagnetostrictiveActuator
-from .errors import DataError
 from .excitation import identification_excitation
-from .extensions.effect import plant_switch
+from ..errors import DataError
+from ..extensions.effect import plant_switch
 
 __all__ = ['SyntheticRecord', 'synthetic_record', 'SYNTHETIC_KINDS', 'rising_amplitude_sine',
            'resonance']

@@ -22,7 +22,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from .errors import DataError
+from ..errors import DataError
 
 __all__ = ['diagnostic_excitation', 'identification_excitation', 'tracking_trajectory']
 

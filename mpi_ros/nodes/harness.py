@@ -3,7 +3,7 @@
 Drive the compensator/plant loop from outside: node processes and a lock-step driver.
 
 The harness of ``mpi-ros demo``, the integration tests and the benchmarks; production nodes
-never import it.  Every node runs in its own process (``python -m mpi_ros.cli <node>
+never import it.  Every node runs in its own process (``python -m mpi_ros.app.cli <node>
 --ros-args ...``), started and stopped by PID.  The driver publishes a command or a desired
 displacement and waits for the measured displacement it causes, so results do not depend on
 DDS timing.
@@ -23,8 +23,8 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from .errors import MPIError
-from .nodes.qos import loop_qos
+from .qos import loop_qos
+from ..errors import MPIError
 
 __all__ = ['NodeProcess', 'LoopDriver']
 
@@ -50,7 +50,7 @@ class NodeProcess:
                  env: Optional[dict[str, str]] = None) -> None:
         self.log_path = Path(log)
         self._log = open(self.log_path, 'w')  # noqa: SIM115 - closed in stop()
-        cmd = [sys.executable, '-m', 'mpi_ros.cli', node, '--ros-args', *ros_args]
+        cmd = [sys.executable, '-m', 'mpi_ros.app.cli', node, '--ros-args', *ros_args]
         self.proc = subprocess.Popen(cmd, stdout=self._log, stderr=subprocess.STDOUT,
                                      stdin=subprocess.DEVNULL,
                                      env=dict(os.environ if env is None else env))

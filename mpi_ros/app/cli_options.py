@@ -17,9 +17,9 @@ import argparse
 import sys
 from typing import Any, Mapping, NoReturn, Sequence
 
-from .errors import MPIError
-from .order import Order, parse_order
-from .recordings.options import DATA_OPTIONS, DataOptions, JOINT_FIELDS
+from ..errors import MPIError
+from ..order import Order, parse_order
+from ..recordings.options import DATA_OPTIONS, DataOptions, JOINT_FIELDS
 
 __all__ = ['ArgumentParser', 'UsageError', 'add_data_options', 'data_options',
            'add_order_option', 'order_option']

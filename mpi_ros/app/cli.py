@@ -15,7 +15,7 @@ Subcommands
 
 The command returns an exit code; errors are printed as ``error: ...`` on stderr, warnings
 as ``warning: ...``.  Long work (``identify``, ``diagnose``, ``demo``) draws a progress line on
-stderr when it is a terminal (:mod:`mpi_ros.progress`; ``--quiet``: none).
+stderr when it is a terminal (:mod:`mpi_ros.app.progress`; ``--quiet``: none).
 """
 
 import argparse
@@ -27,7 +27,7 @@ import sys
 
 from typing import Any
 
-from .errors import MPIError
+from ..errors import MPIError
 
 __all__ = ['main', 'order_table_lines']
 
@@ -65,12 +65,12 @@ def _check_output(path: str | None, option: str) -> None:
 
 def _cmd_identify(args: argparse.Namespace) -> int:
     from .cli_options import data_options, order_option
-    from .order import format_order
-    from .params import write_params_yaml
-    from .pipeline import fit_recording
+    from ..order import format_order
+    from ..params import write_params_yaml
+    from ..pipeline import fit_recording
     from .progress import Progress
     from .ranges import range_header
-    from .recordings import atomic_write, read_recording
+    from ..recordings import atomic_write, read_recording
     _check_output(args.output, '--output')
     _check_output(args.json, '--json')
     options = data_options(args)             # refuse bad options before reading
@@ -164,7 +164,7 @@ def order_table_lines(table: list[dict[str, Any]]) -> list[str]:
 def _model_parameters(path: str, node_name: str | None) -> dict[str, Any]:
     """Read the model keys of `node_name` (None: the file's compensator or only entry)."""
     import yaml
-    from .params import read_params_yaml
+    from ..params import read_params_yaml
     if node_name is None:
         return read_params_yaml(path)
     parameters = read_params_yaml(path, node_name=node_name)
@@ -210,9 +210,9 @@ def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool)
 
 
 def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
-    from .extensions import extended_model_from_params
+    from ..extensions import extended_model_from_params
     from .ranges import identified_range, outside, recorded_range
-    from .recordings import read_csv_table, write_csv_columns
+    from ..recordings import read_csv_table, write_csv_columns
     parameters = _model_parameters(args.params, args.node_name)
     described = extended_model_from_params(parameters)
     header, table = read_csv_table(args.input,
@@ -294,7 +294,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     # With an effect (time column needed) the compensator's streaming inverse (with a dead
     # time: Gamma only, as the node does).
     import numpy as np
-    from .compensation import operating_range
+    from ..compensation import operating_range
     from .ranges import outside
     plain = not model.timed
     if model.timed:
@@ -336,7 +336,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
 
 def _streaming_compensator(model: Any, time: Any, lo: float, hi: float) -> Any:
     import numpy as np
-    from .compensation import Compensator
+    from ..compensation import Compensator
     period = 1e-3 if time is None or len(time) < 2 else float(np.median(np.diff(time)))
     return Compensator(model, output_min=lo, output_max=hi, sample_period=period)
 
@@ -378,7 +378,7 @@ def _cmd_compensate(args: argparse.Namespace) -> int:
 
 def _cmd_diagnose(argv: list[str]) -> int:
     try:
-        from .diagnosis.cli import diagnose_main
+        from ..diagnosis.cli import diagnose_main
     except ImportError as err:            # pragma: no cover - during development only
         msg = f'diagnosis is not available in this installation: {err}'
         raise MPIError(msg) from err
@@ -481,7 +481,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     args_list = list(sys.argv[1:] if argv is None else argv)
     if args_list and args_list[0] in _NODE_COMMANDS:
-        from .nodes.launcher import run_node
+        from ..nodes.launcher import run_node
         return int(run_node(args_list[0], args_list[1:]))
     try:
         if args_list and args_list[0] == 'diagnose':

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from ._arrays import frozen_vector
 from .deadzone import dead_zone_operator
-from .errors import ModelError
+from .._arrays import frozen_vector
+from ..errors import ModelError
 
 __all__ = ['PISuperpositionOperator']
 
