@@ -38,26 +38,17 @@ the exported ``ROS_DOMAIN_ID``, else a random one; every process the demo starts
 by the demo. The bag has real time stamps (the wall clock from the start of the recording).
 """
 
-from collections.abc import Callable
 import os
 import random
 
 from .cli_options import ArgumentParser
 from .progress import Progress
 from ..errors import MPIError
+from ..nodes.demo_runs import EFFECTS, ORDERS   # no rclpy at import (it loads when run)
 
 
-__all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']
+__all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']   # ORDERS, EFFECTS: the runs'
 
-#: The paper's table (section 5).
-ORDERS = ((0, 0), (4, 2), (8, 4), (14, 7))
-
-#: The option that sets each effect's strength in the plant (its argparse destination).
-_STRENGTH_OPTIONS = {'creep': 'creep_gain', 'rate_dependence': 'eddy_time_constant'}
-
-#: Effects ``--effect`` can switch on in the plant simulator.
-EFFECTS = tuple(_STRENGTH_OPTIONS)
-_REPLY_TIMEOUT = 5.0
 #: Excitation and tracking lengths [s] when not given: (plain demo, --effect demo).
 _DURATIONS = {False: (40.0, 12.0), True: (60.0, 30.0)}
 
@@ -172,10 +163,3 @@ def demo_main(argv: list[str]) -> int:
                      f'(n=14, l=7) {100 * best:.2f} % (goal <= {100 * args.goal:.1f} %); report '
                      f'in {args.output}/report.md ({results["elapsed_s"]:.0f} s)')
         return 0 if best <= args.goal else 1
-
-
-def _phase(progress: Progress, prefix: str) -> Callable[[str], None]:
-    # A progress callback for a library function: its lines under the demo's phase.
-    def show(text: str) -> None:
-        progress(prefix + text)
-    return show

@@ -208,7 +208,7 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
         r = (measured - sim)[start:]
         ax.plot(centre, [units.scale * float(np.sqrt(np.mean(r[c] ** 2))) for c in classes],
                 marker='o', ms=3, label=label)
-    if top > 0.0:
+    if top > 0.0 and min(centre) > 0.0:
         ax.set_xscale('log')
     ax.set_xlabel(f'input speed |dx/dt| [{units.current}/s] (classes, holds left out)')
     ax.set_ylabel(f'RMS residual [{units.displacement}]')

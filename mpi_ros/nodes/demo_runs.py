@@ -15,14 +15,23 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from ..app.demo import _phase, _REPLY_TIMEOUT, _STRENGTH_OPTIONS, ORDERS
 from ..app.progress import Progress
 
 if TYPE_CHECKING:
     from .harness import NodeProcess
     from ..extensions import EffectModel
 
-__all__ = ['run_demo', 'run_effect_demo']
+__all__ = ['run_demo', 'run_effect_demo', 'ORDERS', 'EFFECTS']
+
+#: The paper's table (section 5).
+ORDERS = ((0, 0), (4, 2), (8, 4), (14, 7))
+
+#: The option that sets each effect's strength in the plant (its argparse destination).
+_STRENGTH_OPTIONS = {'creep': 'creep_gain', 'rate_dependence': 'eddy_time_constant'}
+
+#: Effects ``--effect`` can switch on in the plant simulator.
+EFFECTS = tuple(_STRENGTH_OPTIONS)
+_REPLY_TIMEOUT = 5.0
 
 
 class _DemoLoop:
@@ -319,3 +328,10 @@ def _desired_trajectory(model: Any, args: argparse.Namespace) -> tuple[
     t_track, desired = tracking_trajectory(args.track_duration, sample_rate=args.sample_rate,
                                            low=lo + 0.1 * span, high=hi - 0.1 * span)
     return t_track, desired, np.linspace(0.0, desired[0], int(args.sample_rate))
+
+
+def _phase(progress: Progress, prefix: str) -> Callable[[str], None]:
+    # A progress callback for a library function: its lines under the demo's phase.
+    def show(text: str) -> None:
+        progress(prefix + text)
+    return show
