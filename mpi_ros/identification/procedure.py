@@ -536,7 +536,7 @@ def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
     xs = fitter.xs
     first = segments[0].start_state
     z0 = (first.states(float(xs[0]), design.hysteresis_thresholds,
-                       end_state(xs[:segments[0].stop], design.hysteresis_thresholds))
+                       fitter._end(segments[0]) if first.kind == 'periodic' else None)
           if first is not None else np.zeros(w_h.size))
     model = design.model(w_h, w_s, constant, initial_states=z0)
     train = fitter.error(parts, weights, 0) * design.x_scale
@@ -567,16 +567,23 @@ class _Fitter:
         self._prefixes: dict[tuple[int, bytes], GramParts] = {}
         self._dead_zones: dict[int, FloatArray] = {}
         self._splits: dict[tuple[int, int], int] = {}
+        self._ends: dict[tuple[int, int], FloatArray] = {}
 
     def _state(self, seg: Segment, previous: FloatArray | None) -> FloatArray:
         u = self.xs[seg.start:seg.stop]
         if seg.start_state is None:
             if previous is not None:
                 return previous
-            return StartState('periodic').states(float(u[0]), self.r_h,
-                                                 end_state(u, self.r_h))
-        end = end_state(u, self.r_h) if seg.start_state.kind == 'periodic' else None
+            return StartState('periodic').states(float(u[0]), self.r_h, self._end(seg))
+        end = self._end(seg) if seg.start_state.kind == 'periodic' else None
         return seg.start_state.states(float(u[0]), self.r_h, end)
+
+    def _end(self, seg: Segment) -> FloatArray:
+        # The plays' states at the segment's end (a periodic start), once per segment.
+        key = (seg.start, seg.stop)
+        if key not in self._ends:
+            self._ends[key] = end_state(self.xs[seg.start:seg.stop], self.r_h)
+        return self._ends[key]
 
     def _segment_parts(self, seg: Segment, z0: FloatArray) -> GramParts:
         # Rows of the segment once its plays are determined do not depend on its start
