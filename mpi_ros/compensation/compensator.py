@@ -69,9 +69,9 @@ class InverseStep(Protocol):
 
 
 def gamma_of(model: Any) -> MPIModel:
-    """Return the forward Gamma of a plain or extended model (``model.model``)."""
-    gamma = model if isinstance(model, MPIModel) else model.model
-    return gamma.inverse() if gamma.is_inverse else gamma
+    """Return the forward Gamma of any model (the model interface's ``gamma``)."""
+    gamma: MPIModel = model.gamma
+    return gamma
 
 
 def inverse_step_of(model: Any, inverse: MPIModel | None = None) -> 'InverseStep | None':
@@ -102,7 +102,7 @@ def inverse_step_of(model: Any, inverse: MPIModel | None = None) -> 'InverseStep
 
 def kind_of(model: Any) -> str:
     """Name a model's effect: ``none``, its cause, or ``dead_time (not compensated)``."""
-    if isinstance(model, MPIModel):
+    if model.cause == 'none':
         return 'none'
     cause = str(model.cause).replace(' + ', '+')       # one token (diagnostics join by spaces)
     if inverse_step_of(model) is None:

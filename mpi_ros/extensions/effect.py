@@ -105,8 +105,8 @@ class ExtendedModelBase:
 
     @property
     def gamma(self) -> MPIModel:
-        """Return the Gamma the effect extends."""
-        return self.model
+        """Return the (forward) Gamma the effect extends."""
+        return self.model.gamma
 
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Return the output [m] for a current [A] sampled at ``time`` [s]."""
