@@ -4,8 +4,6 @@
 import subprocess
 import sys
 
-from mpi_ros.bag_identification import check_identifier_value, identify
-from mpi_ros.bag_identification import PARAMETERS as IDENTIFIER_PARAMETERS
 from mpi_ros.compensation.multi_axis import JointOrder
 from mpi_ros.compensation.parameters import (
     axis_limit_parameters, axis_parameters, check_value, check_values, compensator_parameters,
@@ -17,6 +15,8 @@ from mpi_ros.compensation.status import (
 )
 from mpi_ros.errors import DataError, MPIError, ParameterRejected
 from mpi_ros.params import INPUT_OFFSET, MODEL_KEYS, OUTPUT_SIGN
+from mpi_ros.pipeline import check_identifier_value, identify_bag as identify
+from mpi_ros.pipeline import PARAMETERS as IDENTIFIER_PARAMETERS
 from mpi_ros.plant.simulator import build_truth, describe_truth, excitation_schedule
 from mpi_ros.plant.simulator import PARAMETERS as PLANT_PARAMETERS
 import numpy as np
@@ -29,7 +29,7 @@ LOSSLESS = {'messages_lost': 0, 'incompatible_qos': 0}
 
 def test_the_moved_modules_import_no_ros():
     code = ('import sys, mpi_ros.compensation.parameters, mpi_ros.compensation.status, '
-            'mpi_ros.plant.simulator, mpi_ros.bag_identification, mpi_ros.array_layout; '
+            'mpi_ros.plant.simulator, mpi_ros.pipeline, mpi_ros.array_layout; '
             "sys.exit(any(m.split('.')[0] in ('rclpy', 'rcl_interfaces', 'std_msgs', "
             "'diagnostic_msgs') for m in sys.modules))")
     assert subprocess.run([sys.executable, '-c', code], check=False).returncode == 0

@@ -12,7 +12,7 @@ import sys
 from mpi_ros.app.cli import main
 from mpi_ros.app.progress import Progress
 from mpi_ros.identification import identify
-import mpi_ros.identification.selection as selection
+import mpi_ros.identification.api as selection
 from mpi_ros.plant.synthetic import synthetic_record
 from mpi_ros.recordings import write_csv_columns
 import numpy as np

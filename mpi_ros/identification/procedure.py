@@ -30,9 +30,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .design import FloatArray, scaled_design, ScaledDesign
 from .dynamics import analyse_dynamics, DynamicsAnalysis
-from .qp import fit_generalized_error, GramParts, regressor_gram
+from .qp import _IDLE_PLAY, fit_generalized_error, FloatArray, GramParts, output_sign, \
+    regressor_gram, scaled_design, ScaledDesign
 from .start_state import determined_from, end_state, refine_memory, start_candidates, \
     StartState, turning_point_candidates
 from ..errors import DataError, IdentificationError
@@ -421,7 +421,6 @@ def prepare_record(current: FloatArray, displacement: FloatArray, *,
         The record and what was found.
 
     """
-    from .design import output_sign
     x = np.asarray(current, dtype=np.float64)
     y = np.asarray(displacement, dtype=np.float64)
     if sign is None:
@@ -631,7 +630,6 @@ class _Fitter:
         if self.design.constant:
             gram = gram - np.outer(mean, mean)
             variance = np.diag(gram)[:n1]
-            from .design import _IDLE_PLAY
             idle = np.flatnonzero(variance <= _IDLE_PLAY ** 2 * variance[0])
         w_h, w_s, _, info = fit_generalized_error(
             gram, 1.0 - self.r_h, n_hysteresis=n1, n_superposition=self.r_s.size,

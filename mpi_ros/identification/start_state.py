@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .design import burn_in, FloatArray
+from .qp import burn_in, FloatArray
 from ..operators.play import play_operator
 
 __all__ = ['StartState', 'estimate_start_state', 'refine_memory', 'start_candidates',

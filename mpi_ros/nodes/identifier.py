@@ -62,10 +62,10 @@ from rclpy.signals import SignalHandlerOptions
 
 from .parameters import check_parameters, declare_parameters, harden_parameter_services
 from .spinning import shutdown, StopSignals
-from ..bag_identification import check_identifier_value, DATA_PARAMETERS, identify, PARAMETERS
 from ..compensation.parameters import specs_by_name
 from ..errors import MPIError, ParameterPushError, ParameterRejected
-from ..pipeline import BagFit, fit_bag, fit_bag_axes, parse_order
+from ..pipeline import BagFit, check_identifier_value, DATA_PARAMETERS, fit_bag, fit_bag_axes, \
+    identify_bag, PARAMETERS, parse_order
 
 __all__ = [
     'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS', 'DATA_PARAMETERS',
@@ -122,7 +122,7 @@ class IdentifierNode(Node):
         """
         values = {name: self.get_parameter(name).value for name in _SPECS}
         logger = self.get_logger()
-        fitted, parameters = identify(values, info=logger.info, error=logger.error)
+        fitted, parameters = identify_bag(values, info=logger.info, error=logger.error)
         if values['push']:
             target = values['target_node']
             push_model_parameters(self, target, parameters, timeout=values['service_timeout'])

@@ -19,8 +19,8 @@ import numpy as np
 import numpy.typing as npt
 from rosbags.rosbag2 import StoragePlugin, Writer
 
+from .bag_reader import Float64Reader, typestore
 from .files import _check_target, _equal_length_arrays, _install, _make_tmpdir
-from .messages import Float64Reader, typestore
 from .options import show_value
 from .recording import FloatArray, PathLike
 from ..errors import DataError

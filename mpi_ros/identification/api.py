@@ -1,0 +1,618 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Identification of the MPI operator from measured data, section 4.2 of Kuhnen's paper.
+
+The entry of :mod:`mpi_ros.identification`: :func:`identify` (order given or chosen on
+held-out data by :func:`select_order` / :func:`select_record_order`) ties together
+:mod:`.qp` (operating point, thresholds (28)-(31), checks of the data, the QP (34)-(36), the
+straight-line baseline), :mod:`.procedure` (record, segments, start states, dynamics grid,
+refusals), :mod:`.dynamics` and :mod:`.start_state`.
+
+Three parts, as in the paper:
+
+1. Thresholds and initial states from the data: ``r_Hi = i/(n+1) ||x||_inf``
+   (28), ``r'_S0 = 0`` (29), ``r'_Si = (i - 1/2)/l max y`` (30),
+   ``r'_S-i = (i - 1/2)/l min y`` (31; the printed sign is a slip), ``z_H0 = 0`` (32).
+2. The weights ``w_H`` of H and ``w'_S`` of the inverse superposition operator
+   S' minimise the L2 norm of the generalised error
+   ``E = w_H^T H_rH[x] - w'_S^T S_r'S[y]`` (33)-(34), subject to the
+   invertibility constraints (35) and the equality constraint (36); a convex
+   QP solved with OSQP.
+3. ``S`` follows from ``S'`` by the laws (22)-(25).
+
+Real records (documented in docs/design.md, "Identification on real records"):
+
+- **Operating point.** The paper's data start at the origin (demagnetised actuator,
+  displacement 0 at zero current).  A rig's data do not: the sensor has an arbitrary
+  zero, the drive a bias, some sensors fall as the actuator extends, and a record starts
+  mid-history.  By default (``anchor='operating_point'``) the input is centred on the
+  middle of its range ``x0`` and scaled by half its range, so (28) places the play
+  thresholds over the loops the data actually contain; the output is centred on the
+  middle of its range, multiplied by the sign detected from the data (slope of the
+  straight-line fit), and (29)-(31) place S' thresholds on both sides.  A constant term
+  ``c`` in the generalised error, ``E = w_H^T H[x - x0] - w'_S^T S'[v] + c``, keeps the
+  QP convex (it is eliminated exactly: the columns' covariance replaces their Gram
+  matrix, and ``c = -mean(columns) . w``); since ``H[u] + c = H[u + c / sum w_H]``
+  once the plays' states are set by the data, it is an exact shift of the input offset.
+  The result is invariant to a constant added to the displacement or the current and
+  to the output's sign.
+  ``anchor='origin'`` is the paper's design as printed (for data that start at rest at
+  the origin).
+- **Unknown start state.** The plays start at the centre (``z = 0``), which is almost
+  never the true state of a record that starts mid-history.  By the wiping-out property a
+  play with threshold ``r`` forgets its initial state once the input has swept over a
+  range of ``2 r``, and so does the actuator (any hysteresis with that property) once
+  the input has visited both extremes of the record; the generalised error is
+  therefore minimised only over the samples after the input first covered its range
+  (99 %): the fit uses only what the data determine, not the initial loading curve.
+  The returned model's initial states are the plays at rest at the record's lowest
+  input (where an actuator rests when it is off; the paper's ``z_H0 = 0`` at ``x = 0``
+  for data that start there): a compensator starts from that state.
+- **Refusals.** A record whose output is not monotone in the input (correlation below
+  0.3, or, anywhere in the record, burn-in included, a move against the input within one
+  sweep of more than 15 % of the output range beyond the noise: butterfly loops), too
+  little excitation for the order, or a fit no better than a straight line on the same
+  samples or absurd is refused with :class:`IdentificationError`.
+- The data are scaled internally; all thresholds follow the data, so results do not
+  depend on units.
+- A branch of S' the output never reaches (the output stays on one side of
+  0 except for less than 1 % of its range) gets no thresholds: its weights
+  would be undetermined by the data.
+- A tiny ridge (1e-9 of the mean diagonal) makes the QP strictly convex,
+  so the solution is unique even when plays are collinear on the data.
+- The solver status is always checked and the constraints re-checked on the
+  result: a failure raises :class:`IdentificationError`, never a silently
+  non-invertible model.
+"""
+
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+import math
+import time as time_module
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from .procedure import (DynamicsEstimate, estimate_dynamics, fit_record, held_out_rows,
+                        InputDynamics, prepare_record, PreparedRecord, refuse_if_unmodellable,
+                        Segment)
+from .qp import _check_excitation, _check_signals, _errors, _quality_check, ANCHORS, \
+    DEFAULT_ORDERS, FloatArray, output_sign
+from .start_state import StartState
+from ..errors import DataError, IdentificationError
+from ..operators.model import MPIModel
+
+__all__ = ['DEFAULT_ORDERS', 'IdentificationResult', 'identify', 'model_with_dynamics',
+           'select_order', 'select_record_order']
+
+
+@dataclass(frozen=True)
+class IdentificationResult:
+    """
+    Outcome of :func:`identify`.
+
+    Attributes
+    ----------
+    model : MPIModel
+        The identified Gamma (SI units); its initial states are the record's start state.
+        With input dynamics (``dynamics``), Gamma of the delayed / lagged input: the whole
+        model is :attr:`full_model`.
+    order : tuple of int
+        ``(n, l)``.
+    nonlinearity_error : float
+        (37) of the model's simulation on the fitted samples (those the weights were
+        fitted on; :attr:`whole_record_rms_error` covers every sample), with the output's
+        range in place of ``max|Gamma[x]|`` (the two agree when the output starts at 0, as
+        in the paper; the range does not depend on the sensor's zero) [fraction].
+    rms_error : float
+        RMS error of the simulation on the fitted samples over the output's range.
+    samples : int
+        Number of samples in the record.
+    solver_status : str
+        OSQP's status text (always ``'solved'`` for a returned result).
+    iterations : int
+        OSQP iterations.
+    solve_time : float
+        Wall time of the whole identification [s].
+    order_table : list of dict
+        Rows ``{'n', 'l', 'nonlinearity_error', 'rms_error'}`` (held-out data)
+        of the order selection; empty when the order was given.
+    linear_rms_error : float
+        RMS error of the best straight line ``y = a x + b`` on the same samples, over the
+        output's range: the baseline every fit is checked against.
+    burn_in : int
+        Samples at the start left out of the fit because no start state explains them
+        (0 when the start state is determined; see :mod:`.start_state`).
+    whole_record_rms_error : float
+        RMS error of the model simulated over the whole record from its first sample
+        (ringing and burn-in included), over the output's range.
+    start_state : dict
+        How the record starts: ``kind``, ``levels`` (turning points, input unit),
+        ``description``.
+    segments : list of dict
+        The experiments of a stitched record: ``start``, ``stop``, ``reason``,
+        ``start_state``.
+    dynamics : InputDynamics
+        Dead time and lag of the input path modelled with Gamma (zeros: none).
+    dynamics_estimate : DynamicsEstimate
+        Both kinds as estimated (with a time base), their held-out errors, whether they tie.
+    findings : str
+        What moves the output against the input (ringing, lag, dead time), in words.
+    excluded : int
+        Samples of ringing left out of the fit.
+    notes : list of str
+        What the identification changed or noticed (lowered order, burn-in, ...).
+
+    """
+
+    model: MPIModel
+    order: tuple[int, int]
+    nonlinearity_error: float
+    rms_error: float
+    samples: int
+    solver_status: str
+    iterations: int
+    solve_time: float
+    order_table: list[dict[str, Any]] = field(default_factory=list)
+    linear_rms_error: float = math.nan
+    burn_in: int = 0
+    whole_record_rms_error: float = math.nan
+    start_state: dict[str, Any] = field(default_factory=dict)
+    segments: list[dict[str, Any]] = field(default_factory=list)
+    dynamics: InputDynamics = field(default_factory=InputDynamics)
+    dynamics_estimate: DynamicsEstimate = field(default_factory=DynamicsEstimate)
+    findings: str = ''
+    excluded: int = 0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def full_model(self) -> Any:
+        """Return the model with its input dynamics (Gamma itself when there are none)."""
+        return model_with_dynamics(self.model, self.dynamics)
+
+    def summary(self) -> dict[str, Any]:
+        """Return the result as a JSON-ready dict: ``order``, errors, ``samples``, table."""
+        m = self.model
+        return {'order': list(self.order), 'nonlinearity_error': self.nonlinearity_error,
+                'rms_error': self.rms_error, 'linear_rms_error': self.linear_rms_error,
+                'whole_record_rms_error': self.whole_record_rms_error,
+                'samples': self.samples, 'burn_in': self.burn_in,
+                'excluded_ringing_samples': self.excluded,
+                'operating_point': {'input_offset': m.input_offset,
+                                    'output_offset': m.output_offset,
+                                    'output_sign': m.output_sign},
+                'start_state': self.start_state, 'segments': self.segments,
+                'dynamics': {**self.dynamics_estimate.to_json(), 'findings': self.findings},
+                'notes': list(self.notes),
+                'solver_status': self.solver_status, 'iterations': self.iterations,
+                'solve_time': self.solve_time, 'order_table': self.order_table}
+
+
+def model_with_dynamics(model: MPIModel, dynamics: InputDynamics) -> Any:
+    """
+    Return Gamma with input dynamics as the extended model the compensator reads.
+
+    Parameters
+    ----------
+    model : MPIModel
+        Gamma (of the delayed / lagged input).
+    dynamics : InputDynamics
+        Dead time and lag.
+
+    Returns
+    -------
+    MPIModel or extended model
+        Gamma itself, a dead-time model or a rate-dependence (input lag) model.
+
+    """
+    if not dynamics.present:
+        return model
+    from ..extensions import DeadTimeModel, RateDependentModel
+    if dynamics.lag_time_constant > 0.0 and dynamics.dead_time > 0.0:
+        msg = 'a dead time and a lag together are not supported yet'
+        raise IdentificationError(msg)
+    if dynamics.lag_time_constant > 0.0:
+        return RateDependentModel(model, dynamics.lag_time_constant)
+    return DeadTimeModel(model, dynamics.dead_time)
+
+
+def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | None = None,
+             l: int | None = None, order: str | tuple[int, int] | None = None,  # noqa: E741
+             epsilon: float = 1e-6, holdout: float = 0.3,
+             anchor: str = 'operating_point', periodic: bool = False,
+             time: npt.ArrayLike | None = None, dynamics: str = 'auto',
+             progress: Callable[[str], None] | None = None) -> IdentificationResult:
+    """
+    Identify a modified Prandtl-Ishlinskii model from measured input/output data.
+
+    The whole record is used from its first sample: the start state is estimated (see
+    :mod:`.start_state`), ringing after steps is left out, lag and dead time are measured
+    and, with a time base, modelled (see :mod:`.procedure`).  The record may have any
+    sensor zero, input bias or output sign.  The fit is refused, never returned, for a
+    butterfly loop or switching transients, an output unrelated to the input, a fit no
+    better than a straight line on the same data or absurd, or too little excitation.
+
+    Parameters
+    ----------
+    current : array_like of float, shape (N,)
+        Measured input ``x`` (coil current [A]; any unit works, results scale).
+    displacement : array_like of float, shape (N,)
+        Measured output ``y`` (displacement [m]; any zero, either sign).
+    n, l : int, optional
+        Model orders (default 14 and 7, the paper's final order).
+    order : 'auto' or (int, int), optional
+        ``'auto'`` raises the order until the held-out error saturates; a tuple gives
+        ``(n, l)``.
+    epsilon : float
+        The small positive bound in (8) and (19), relative to the scaled data.
+    holdout : float
+        Held-out fraction (order selection and dynamics).
+    anchor : {'operating_point', 'origin'}
+        Where thresholds and states are anchored, see :func:`scaled_design`.
+    periodic : bool
+        The record is one period of a periodic excitation the actuator had been following
+        (e.g. a single measured loop that ends where it starts): its start state is the
+        state at its end, instead of the one estimated.  Needs an explicit order.
+    time : array_like of float, shape (N,), optional
+        Sample times [s]: lag and dead time are then measured in seconds and modelled
+        (``dynamics``); a stitched record's clock may restart (a join).
+    dynamics : {'auto', 'off'}
+        ``'auto'``: with a time base, estimate the input's dead time and lag and model them
+        when they cut the held-out error clearly; ``'off'``: the static model only (the
+        diagnosis' baseline).
+    progress : callable, optional
+        Called with a line of text at each phase, each trial fit of the dynamics grid and
+        each order tried (for a progress display such as :class:`mpi_ros.app.progress.Progress`).
+
+    Returns
+    -------
+    IdentificationResult
+        The model and its fit statistics.
+
+    Raises
+    ------
+    DataError
+        For malformed data (lengths, non-finite values) or options.
+    IdentificationError
+        For an output the MPI model cannot represent (the message names the cause), too
+        little excitation, a failed QP, or a fit no better than a straight line.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 2001)
+    >>> x = np.sin(2 * np.pi * 3 * t) * np.exp(-t)
+    >>> truth = MPIModel.from_params({
+    ...     'model.hysteresis.thresholds': [0.0, 0.3], 'model.hysteresis.weights': [1.0, 0.4],
+    ...     'model.hysteresis.initial_states': [0.0, 0.0],
+    ...     'model.superposition.thresholds': [0.0], 'model.superposition.weights': [2e-5]})
+    >>> y = 3.0 - truth.simulate(x)          # a sensor with its own zero, falling
+    >>> result = identify(x, y, n=4, l=2)
+    >>> result.nonlinearity_error < 0.05, result.model.output_sign
+    (True, -1)
+
+    """
+    started = time_module.perf_counter()
+    x, y = _check_signals(current, displacement)
+    t = _check_time(time, x.size)
+    if anchor not in ANCHORS:
+        msg = f"anchor must be one of {', '.join(ANCHORS)}; found {anchor!r}"
+        raise DataError(msg)
+    if dynamics not in ('auto', 'off'):
+        msg = f"dynamics must be 'auto' or 'off'; found {dynamics!r}"
+        raise DataError(msg)
+    if not 0.0 < holdout < 1.0:
+        msg = f'holdout must be a fraction in (0, 1); found {holdout}'
+        raise DataError(msg)
+    auto = order == 'auto'
+    if order is not None and not auto:
+        if isinstance(order, str) or len(order) != 2:
+            msg = f"order must be 'auto' or a pair (n, l); found {order!r}"
+            raise DataError(msg)
+        n, l = int(order[0]), int(order[1])  # noqa: E741
+    n = 14 if n is None else int(n)
+    l = 7 if l is None else int(l)  # noqa: E741
+    if n < 0 or l < 0:
+        msg = f'model orders must be >= 0; found n={n}, l={l}'
+        raise DataError(msg)
+    if periodic:
+        _check_one_period(x, order)
+    _check_levels(x, y)
+    say = progress if progress is not None else _silent
+    say(f'analysing the record ({x.size} samples)')
+    record = prepare_record(x, y, time=t, anchor=anchor, epsilon=epsilon)
+    keep = record.keep
+    _, correlation = output_sign(x[keep], y[keep])
+    refuse_if_unmodellable(record, correlation)
+    notes: list[str] = []
+    if periodic:
+        record = replace(record, segments=[Segment(0, x.size, 'start', StartState('periodic'))])
+    n, l, lowered = _supported_order(x.size, n, l, auto)  # noqa: E741
+    if lowered:
+        notes.append(lowered)
+    _check_excitation(x, y, n if not auto else 0, l if not auto else 0, anchor=anchor)
+    choose = not periodic
+    # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
+    # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
+    reference = (8, 4) if x.size >= 10 * 15 else (min(n, 8), min(l, 4))
+    estimate = DynamicsEstimate()
+    if t is not None and dynamics == 'auto' and bool(np.all(np.diff(t) > 0.0)):
+        # On a window of a long record: trials cost the window, not the record.
+        trial = record.window(_DYNAMICS_WINDOW)
+        held = held_out_rows(trial.current.size, holdout, trial.keep)
+        say('dynamics: start state of the trial window')
+        base = fit_record(trial, *reference, held=held, choose=choose)
+        estimate = estimate_dynamics(trial, *reference, held, base.segments,
+                                     burn_in=base.burn_in, progress=progress)
+    found = estimate.modelled
+    table: list[dict[str, Any]] = []
+    if auto:
+        trial = record.window(_ORDER_WINDOW)
+        held = held_out_rows(trial.current.size, holdout, trial.keep)
+        say('order selection: start state of the trial window')
+        base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose)
+        (n, l), table = select_record_order(trial, held, found, base.segments,
+                                            burn_in=base.burn_in, progress=progress)
+    _check_excitation(x, y, n, l, anchor=anchor)
+    say(f'fitting n={n}, l={l} on the whole record')
+    fit = fit_record(record, n, l, dynamics=found, choose=choose)
+    notes.extend(fit.notes)
+    say('judging the fit against the straight line')
+    sim = fit.simulate()                 # each segment from its start state
+    fitted = fit.fitted if fit.fitted is not None else keep
+    rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
+    # What `mpi-ros simulate` gives: the model from its initial states, straight through.
+    straight = (model_with_dynamics(fit.model, found).simulate(t, x) if found.present
+                else fit.model.simulate(x))
+    whole = float(np.sqrt(np.mean((straight - y) ** 2)) / np.ptp(y))
+    design = fit.design
+    first = fit.segments[0].start_state
+
+    def to_input(level: float) -> float:
+        return float(design.input_offset + level * design.x_scale)
+
+    start = ({**first.to_json(to_input), 'description': first.describe(to_input, 'A')}
+             if first is not None else {'kind': 'continue', 'levels': [],
+                                        'description': 'continues'})
+    segments = [{'start': s.start, 'stop': s.stop, 'reason': s.reason,
+                 'start_state': (s.start_state.to_json(to_input) if s.start_state is not None
+                                 else {'kind': 'continue', 'levels': []})}
+                for s in fit.segments]
+    if len(fit.segments) > 1:
+        notes.append(f'{len(fit.segments)} segments (joins at samples '
+                     f'{", ".join(str(s.start) for s in fit.segments[1:])}: '
+                     f'{"; ".join(s.reason for s in fit.segments[1:])}), each with its own'
+                     ' start state')
+    findings = '; '.join(part for part in (record.analysis.describe(), estimate.describe())
+                         if part)
+    info = fit.info
+    return IdentificationResult(
+        model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
+        samples=int(x.size), solver_status=str(info.status), iterations=int(info.iter),
+        solve_time=time_module.perf_counter() - started, order_table=table,
+        linear_rms_error=linear, burn_in=int(fit.burn_in), whole_record_rms_error=whole,
+        start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
+        findings=findings,
+        excluded=int(np.count_nonzero(~keep)), notes=notes)
+
+
+def _silent(text: str) -> None:
+    pass
+
+
+def _check_time(time: npt.ArrayLike | None, size: int) -> FloatArray | None:
+    if time is None:
+        return None
+    t = np.asarray(time, dtype=np.float64).reshape(-1)
+    if t.size != size:
+        msg = f'time must have one value per sample ({size}); found {t.size}'
+        raise DataError(msg)
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        msg = (f'time contains {bad.size} non-finite value(s), the first at sample {bad[0]};'
+               ' remove or repair them')
+        raise DataError(msg)
+    return t
+
+
+def _check_levels(x: FloatArray, y: FloatArray) -> None:
+    # Too few samples, or an input or output that does not move: nothing to identify.
+    _check_excitation(x, y, 0, 0)
+
+
+#: Samples of the window the dynamics grid runs on (a long record's busiest part).
+_DYNAMICS_WINDOW = 20000
+
+#: Samples of the window the order selection runs on.
+_ORDER_WINDOW = 100000
+
+#: Fewer samples than this (or than two per weight of the requested order) are too few to
+#: lower the order for: the order stays and the excitation check refuses the record.
+_SHORT_RECORD = 60
+
+
+def _supported_order(size: int, n: int, l: int,  # noqa: E741
+                     auto: bool) -> tuple[int, int, str]:
+    # At least ten samples per weight (a short record, such as one quasi-static loop of a
+    # few hundred samples, gets a lower order and a note, not a refusal).
+    weights = n + 1 + 2 * l + 1
+    if auto or size >= 10 * weights or size < max(_SHORT_RECORD, 2 * weights):
+        # Below two samples per weight an explicit order is refused (excitation check).
+        return n, l, ''
+    scale = (size / 10.0 - 2.0) / (n + 2 * l) if n + 2 * l > 0 else 0.0
+    n2 = max(int(n * scale), 0)
+    l2 = max(int(l * scale), 0)  # noqa: E741
+    note = (f'order lowered from n={n}, l={l} to n={n2}, l={l2}: the record has only {size}'
+            ' samples (at least ten per weight are used)')
+    return n2, l2, note
+
+
+def _check_one_period(x: npt.NDArray[Any], order: Any) -> None:
+    span = float(np.ptp(x))
+    if abs(float(x[-1]) - float(x[0])) > 0.02 * span:
+        gap = 100.0 * abs(float(x[-1]) - float(x[0])) / span
+        msg = (f'periodic: the record must end where it starts (one period); the input goes'
+               f' from {float(x[0]):.6g} to {float(x[-1]):.6g}, {gap:.1f} % of its range'
+               ' apart; cut it to whole periods')
+        raise DataError(msg)
+    if order == 'auto':
+        msg = ("periodic: order 'auto' needs held-out data beyond one period; give the order"
+               ' (e.g. 8,4), or record several periods and leave periodic off')
+        raise DataError(msg)
+
+
+def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,
+                 orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
+                 holdout: float = 0.3, tolerance: float = 0.02, patience: int = 3,
+                 absolute_tolerance: float = 1e-3, epsilon: float = 1e-6,
+                 anchor: str = 'operating_point'
+                 ) -> tuple[tuple[int, int], list[dict[str, Any]]]:
+    """
+    Choose (n, l) as in the paper: raise the order until the held-out error saturates.
+
+    The determined part of the record (after the burn-in of the highest order tried) is
+    cut into ten blocks; ``holdout`` of them, spread over the record, are held out and
+    the rest train each order.  The model is simulated over the whole record (so each
+    held-out block starts from the state the data before it leave) and (37), over the
+    output's range, is measured on the held-out blocks.  An order that is worse than a
+    lower one does not stop the search while no order has halved the first (linear)
+    order's error (low orders often are worse, on real records); after that it stops
+    when ``patience`` successive orders fail to improve the best error by more than the
+    tolerance: the error has saturated.  The tolerance is the larger
+    of ``tolerance`` (relative) and ``absolute_tolerance`` (fraction of the output
+    range: differences below it are noise) for the stop.  The chosen order is the
+    smallest whose held-out error is within ``tolerance`` (relative) of the best.
+
+    Parameters
+    ----------
+    current : array_like of float, shape (N,)
+        Input [A].
+    displacement : array_like of float, shape (N,)
+        Output [m].
+    orders : tuple of (int, int)
+        Candidate orders in increasing complexity.
+    holdout : float
+        Fraction of the determined samples held out, in (0, 1).
+    tolerance : float
+        Relative difference that counts as significant.
+    patience : int
+        Saturated orders before the search stops.
+    absolute_tolerance : float
+        Difference, as a fraction of the output range, below which errors count as equal.
+    epsilon : float
+        Bound of (8)/(19), scaled units.
+    anchor : {'operating_point', 'origin'}
+        See :func:`scaled_design`.
+
+    Returns
+    -------
+    order : (int, int)
+        The chosen order.
+    table : list of dict
+        ``{'n', 'l', 'nonlinearity_error', 'rms_error'}`` per order tried (held-out
+        blocks, fractions of the output's range).
+
+    """
+    x, y = _check_signals(current, displacement)
+    if not 0.0 < holdout < 1.0:
+        msg = f'holdout must be a fraction in (0, 1); found {holdout}'
+        raise DataError(msg)
+    record = prepare_record(x, y, anchor=anchor, epsilon=epsilon)
+    held = held_out_rows(x.size, holdout, record.keep)
+    n_ref = min(8, max(n for n, _ in orders))
+    base = fit_record(record, n_ref, n_ref // 2, held=held)
+    return select_record_order(record, held, InputDynamics(), base.segments, orders=orders,
+                               tolerance=tolerance, patience=patience,
+                               absolute_tolerance=absolute_tolerance, burn_in=base.burn_in)
+
+
+def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
+                        dynamics: InputDynamics, starts: list[Segment], *,
+                        orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
+                        tolerance: float = 0.02, patience: int = 3,
+                        absolute_tolerance: float = 1e-3, burn_in: int = 0,
+                        progress: Callable[[str], None] | None = None) -> tuple[
+                            tuple[int, int], list[dict[str, Any]]]:
+    """
+    Choose (n, l) as in the paper: raise the order until the held-out error saturates.
+
+    Each order (with at least ten training samples per weight) is fitted on the training
+    blocks with the record's start states and dynamics, simulated over the whole record
+    and scored on the held-out blocks by its RMS error over the output's range (and (37),
+    reported).  The search stops when ``patience`` successive orders fail to improve the
+    best error by the tolerance once an order has halved the linear one's; the chosen
+    order is the smallest within ``tolerance`` (relative) of the best.  Orders whose
+    held-out error is absurd (over the output's range) are marked ``unstable`` and not
+    considered.
+
+    Parameters
+    ----------
+    record : PreparedRecord
+        The record.
+    held : ndarray of bool, shape (N,)
+        Held-out rows.
+    dynamics : InputDynamics
+        The input's dynamics.
+    starts : list of Segment
+        Start states (their kinds are kept for every order).
+    orders : tuple of (int, int)
+        Candidate orders in increasing complexity.
+    tolerance : float
+        Relative difference of held-out RMS errors that counts as significant.
+    patience : int
+        Saturated orders before the search stops.
+    absolute_tolerance : float
+        Difference, as a fraction of the output range, below which errors count as equal
+        for the stop.
+    burn_in : int
+        Samples at the start left out of every fit (the reference fit's burn-in).
+    progress : callable, optional
+        Called with a line of text before each order is fitted (a progress display).
+
+    Returns
+    -------
+    order : (int, int)
+        The chosen order.
+    table : list of dict
+        ``{'n', 'l', 'nonlinearity_error', 'rms_error', 'unstable'}`` per order tried
+        (held-out blocks, fractions of the output's range).
+
+    """
+    y = record.displacement
+    train = int(np.count_nonzero(record.keep & ~held))
+    table: list[dict[str, Any]] = []
+    best = math.inf
+    saturated = 0
+    for i, (n, l) in enumerate(orders):  # noqa: E741
+        if train < 10 * (n + 2 * l + 2) and table:
+            break
+        if progress is not None:
+            progress(f'order selection: n={n}, l={l} ({i + 1} of at most {len(orders)})')
+        try:
+            fit = fit_record(record, n, l, dynamics=dynamics, held=held, starts=starts,
+                             choose=False, burn_in=burn_in)
+        except IdentificationError:
+            continue
+        peak, rms = _errors(fit.simulate(), y, held)
+        unstable = not (math.isfinite(rms) and rms < 1.0)
+        table.append({'n': n, 'l': l, 'nonlinearity_error': peak, 'rms_error': rms,
+                      'unstable': unstable})
+        if unstable:
+            continue
+        first = next(r for r in table if not r['unstable'])['rms_error']
+        margin = max(tolerance * best, absolute_tolerance) if math.isfinite(best) else 0.0
+        if rms < best - margin or not math.isfinite(best):
+            saturated = 0
+        elif best < 0.5 * first:
+            saturated += 1      # no better, once hysteresis models work: saturating
+        best = min(best, rms)
+        if saturated >= patience:
+            break
+    stable = [r for r in table if not r['unstable']]
+    if not stable:
+        msg = ('no order could be evaluated on the held-out blocks (every fit was absurd or'
+               ' failed); give the order (e.g. 8,4), or record more cycles')
+        raise IdentificationError(msg)
+    chosen = next(r for r in stable if r['rms_error'] <= best * (1.0 + tolerance))
+    return (chosen['n'], chosen['l']), table
