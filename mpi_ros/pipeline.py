@@ -31,8 +31,9 @@ from .compensation.parameters import AXES, ParameterSpec
 from .compensation.updates import axis_key
 from .errors import DataError, IdentificationError, MPIError, ParameterRejected
 from .identification import IdentificationResult, identify
+from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS
 from .order import format_order, Order, parse_order as parse_order_text
-from .params import MODEL_KEYS, OPERATING_POINT_KEYS, write_params_yaml
+from .params import write_params_yaml
 from .recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording, \
     Recording
 

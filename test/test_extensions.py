@@ -13,7 +13,7 @@ from mpi_ros.extensions._signals import delay, first_order_lag, lag_bank, \
     lag_feedback_inverse
 from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error, rms_range_error
-from mpi_ros.params import OPERATING_POINT_KEYS
+from mpi_ros.operators.model import OPERATING_POINT_KEYS
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
 import numpy as np

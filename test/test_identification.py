@@ -7,8 +7,8 @@ from mpi_ros.identification import (fit_model, hysteresis_thresholds,
                                     inverse_superposition_thresholds, select_order)
 from mpi_ros.operators.hysteresis import PIHysteresisOperator
 from mpi_ros.operators.inverse import invert_superposition
+from mpi_ros.operators.model import check_model_parameters
 from mpi_ros.operators.superposition import PISuperpositionOperator
-from mpi_ros.params import check_model_parameters
 import numpy as np
 import pytest
 

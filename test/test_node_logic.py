@@ -14,7 +14,7 @@ from mpi_ros.compensation.status import (
     single_axis_status, single_axis_values, status_values, WARN,
 )
 from mpi_ros.errors import DataError, MPIError, ParameterRejected
-from mpi_ros.params import INPUT_OFFSET, MODEL_KEYS, OUTPUT_SIGN
+from mpi_ros.operators.model import INPUT_OFFSET, MODEL_KEYS, OUTPUT_SIGN
 from mpi_ros.pipeline import check_identifier_value, identify_bag as identify
 from mpi_ros.pipeline import PARAMETERS as IDENTIFIER_PARAMETERS
 from mpi_ros.plant.simulator import build_truth, describe_truth, excitation_schedule

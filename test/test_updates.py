@@ -9,8 +9,7 @@ from mpi_ros.compensation.updates import (
 )
 from mpi_ros.errors import ModelError, ParameterRejected
 from mpi_ros.extensions.effect import effect_off_values
-from mpi_ros.operators.model import MPIModel
-from mpi_ros.params import MODEL_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel
 import numpy as np
 import pytest
 

@@ -24,7 +24,7 @@ import yaml
 from .updates import axis_key
 from ..errors import ParameterRejected
 from ..extensions import EFFECTS
-from ..params import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN
+from ..operators.model import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN
 
 __all__ = [
     'AUTOSTART', 'AXES', 'DIAGNOSTICS_PERIOD', 'ENABLED', 'INPUT_MESSAGE', 'JOINTS',

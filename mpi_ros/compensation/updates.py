@@ -38,8 +38,7 @@ from .compensator import Compensator, gamma_of, inverse_step_of
 from ..errors import MPIError, ParameterRejected
 from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
-from ..operators.model import MPIModel
-from ..params import MODEL_KEYS, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS
+from ..operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS
 
 __all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'Prepared', 'apply', 'axis_key', 'complete',
            'is_off', 'limits_of', 'load', 'model_keys', 'model_params', 'ordered_limits',

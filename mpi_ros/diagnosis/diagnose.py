@@ -74,7 +74,7 @@ from ..extensions.composite import check_combination, composite_cause
 from ..identification import burn_in, identify, output_sign
 from ..identification.start_state import estimate_start_state
 from ..metrics import range_error, rms_range_error
-from ..params import OPERATING_POINT_KEYS
+from ..operators.model import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
 __all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']

@@ -17,8 +17,7 @@ from ..compensation.parameters import AXES, loop_qos_parameters, MODEL_PARAMETER
 from ..diagnosis.signatures import diagnostic_excitation
 from ..errors import ParameterRejected
 from ..extensions.effect import plant_effects
-from ..operators.model import MPIModel
-from ..params import MODEL_KEYS, OPERATING_POINT_KEYS
+from ..operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS
 
 __all__ = ['NODE_OWNED_FIELDS', 'actuator_parameters', 'plant_parameters', 'build_truth',
            'describe_truth', 'excitation_schedule']

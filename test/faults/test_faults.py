@@ -11,8 +11,7 @@ command with the core :class:`~mpi_ros.compensation.Compensator` (exactly, to
 import time
 
 from mpi_ros.nodes.identifier import push_model_parameters
-from mpi_ros.operators.model import MPIModel
-from mpi_ros.params import MODEL_KEYS, OPERATING_POINT_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS
 import numpy as np
 import pytest
 from std_msgs.msg import Float64

@@ -16,8 +16,7 @@ import math
 from pathlib import Path
 
 from mpi_ros.nodes.compensator import PARAMETERS
-from mpi_ros.operators.model import MPIModel
-from mpi_ros.params import MODEL_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel
 import numpy as np
 import pytest
 from rcl_interfaces.srv import ListParameters, SetParameters, SetParametersAtomically

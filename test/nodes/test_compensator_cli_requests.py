@@ -19,8 +19,7 @@ import time
 
 from mpi_ros.compensation import Compensator
 from mpi_ros.nodes.compensator import CompensatorNode
-from mpi_ros.operators.model import MPIModel
-from mpi_ros.params import MODEL_KEYS, OPERATING_POINT_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS
 from mpi_ros.params import write_params_yaml
 import numpy as np
 import pytest

@@ -17,7 +17,7 @@ from mpi_ros.nodes import compensator as compensator_module
 from mpi_ros.nodes import compensator_base
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.spinning import events_executor
-from mpi_ros.params import MODEL_KEYS
+from mpi_ros.operators.model import MODEL_KEYS
 import pytest
 import rclpy
 from rclpy.parameter import Parameter

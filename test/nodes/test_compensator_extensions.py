@@ -13,7 +13,7 @@ from mpi_ros.compensation import Compensator
 from mpi_ros.extensions import extended_model_from_params
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.spinning import events_executor
-from mpi_ros.params import MODEL_KEYS
+from mpi_ros.operators.model import MODEL_KEYS
 import numpy as np
 import pytest
 import rclpy

@@ -16,7 +16,7 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.spinning import events_executor
-from mpi_ros.params import MODEL_KEYS
+from mpi_ros.operators.model import MODEL_KEYS
 import pytest
 import rclpy
 from rclpy.parameter import Parameter

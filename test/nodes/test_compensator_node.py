@@ -16,8 +16,7 @@ from mpi_ros.errors import ModelError
 from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import ParameterPushError, push_model_parameters
-from mpi_ros.operators.model import MPIModel
-from mpi_ros.params import MODEL_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel
 import numpy as np
 import pytest
 import rclpy

@@ -9,7 +9,7 @@ from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes import identifier
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import IdentifierNode, parse_order
-from mpi_ros.params import MODEL_KEYS, OPERATING_POINT_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, OPERATING_POINT_KEYS
 from mpi_ros.params import read_params_yaml
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation

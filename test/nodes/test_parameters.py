@@ -5,7 +5,7 @@ from mpi_ros.compensation.parameters import specs_by_name
 from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes.compensator import PARAMETERS
 from mpi_ros.nodes.parameters import check_parameter, descriptor, is_null, normalized
-from mpi_ros.params import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_SIGN
+from mpi_ros.operators.model import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_SIGN
 import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rclpy.parameter import get_parameter_value, Parameter

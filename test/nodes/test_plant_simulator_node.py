@@ -7,8 +7,7 @@ import time
 from mpi_ros.errors import ModelError
 from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes.plant_simulator import PlantSimulatorNode
-from mpi_ros.operators.model import MPIModel
-from mpi_ros.params import MODEL_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import read_bag_signals
