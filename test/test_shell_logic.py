@@ -6,8 +6,9 @@ Loss counting (``compensation.loss``), the throttled fault warning and the diagn
 period (``screening``, ``status``), the update rule across a node's models
 (``updates.UpdateRule``, ``load_axes``), a multi-axis node's keys, models, inputs, chunk
 times and counters (``parameters.AxisKeys``, ``multi_axis``), which node a compensator's
-start-up values ask for, the type a pushed key is sent as, and the steps of a grouped
-``set_parameters`` request.
+start-up values ask for, the type a pushed key is sent as, the steps of a grouped
+``set_parameters`` request, and the plant simulator's plants and excitation schedule
+(``plant.simulator``).
 """
 
 import subprocess
@@ -30,6 +31,7 @@ from mpi_ros.compensation.updates import (
 from mpi_ros.errors import ParameterPushError, ParameterRejected
 from mpi_ros.extensions import extended_model_from_params
 from mpi_ros.operators.model import MPIModel
+from mpi_ros.plant.simulator import build_truth, ExcitationRun, plant_parameters, SimulatedPlants
 import numpy as np
 import pytest
 
@@ -58,7 +60,8 @@ def node_values(prefixes, models=None, **extra):
 
 def test_the_moved_logic_imports_no_ros():
     code = ('import sys, mpi_ros.compensation.loss, mpi_ros.compensation.multi_axis, '
-            'mpi_ros.compensation.parameters, mpi_ros.compensation.updates; '
+            'mpi_ros.compensation.parameters, mpi_ros.compensation.updates, '
+            'mpi_ros.plant.simulator; '
             "sys.exit(any(m.split('.')[0] in ('rclpy', 'rcl_interfaces', 'std_msgs', "
             "'diagnostic_msgs') for m in sys.modules))")
     assert subprocess.run([sys.executable, '-c', code], check=False).returncode == 0
@@ -339,3 +342,71 @@ def test_a_grouped_request_is_set_in_steps():
     assert request_steps(names, groups) == [[0], [1, 3, 5], [2, 4]]
     assert request_steps(names, groups, answered=[1]) == [[0], [2, 3, 4], [5]]
     assert request_steps(names, ()) == [[0], [1], [2], [3], [4], [5]]
+
+
+# -- the plant simulator's plants and excitation ----------------------------------------
+def plant_values(**given):
+    """Return the plant simulator's default parameter values with ``given`` (``__``: ``.``)."""
+    values = {spec.name: spec.default for spec in plant_parameters()}
+    values.update({key.replace('__', '.'): value for key, value in given.items()})
+    return values
+
+
+def test_several_axes_are_refused_with_the_single_axis_modes():
+    with pytest.raises(ParameterRejected, match='axes=2: excitation.enabled and record.path '
+                                                'are single-axis only'):
+        SimulatedPlants(plant_values(axes=2, excitation__enabled=True))
+    with pytest.raises(ParameterRejected, match='axes=3'):
+        SimulatedPlants(plant_values(axes=3, record__path='/tmp/bag'))
+
+
+def test_each_axis_is_its_own_truth_with_seed_plus_k():
+    values = plant_values(axes=3, seed=7)
+    plants = SimulatedPlants(values)
+    current = 1.0 + 0.5 * np.sin(np.arange(40) / 5.0)
+    block = plants.measure_block(0.2, np.repeat(current[:, None], 3, axis=1))
+    t = [0.2 - (39 - row) * values['sample_period'] for row in range(40)]  # last at 0.2
+    for axis in range(3):
+        truth = build_truth(values, seed=7 + axis)
+        np.testing.assert_array_equal(block[:, axis], [truth.step(tk, ik)
+                                                       for tk, ik in zip(t, current)])
+    assert plants.last_t == 0.2
+
+
+def test_a_non_finite_current_of_a_block_is_held_and_counted():
+    mpi = {key.replace('.', '__'): value for key, value in GAMMA.items()}
+    plants = SimulatedPlants(plant_values(truth='mpi', axes=2, **mpi))
+    block = np.array([[0.5, 0.5], [np.nan, 0.9], [0.7, np.inf]])
+    out = plants.measure_block(1.0, block)
+    model = MPIModel.from_params(GAMMA)
+    np.testing.assert_array_equal(out[:, 0], model.simulate(np.array([0.5, 0.5, 0.7])))
+    np.testing.assert_array_equal(out[:, 1], model.simulate(np.array([0.5, 0.9, 0.9])))
+    assert plants.counters['nonfinite_commands'] == 2
+
+
+def test_sample_times_never_go_back():
+    plants = SimulatedPlants(plant_values())
+    assert plants.sample_time(2.0) == 2.0
+    assert plants.sample_time(1.0) == pytest.approx(2.0 + 1e-9, abs=1e-15)
+    plants.measure_block(0.5, np.ones((3, 1)))        # a block timed before the last sample
+    assert plants.last_t == pytest.approx(2.0 + 4e-9, abs=1e-15)
+
+
+def test_the_sensor_noise_is_seeded_and_added():
+    values = plant_values(noise_std=1e-6, seed=3)
+    first, second = SimulatedPlants(values), SimulatedPlants(values)
+    quiet = SimulatedPlants(plant_values(seed=3))
+    a = [first.measure(k * 1e-3, 1.0) for k in range(1, 20)]
+    assert a == [second.measure(k * 1e-3, 1.0) for k in range(1, 20)]
+    noise = np.subtract(a, [quiet.measure(k * 1e-3, 1.0) for k in range(1, 20)])
+    assert 0.0 < np.std(noise) < 1e-5
+
+
+def test_the_excitation_hands_each_sample_out_once_on_time():
+    run = ExcitationRun([1.0, 1.001, 1.002, 1.5], [0.1, 0.2, 0.3, 0.4])
+    assert run.due(100.0) == [(1.0, 0.1)]                 # the first one at once
+    assert run.due(100.0015) == [(1.001, 0.2)]
+    assert run.due(100.0015) == []
+    assert not run.done
+    assert run.due(100.6) == [(1.002, 0.3), (1.5, 0.4)]
+    assert run.done and run.index == 4
