@@ -14,7 +14,7 @@ MODULES = ['mpi_ros.operators.play', 'mpi_ros.operators.deadzone', 'mpi_ros.oper
            'mpi_ros.compensation.loss', 'mpi_ros.compensation.multi_axis',
            'mpi_ros.compensation.parameters', 'mpi_ros.compensation.screening',
            'mpi_ros.compensation.status', 'mpi_ros.compensation.updates',
-           'mpi_ros.plant.simulator']
+           'mpi_ros.plant.simulator', 'mpi_ros.stop_signals']
 
 
 @pytest.mark.parametrize('name', MODULES)

@@ -7,8 +7,8 @@ period (``screening``, ``status``), the update rule across a node's models
 (``updates.UpdateRule``, ``load_axes``), a multi-axis node's keys, models, inputs, chunk
 times and counters (``parameters.AxisKeys``, ``multi_axis``), which node a compensator's
 start-up values ask for, the type a pushed key is sent as, the steps of a grouped
-``set_parameters`` request, and the plant simulator's plants and excitation schedule
-(``plant.simulator``).
+``set_parameters`` request, the plant simulator's plants and excitation schedule
+(``plant.simulator``), and the nodes' stop signals (``stop_signals``, in a child process).
 """
 
 import subprocess
@@ -61,7 +61,7 @@ def node_values(prefixes, models=None, **extra):
 def test_the_moved_logic_imports_no_ros():
     code = ('import sys, mpi_ros.compensation.loss, mpi_ros.compensation.multi_axis, '
             'mpi_ros.compensation.parameters, mpi_ros.compensation.updates, '
-            'mpi_ros.plant.simulator; '
+            'mpi_ros.plant.simulator, mpi_ros.stop_signals; '
             "sys.exit(any(m.split('.')[0] in ('rclpy', 'rcl_interfaces', 'std_msgs', "
             "'diagnostic_msgs') for m in sys.modules))")
     assert subprocess.run([sys.executable, '-c', code], check=False).returncode == 0
@@ -410,3 +410,44 @@ def test_the_excitation_hands_each_sample_out_once_on_time():
     assert not run.done
     assert run.due(100.6) == [(1.002, 0.3), (1.5, 0.4)]
     assert run.done and run.index == 4
+
+
+# -- stop signals (in a child process: the handlers are the process's) -------------------
+STOP_SCRIPT = """
+import os, signal, sys
+from mpi_ros.stop_signals import StopSignals
+with StopSignals() as stop:
+    os.kill(os.getpid(), signal.SIG{first})
+    while not stop.requested:          # the handler runs at the next bytecode
+        pass
+    os.kill(os.getpid(), signal.SIG{second})      # ignored: no second request, no exit
+    print(stop.name, stop.received == signal.SIG{first}, flush=True)
+print(*(signal.getsignal(s) == signal.SIG_IGN for s in (signal.SIGINT, signal.SIGTERM)))
+os.kill(os.getpid(), signal.SIGTERM)   # ignored after the context: the process goes on
+with StopSignals(interrupt=True) as stop:
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        while True:
+            pass
+    except KeyboardInterrupt:
+        print('interrupted', stop.name)
+"""
+
+
+@pytest.mark.parametrize('first, second', [('TERM', 'INT'), ('INT', 'TERM')])
+def test_the_first_stop_signal_is_a_request_and_every_later_one_is_ignored(first, second):
+    done = subprocess.run([sys.executable, '-c', STOP_SCRIPT.format(first=first, second=second)],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [f'SIG{first} True', 'True True', 'interrupted SIGINT']
+
+
+def test_without_a_signal_the_previous_handlers_come_back():
+    code = ('import signal\nfrom mpi_ros.stop_signals import StopSignals\n'
+            'before = [signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)]\n'
+            'with StopSignals() as stop:\n'
+            '    assert not stop.requested and stop.name == ""\n'
+            'print([signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)] == before)\n')
+    done = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=60)
+    assert done.stdout.strip() == 'True', done.stderr

@@ -60,11 +60,12 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 
 from .parameters import check_parameters, declare_parameters, harden_parameter_services
-from .spinning import shutdown, StopSignals
+from .spinning import shutdown
 from ..bag_identification import check_identifier_value, DATA_PARAMETERS, identify, PARAMETERS
 from ..compensation.parameters import specs_by_name, typed_value
 from ..errors import MPIError, ParameterPushError, ParameterRejected
 from ..pipeline import BagFit, fit_bag, fit_bag_axes, parse_order
+from ..stop_signals import StopSignals
 
 __all__ = [
     'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS', 'DATA_PARAMETERS',
