@@ -9,11 +9,13 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
 
 - the parameter rule's frame: the three parameter callbacks registered before any key is
   declared (rclpy runs the validator once per key while declaring, so a bad
-  ``--params-file`` override is rejected there), the validator that only checks and keeps
-  the prepared candidate, the rejection bookkeeping (``rejected_updates``,
-  ``last_rejected_update``, the warning), the post-set swap, the re-created diagnostics
-  timer on ``diagnostics_period``, and the grouped ``set_parameters`` (model keys and the
-  output limits set together, :func:`mpi_ros.nodes.parameters.set_parameters_in_groups`);
+  ``--params-file`` override is rejected there), the validator that only checks and has
+  the core keep the prepared candidate and count the refusals
+  (:class:`~mpi_ros.compensation.updates.UpdateRule`: ``rejected_updates``,
+  ``last_rejected_update``; the node logs the warning), the post-set swap, the re-created
+  diagnostics timer on ``diagnostics_period``, and the grouped ``set_parameters`` (model
+  keys and the output limits set together,
+  :func:`mpi_ros.nodes.parameters.set_parameters_in_groups`);
 - the topics: the raw subscription and publisher of the loop with their
   :class:`~mpi_ros.nodes.loss.LossMonitor`, ``/diagnostics`` and the two timers;
 - the lifecycle (a managed node, :class:`rclpy.lifecycle.LifecycleNode`): configure loads
@@ -22,12 +24,15 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
   cleanup closes the topics and drops the core, shutdown does the same and completes
   :attr:`CompensatorNodeBase.finalized`; ``autostart`` (default true) configures and
   activates at start-up;
-- the message counters, the once-a-second log of losses and bad inputs, and the frame of
-  the diagnostics message (rate window, loss problems, common values);
+- the message counters, the once-a-second log of losses and bad inputs (throttled by
+  the core's :class:`~mpi_ros.compensation.loss.LossCounter` and
+  :class:`~mpi_ros.compensation.screening.FaultLog`, which also word them), and the frame
+  of the diagnostics message (the core's
+  :class:`~mpi_ros.compensation.status.RateWindow`, loss problems, common values);
 - the conversion between rclpy's ``Parameter`` and the dicts of the model-update rule
   (:mod:`mpi_ros.compensation.updates`: null handling and whole-model completion in the
-  pre-set callback, :func:`~mpi_ros.compensation.updates.prepare` per model prefix in the
-  on-set callback - ``''`` for the single-axis node, ``axis<k>.`` for each axis -,
+  pre-set callback, :func:`~mpi_ros.compensation.updates.prepare` per model prefix touched
+  in the on-set callback - ``''`` for the single-axis node, ``axis<k>.`` for each axis -,
   :func:`~mpi_ros.compensation.updates.apply` in the post-set callback), and the
   parameters ``sample_period`` and ``message_time`` of the extensions' lags.
 
