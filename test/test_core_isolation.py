@@ -64,7 +64,10 @@ def _absolute_imports(path, package):
     for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
         if isinstance(node, ast.ImportFrom):
             base = here[:len(here) - node.level + 1] if node.level else ()
-            yield node.lineno, '.'.join(base + ((node.module,) if node.module else ()))
+            module = '.'.join(base + ((node.module,) if node.module else ()))
+            yield node.lineno, module
+            for alias in node.names:        # from .. import app: the module mpi_ros.app
+                yield node.lineno, f'{module}.{alias.name}'
         elif isinstance(node, ast.Import):
             for alias in node.names:
                 yield node.lineno, alias.name
