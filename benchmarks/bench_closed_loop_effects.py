@@ -21,7 +21,7 @@ For every effect (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``,
 3. **Track.**  Per model, a fresh plant simulator process with the effect and a fresh
    compensator process loading the file (``--params-file``, ``output.min:=0.2``,
    ``output.max:=1.8``); the driver sends the desired displacement in real time at
-   ``--rate`` Hz in lock step (:meth:`mpi_ros.nodes.harness.LoopDriver.exchange_paced`: both nodes
+   ``--rate`` Hz in lock step (:meth:`mpi_ros.harness.driver.LoopDriver.exchange_paced`: both nodes
    time a message by their steady clocks at its arrival): a 1 s lead from the record's
    rest reading, then ``--track-duration`` s of
    :func:`mpi_ros.plant.excitation.tracking_trajectory`
@@ -213,14 +213,14 @@ class DDSLoop:
     """The node processes of one benchmark run, each stopped by its PID."""
 
     def __init__(self, out, rate):
-        from mpi_ros.nodes.harness import LoopDriver
+        from mpi_ros.harness.driver import LoopDriver
         self.out, self.rate = out, rate
         self.processes = []
         self.driver = LoopDriver('mpi_ros_bench_closed_loop_effects')
 
     def start(self, node, args, log):
         """Start a node process and remember it."""
-        from mpi_ros.nodes.harness import NodeProcess
+        from mpi_ros.harness.processes import NodeProcess
         proc = NodeProcess(node, args, self.out / log)
         self.processes.append(proc)
         return proc

@@ -139,7 +139,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     from mpi_ros import MPIModel
     from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
-    from mpi_ros.nodes.harness import NodeProcess
+    from mpi_ros.harness.processes import NodeProcess
     from mpi_ros.nodes.qos import loop_qos
     from mpi_ros.nodes.multi_axis import axis_key
     from mpi_ros.params import write_params_yaml

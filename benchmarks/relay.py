@@ -52,7 +52,8 @@ def main(argv: 'list[str] | None' = None) -> None:
     from std_msgs.msg import Float64, Float64MultiArray
 
     from mpi_ros.nodes.qos import loop_qos
-    from mpi_ros.nodes.spinning import events_executor, StopSignals
+    from mpi_ros.nodes.spinning import events_executor
+    from mpi_ros.stop_signals import StopSignals
     qos = loop_qos(args.qos_depth, args.reliability)
     arrays = args.axes > 1
     message_type = Float64MultiArray if arrays else Float64

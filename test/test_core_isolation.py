@@ -29,6 +29,10 @@ ROS_PACKAGES = ('rclpy', 'rcl_interfaces', 'std_msgs', 'sensor_msgs', 'diagnosti
                 'rosgraph_msgs', 'launch', 'launch_ros', 'ament_index_python', 'rosbag2_py')
 
 
+#: The ROS side of the package: the only folders whose modules may import ROS.
+ROS_SIDE = {'nodes', 'harness'}
+
+
 def _imported_packages(path):
     import ast
     tree = ast.parse(path.read_text(), filename=str(path))
@@ -41,11 +45,40 @@ def _imported_packages(path):
 
 
 def test_no_module_outside_the_ros_side_imports_ros():
-    # Every module of the package (found on disk, not a hand-kept list) outside
-    # mpi_ros/nodes/, at any depth and in any function (lazy imports too).
+    # Every module of the package (found on disk, not a hand-kept list) outside the ROS
+    # side (mpi_ros/nodes/, mpi_ros/harness/), at any depth and in any function (lazy
+    # imports too).
     package = Path(__file__).resolve().parents[1] / 'mpi_ros'
-    core = [p for p in package.rglob('*.py') if 'nodes' not in p.relative_to(package).parts]
+    core = [p for p in package.rglob('*.py')
+            if not ROS_SIDE & set(p.relative_to(package).parts)]
     assert len(core) > 40, core
     found = [f'{p.relative_to(package.parent)}:{line} imports {name}'
              for p in core for line, name in _imported_packages(p) if name in ROS_PACKAGES]
+    assert not found, '\n'.join(found)
+
+
+def _absolute_imports(path, package):
+    """Yield (line, module) for each import of ``path``, relative ones made absolute."""
+    import ast
+    here = ('mpi_ros',) + path.relative_to(package).parts[:-1]
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.ImportFrom):
+            base = here[:len(here) - node.level + 1] if node.level else ()
+            module = '.'.join(base + ((node.module,) if node.module else ()))
+            yield node.lineno, module
+            for alias in node.names:        # from .. import app: the module mpi_ros.app
+                yield node.lineno, f'{module}.{alias.name}'
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+
+
+def test_the_ros_side_imports_nothing_from_the_application():
+    # Layers: the application (mpi_ros/app/) sits on the ROS side, never below it.
+    package = Path(__file__).resolve().parents[1] / 'mpi_ros'
+    ros_side = [p for p in package.rglob('*.py') if ROS_SIDE & set(p.relative_to(package).parts)]
+    assert len(ros_side) > 10, ros_side
+    found = [f'{p.relative_to(package.parent)}:{line} imports {name}'
+             for p in ros_side for line, name in _absolute_imports(p, package)
+             if name == 'mpi_ros.app' or name.startswith('mpi_ros.app.')]
     assert not found, '\n'.join(found)

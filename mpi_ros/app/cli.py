@@ -15,7 +15,7 @@ Subcommands
 
 The command returns an exit code; errors are printed as ``error: ...`` on stderr, warnings
 as ``warning: ...``.  Long work (``identify``, ``diagnose``, ``demo``) draws a progress line on
-stderr when it is a terminal (:mod:`mpi_ros.app.progress`; ``--quiet``: none).
+stderr when it is a terminal (:mod:`mpi_ros.progress`; ``--quiet``: none).
 """
 
 import argparse
@@ -68,7 +68,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from ..order import format_order
     from ..params import write_params_yaml
     from ..pipeline import fit_recording
-    from .progress import Progress
+    from ..progress import Progress
     from .ranges import range_header
     from ..recordings import atomic_write, read_recording
     _check_output(args.output, '--output')

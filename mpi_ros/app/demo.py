@@ -28,7 +28,7 @@ function (:mod:`mpi_ros.extensions`), each pushed into a fresh compensator in fr
 fresh plant, tracking the same trajectory.  The identification excitation then has holds
 and bursts.  Both effects depend on time, and the plant and the compensator take a
 message's time from their steady clocks at its arrival, so the driver sends sample ``k``
-at ``t[k]`` in real time (:meth:`~mpi_ros.nodes.harness.LoopDriver.exchange_paced`), still
+at ``t[k]`` in real time (:meth:`~mpi_ros.harness.driver.LoopDriver.exchange_paced`), still
 waiting for each answer; the bag's time stamps are the real send times.
 
 Samples are exchanged in lock step (each desired value waits for its measured
@@ -42,9 +42,9 @@ import os
 import random
 
 from .cli_options import ArgumentParser
-from .progress import Progress
 from ..errors import MPIError
-from ..nodes.demo_runs import EFFECTS, ORDERS   # no rclpy at import (it loads when run)
+from ..harness.demo_runs import EFFECTS, ORDERS   # no rclpy at import (it loads when run)
+from ..progress import Progress
 
 
 __all__ = ['demo_domain_id', 'demo_main', 'ORDERS', 'EFFECTS']   # ORDERS, EFFECTS: the runs'
@@ -145,17 +145,18 @@ def demo_main(argv: list[str]) -> int:
     duration, track_duration = _DURATIONS[args.effect is not None]
     args.duration = duration if args.duration is None else args.duration
     args.track_duration = track_duration if args.track_duration is None else args.track_duration
-    from ..nodes.demo_runs import run_demo, run_effect_demo   # rclpy only when it runs
+    from .demo_report import write_effect_report, write_report
+    from ..harness.demo_runs import run_demo, run_effect_demo   # rclpy only when it runs
     with Progress(quiet=args.quiet, prefix='[demo] ') as progress:
         if args.effect is not None:
-            results = run_effect_demo(args, progress)
+            results = run_effect_demo(args, progress, write_effect_report)
             plain, extended = (r['control_error'] for r in results['tracking'])
             progress.clear()
             progress.say(f'[demo] plant with {args.effect}: control error (38) plain MPI '
                          f'{100 * plain:.2f} %, extended {100 * extended:.2f} %; report in '
                          f'{args.output}/report.md ({results["elapsed_s"]:.0f} s)')
             return 0 if extended < plain else 1
-        results = run_demo(args, progress)
+        results = run_demo(args, progress, write_report)
         best = results['tracking'][-1]['control_error']
         linear = results['tracking'][0]['control_error']
         progress.clear()

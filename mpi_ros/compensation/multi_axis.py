@@ -6,25 +6,39 @@ One :class:`~mpi_ros.compensation.Compensator` per axis (models, limits, bumples
 blocks of samples x axes in and out through one compiled loop over every axis
 (:func:`~mpi_ros.compensation.kernels._compensate_axes`), which runs each axis's own step
 on its slices of a few packed arrays: the columns are exactly the single-axis results.
+
+What a multi-axis node keeps between its callbacks, on plain values: each axis's validated
+model until every axis has one (:class:`AxisModels`), the inputs it refused
+(:class:`InputCounts`), the arrival of the previous chunk (:class:`ArrivalTimes`), the
+counters it reports (:func:`reported_counters`) and the check of its ros2_control wiring
+(:func:`joint_input`).
 """
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from .compensator import (
-    _check_sample_period, _COMPILED, _LAST, Compensator, COMPILED_COUNTERS, loop_block, pack,
+    _check_sample_period, _COMPILED, _LAST, Compensator, COMPILED_COUNTERS, kind_of, loop_block,
+    pack,
 )
 from .kernels import _compensate_axes, TABLE_COLUMNS
+from .screening import FAULT_KEYS
 from ..errors import DataError, ModelError, ParameterRejected
 from ..operators.memory import TurningPointMemory
 from ..operators.model import MPIModel
 
-__all__ = ['JointOrder', 'MultiAxisCompensator', 'chunk_times', 'joint_names']
+__all__ = ['ArrivalTimes', 'AxisModels', 'InputCounts', 'JointOrder', 'MultiAxisCompensator',
+           'REPORTED_COUNTERS', 'chunk_times', 'joint_input', 'joint_names',
+           'reported_counters']
 
 FloatArray = npt.NDArray[np.float64]
+
+#: The core's counters a multi-axis node reports, summed over the axes (``bad_time``: the
+#: lags of the axes with an effect).
+REPORTED_COUNTERS = FAULT_KEYS + ('bad_time',)
 
 
 class MultiAxisCompensator:
@@ -111,6 +125,11 @@ class MultiAxisCompensator:
         for key, value in zip(COMPILED_COUNTERS, self._counts.sum(axis=0).tolist()):
             totals[key] += value
         return totals
+
+    @property
+    def slow_states(self) -> list[Any]:
+        """Return each axis's slow states (None for an axis without an effect)."""
+        return [axis.slow_state if axis.has_effect else None for axis in self.axes]
 
     def install(self, axis: int, model: Any) -> None:
         """Switch one axis to a new (validated) model, bumplessly (:meth:`Compensator.install`)."""
@@ -297,6 +316,37 @@ def joint_names(names: Any, axes: int) -> tuple[str, ...]:
     return given
 
 
+def joint_input(joints: Sequence[str], input_message: str) -> bool:
+    """
+    Tell whether the node reads JointState messages; check that it can map them.
+
+    Parameters
+    ----------
+    joints : sequence of str
+        The checked ``joints`` (:func:`joint_names`; empty: none).
+    input_message : str
+        The ``input_message`` parameter: ``array`` or ``joint_state``.
+
+    Returns
+    -------
+    bool
+        True for ``joint_state``.
+
+    Raises
+    ------
+    ParameterRejected
+        For ``joint_state`` without ``joints``.
+
+    """
+    if input_message != 'joint_state':
+        return False
+    if not joints:
+        msg = ('input_message joint_state needs the joints parameter (one name per axis, '
+               'in axis order) to map the JointState names to the axes')
+        raise ParameterRejected(msg)
+    return True
+
+
 def chunk_times(arrival: float, previous: float | None, samples: int,
                 sample_period: float) -> FloatArray:
     """
@@ -410,3 +460,155 @@ class JointOrder:
                                        f'{len(position)} positions; each joint needs its '
                                        'position')
         return np.asarray(position, dtype=np.float64)[index].reshape(1, -1), '', ''
+
+
+class ArrivalTimes:
+    """
+    The time stamps of chunks that arrive one after the other (``message_time: arrival``).
+
+    Remembers when the previous chunk arrived, for :func:`chunk_times`.
+
+    Examples
+    --------
+    >>> arrivals = ArrivalTimes()
+    >>> arrivals.times(9.0, 2, 0.1).tolist(), arrivals.times(10.0, 4, 0.1).tolist()
+    ([8.9, 9.0], [9.7, 9.8, 9.9, 10.0])
+
+    """
+
+    def __init__(self) -> None:
+        self.previous: float | None = None
+
+    def times(self, arrival: float, samples: int, sample_period: float) -> FloatArray:
+        """Return the stamps of a chunk that arrived at ``arrival`` (:func:`chunk_times`)."""
+        times = chunk_times(arrival, self.previous, samples, sample_period)
+        self.previous = arrival
+        return times
+
+    def reset(self) -> None:
+        """Forget the previous chunk (the next one is timed as the first)."""
+        self.previous = None
+
+
+class AxisModels:
+    """
+    The validated model of each axis of a multi-axis node, until every axis has one.
+
+    Parameters
+    ----------
+    axes : int
+        Number of axes.
+
+    Attributes
+    ----------
+    models : list
+        Each axis's model (None: none yet).
+    inverses : list
+        Gamma^-1 of each axis's model where the parameter rule built it (None: not built).
+    versions : list of int
+        How many models each axis was given (kept across :meth:`reset`).
+
+    """
+
+    def __init__(self, axes: int) -> None:
+        self.versions = [0] * axes
+        self.models: list[Any] = [None] * axes
+        self.inverses: list[MPIModel | None] = [None] * axes
+
+    def reset(self) -> None:
+        """Forget every model and inverse (the node's cleanup); the versions go on."""
+        self.models = [None] * len(self.versions)
+        self.inverses = [None] * len(self.versions)
+
+    def note(self, axis: int, model: Any) -> None:
+        """Note a new model of ``axis`` (its version goes up)."""
+        self.models[axis] = model
+        self.versions[axis] += 1
+
+    @property
+    def missing(self) -> list[int]:
+        """Return the axes without a model."""
+        return [axis for axis, model in enumerate(self.models) if model is None]
+
+    def applied(self, models: Mapping[int, Any], running: bool) -> str:
+        """
+        Say which models were applied and whether the node compensates (its log line).
+
+        Parameters
+        ----------
+        models : mapping of int to model
+            The models just applied, by axis.
+        running : bool
+            The core runs (every axis has a model).
+
+        Returns
+        -------
+        str
+            e.g. ``model applied to axis 0 (none), 2 (creep) (compensating)``.
+
+        """
+        axes = ', '.join(f'{axis} ({kind_of(models[axis])})' for axis in sorted(models))
+        state = 'compensating' if running else f'{len(self.missing)} axes still without a model'
+        return f'model applied to axis {axes} ({state})'
+
+
+class InputCounts:
+    """
+    What came in on a multi-axis node's input: samples, and the messages it refused.
+
+    Attributes
+    ----------
+    samples : int
+        Samples received (rows of the accepted blocks).
+    malformed, missing_joints : int
+        Messages refused: not a samples x axes block (or a JointState whose names and
+        positions do not match), and JointStates without a joint of ``joints``.
+    last_malformed, last_missing : str
+        Why the last one of each kind was refused (``''``: none yet).
+
+    """
+
+    def __init__(self) -> None:
+        self.samples = 0
+        self.malformed = 0
+        self.missing_joints = 0
+        self.last_malformed = ''
+        self.last_missing = ''
+
+    def refuse(self, fault: str, reason: str) -> None:
+        """Count a refused message: ``fault`` ``missing_joints`` or ``malformed``."""
+        if fault == 'missing_joints':
+            self.missing_joints += 1
+            self.last_missing = reason
+        else:
+            self.malformed += 1
+            self.last_malformed = reason
+
+    def counters(self, joints: bool) -> dict[str, int]:
+        """Return ``samples_in`` and ``malformed`` and, with ``joints``, ``missing_joints``."""
+        counters = {'samples_in': self.samples, 'malformed': self.malformed}
+        if joints:
+            counters['missing_joints'] = self.missing_joints
+        return counters
+
+
+def reported_counters(compensator: MultiAxisCompensator | None) -> dict[str, int]:
+    """
+    Return the core's counters a multi-axis node reports (:data:`REPORTED_COUNTERS`).
+
+    Parameters
+    ----------
+    compensator : MultiAxisCompensator or None
+        The core; None before every axis has a model (every counter 0).
+
+    Returns
+    -------
+    dict of str to int
+        The counters, summed over the axes.
+
+    """
+    counters = dict.fromkeys(REPORTED_COUNTERS, 0)
+    if compensator is not None:
+        summed = compensator.counters
+        counters.update((key, summed[key]) for key in REPORTED_COUNTERS)
+    return counters

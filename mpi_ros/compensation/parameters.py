@@ -17,12 +17,13 @@ the key.
 from dataclasses import dataclass, replace
 import math
 import re
-from typing import Any, Iterable, List, Mapping, Optional, Tuple
+from typing import Any, Collection, Iterable, List, Mapping, Optional, Sequence, Tuple
 
+import numpy as np
 import yaml
 
-from .updates import axis_key
-from ..errors import ParameterRejected
+from .updates import axis_key, LIMIT_KEYS, model_keys
+from ..errors import ParameterPushError, ParameterRejected
 from ..extensions import EFFECTS
 from ..operators.model import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN
 
@@ -32,8 +33,9 @@ __all__ = [
     'axis_limit_parameters', 'axis_parameters', 'compensator_parameters',
     'multi_axis_parameters',
     'ARRAY_KINDS', 'MODEL_PARAMETERS', 'NULL_STRINGS', 'RCLPY_PARAMETERS', 'RELIABILITIES',
-    'ParameterSpec', 'check_value', 'check_values', 'extension_parameters', 'is_null',
-    'loop_qos_parameters', 'normalized', 'plain_value', 'specs_by_name',
+    'AxisKeys', 'ParameterSpec', 'check_value', 'check_values', 'extension_parameters',
+    'is_null', 'loop_qos_parameters', 'normalized', 'plain_value', 'request_steps',
+    'specs_by_name', 'typed_value', 'wants_multi_axis',
 ]
 
 _TYPE_WORDS = {
@@ -388,6 +390,103 @@ def axis_limit_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
     return tuple(specs)
 
 
+@dataclass(frozen=True)
+class AxisKeys:
+    """
+    The parameter names of the axes of a multi-axis compensator node.
+
+    Attributes
+    ----------
+    prefixes : tuple of str
+        Each axis's model prefix, ``axis<k>.``.
+    limits : tuple of (str, str)
+        Each axis's own ``output.min`` and ``output.max`` keys.
+
+    Examples
+    --------
+    >>> keys = AxisKeys.of(2)
+    >>> keys.prefixes
+    ('axis0.', 'axis1.')
+    >>> keys.all_limits
+    ('output.min', 'output.max', 'axis0.output.min', 'axis0.output.max', \
+'axis1.output.min', 'axis1.output.max')
+
+    """
+
+    prefixes: Tuple[str, ...]
+    limits: Tuple[Tuple[str, str], ...]
+
+    @classmethod
+    def of(cls, axes: int) -> 'AxisKeys':
+        """Return the keys of ``axes`` axes."""
+        return cls(tuple(axis_key(k, '') for k in range(axes)),
+                   tuple((axis_key(k, 'output.min'), axis_key(k, 'output.max'))
+                         for k in range(axes)))
+
+    @property
+    def all_limits(self) -> Tuple[str, ...]:
+        """Return the node-wide limit keys, then each axis's."""
+        return LIMIT_KEYS + tuple(key for keys in self.limits for key in keys)
+
+    def group(self) -> Tuple[str, ...]:
+        """
+        Return the keys one ``set_parameters`` request sets together.
+
+        Every model key of every axis (read from the effect registry now) and every limit
+        key: the models and limits of a request succeed or fail together.
+        """
+        return tuple(prefix + key for prefix in self.prefixes
+                     for key in model_keys()) + self.all_limits
+
+    def effective_limits(self, values: Mapping[str, Any]) -> Tuple[List[float], List[float]]:
+        """
+        Return each axis's applied range [A]: its own keys, else the node-wide ones.
+
+        Parameters
+        ----------
+        values : mapping of str to value
+            The node's values of :attr:`all_limits` (None: unset).
+
+        Returns
+        -------
+        lows, highs : list of float
+            ``output.min`` and ``output.max`` of each axis.
+
+        """
+        pairs = [tuple(values[key] if values[key] is not None else values[common]
+                       for key, common in zip(keys, LIMIT_KEYS)) for keys in self.limits]
+        return [pair[0] for pair in pairs], [pair[1] for pair in pairs]
+
+
+def wants_multi_axis(given: Mapping[str, Any]) -> bool:
+    """
+    Tell whether a compensator's start-up values ask for the multi-axis node.
+
+    Parameters
+    ----------
+    given : mapping of str to value
+        The values given at start (``-p``, ``--params-file``) by name; a missing name
+        was not given.
+
+    Returns
+    -------
+    bool
+        True for ``axes`` > 1 and for any ros2_control wiring (``joints`` given,
+        ``output_layout: flat`` or ``input_message: joint_state``: one joint is one axis).
+
+    Examples
+    --------
+    >>> wants_multi_axis({'axes': 1}), wants_multi_axis({'output_layout': 'flat'})
+    (False, True)
+
+    """
+    axes, joints = given.get('axes'), given.get('joints')
+    return bool((isinstance(axes, int) and axes > 1)
+                or (isinstance(joints, (list, tuple)) and len(joints) > 0)
+                or given.get('output_layout') == 'flat'
+                or given.get('input_message') == 'joint_state')
+
+
 def is_null(spec: ParameterSpec, kind: str, value: Any) -> bool:
     """
     Tell whether an incoming value is YAML ``null`` for a parameter that is not a string.
@@ -568,6 +667,85 @@ def plain_value(value: Any) -> Any:
     if value is None or isinstance(value, (bool, int, float, str)):
         return value
     return list(value)
+
+
+def typed_value(name: str, value: Any) -> Tuple[str, Any]:
+    """
+    Return the parameter type name and value a model key is sent as (the identifier's push).
+
+    Parameters
+    ----------
+    name : str
+        The key, for the message.
+    value : int, float or sequence of float
+        Its value (numpy scalars too).
+
+    Returns
+    -------
+    kind : str
+        ``'integer'`` for an integer (``model.output_sign``), ``'double'`` for another
+        scalar, ``'double_array'`` for a sequence.
+    value : int, float or list of float
+        The value as that type.
+
+    Raises
+    ------
+    ParameterPushError
+        For a bool (not a number).
+
+    Examples
+    --------
+    >>> typed_value('model.output_sign', -1), typed_value('model.dead_time', 0.5)
+    (('integer', -1), ('double', 0.5))
+
+    """
+    if isinstance(value, bool):
+        msg = f'{name} must be a number or a list of numbers; found bool {value!r}'
+        raise ParameterPushError(msg)
+    if isinstance(value, (int, np.integer)):
+        return 'integer', int(value)
+    if isinstance(value, (float, np.floating)):
+        return 'double', float(value)
+    return 'double_array', [float(v) for v in value]
+
+
+def request_steps(names: Sequence[str], groups: Iterable[Iterable[str]],
+                  answered: Collection[int] = ()) -> List[List[int]]:
+    """
+    Split a ``set_parameters`` request into its steps: coupled keys together.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The request's names, in order.
+    groups : iterable of iterable of str
+        Names that are set together (a key belongs to the first group naming it).
+    answered : collection of int
+        Positions answered already (they take no step).
+
+    Returns
+    -------
+    list of list of int
+        The positions of each step, in order: the keys of one group together at the
+        position of the group's first key, every other key alone.
+
+    Examples
+    --------
+    >>> request_steps(['enabled', 'model.a', 'output.min', 'model.b'], [('model.a', 'model.b')])
+    [[0], [1, 3], [2]]
+
+    """
+    sets = [frozenset(group) for group in groups]
+    done = set(answered)
+    steps = []
+    for i, name in enumerate(names):
+        if i in done:
+            continue
+        group = next((g for g in sets if name in g), frozenset())
+        step = [j for j, other in enumerate(names) if j not in done and (j == i or other in group)]
+        done.update(step)
+        steps.append(step)
+    return steps
 
 
 def _dotless(item: Any) -> bool:

@@ -16,7 +16,7 @@ import numpy.typing as npt
 from ..operators.model import MPIModel
 
 __all__ = ['screen_desired', 'LinearMap', 'operating_range', 'best_linear_map', 'FAULT_KEYS',
-           'new_faults', 'describe_faults']
+           'FAULT_LOG_PERIOD_S', 'FaultLog', 'new_faults', 'describe_faults']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -28,6 +28,8 @@ SATURATION_RANGES = 10.0
 FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
 _FAULT_WORDS = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
                 'clamped': 'clamped'}
+#: At most one warning about bad inputs per this period [s] (:class:`FaultLog`).
+FAULT_LOG_PERIOD_S = 5.0
 
 
 def screen_desired(desired: object, counters: dict[str, int],
@@ -185,3 +187,58 @@ def describe_faults(faults: Mapping[str, int]) -> str:
     """
     parts = [f'{faults[key]} {_FAULT_WORDS[key]}' for key in FAULT_KEYS if faults[key]]
     return f'{", ".join(parts) or "no bad"} inputs'
+
+
+class FaultLog:
+    """
+    The throttle of a node's warnings about bad inputs: at most one per period.
+
+    Parameters
+    ----------
+    period : float
+        Shortest time between two warnings [s].
+
+    Examples
+    --------
+    >>> log = FaultLog()
+    >>> log.report(100.0, {'nonfinite_input': 2})[:12]
+    '2 non-finite'
+    >>> log.report(101.0, {'nonfinite_input': 5}) is None       # within 5 s
+    True
+    >>> log.report(105.0, {'nonfinite_input': 5})[:12]           # the 3 since the last one
+    '3 non-finite'
+
+    """
+
+    def __init__(self, period: float = FAULT_LOG_PERIOD_S) -> None:
+        self.period = period
+        self._last: tuple[float, dict[str, int]] = (-math.inf, {})
+
+    def report(self, now: float, counters: Mapping[str, int]) -> str | None:
+        """
+        Return the warning about the bad inputs since the last one, if one is due.
+
+        Parameters
+        ----------
+        now : float
+            Steady time [s].
+        counters : mapping of str to int
+            The core's counters now (:data:`FAULT_KEYS`; missing keys count 0).
+
+        Returns
+        -------
+        str or None
+            The warning (what came, and what the compensator did with it); None when the
+            last one is younger than ``period`` or no bad input came since.
+
+        """
+        last_time, last_counters = self._last
+        if now - last_time < self.period:
+            return None
+        faults = new_faults(counters, last_counters)
+        if not any(faults.values()):
+            return None
+        self._last = (now, {key: counters.get(key, 0) for key in FAULT_KEYS})
+        return (f'{describe_faults(faults)} since the last report (non-finite: last command '
+                'held; out of range: beyond the displacement range of the model; clamped: '
+                'command limited to [output.min, output.max])')

@@ -15,8 +15,9 @@ from .compensator import kind_of
 from .screening import describe_faults, new_faults
 from .updates import axis_key
 
-__all__ = ['LOSS_ADVICE', 'OK', 'WARN', 'lifecycle_status', 'loss_problems', 'multi_axis_status',
-           'multi_axis_values', 'single_axis_status', 'single_axis_values', 'status_values']
+__all__ = ['LOSS_ADVICE', 'OK', 'RateWindow', 'WARN', 'lifecycle_status', 'loss_problems',
+           'multi_axis_status', 'multi_axis_values', 'single_axis_status', 'single_axis_values',
+           'state_after', 'status_values']
 
 #: diagnostic_msgs/DiagnosticStatus levels.
 OK = 0
@@ -28,6 +29,79 @@ LOSS_ADVICE = ('the node did not keep up and its input queue (qos_depth) overflo
                '(taskset), or send chunks of samples (docs/reliability.md)')
 
 Status = tuple[int, str]
+
+#: The lifecycle state a successful transition ends in (any other: ``unconfigured``).
+_STATE_AFTER = {'configure': 'inactive', 'activate': 'active', 'deactivate': 'inactive',
+                'shutdown': 'finalized'}
+
+
+class RateWindow:
+    """
+    The diagnostics period of a node: its message rate and the counters at its start.
+
+    Parameters
+    ----------
+    now : float
+        Steady time [s] the first period starts at.
+
+    Examples
+    --------
+    >>> window = RateWindow(10.0)
+    >>> window.close(12.0, 500, {'messages_in': 500})
+    (250.0, {})
+    >>> window.close(13.0, 600, {'messages_in': 600})
+    (100.0, {'messages_in': 500})
+
+    """
+
+    def __init__(self, now: float) -> None:
+        self._start: tuple[float, int, dict[str, int]] = (now, 0, {})
+
+    def close(self, now: float, messages_in: int,
+              counters: dict[str, int]) -> tuple[float, dict[str, int]]:
+        """
+        Close the period at ``now`` and start the next one.
+
+        Parameters
+        ----------
+        now : float
+            Steady time [s].
+        messages_in : int
+            Messages received so far.
+        counters : dict of str to int
+            The node's counters now (the next period's start).
+
+        Returns
+        -------
+        rate : float
+            Messages per second in the period (0 for an empty one).
+        before : dict of str to int
+            The counters at the period's start (empty for the first one).
+
+        """
+        start, count, before = self._start
+        elapsed = now - start
+        rate = (messages_in - count) / elapsed if elapsed > 0.0 else 0.0
+        self._start = (now, messages_in, counters)
+        return rate, before
+
+
+def state_after(transition: str) -> str:
+    """
+    Return the lifecycle state a successful transition ends in.
+
+    Parameters
+    ----------
+    transition : str
+        ``configure``, ``activate``, ``deactivate``, ``cleanup``, ``shutdown``.
+
+    Returns
+    -------
+    str
+        ``inactive``, ``active``, ``inactive``, ``unconfigured``, ``finalized``.
+
+    """
+    return _STATE_AFTER.get(transition, 'unconfigured')
 
 
 def loss_problems(counters: Mapping[str, int], before: Mapping[str, int], depth: int,

@@ -26,9 +26,12 @@ keys once per axis under the prefix ``axis<k>.``.  Here, on ``{name: value}`` di
     (14)), with the inverse :func:`prepare` built.
 
 :func:`load` reads a model from declared values (a node's configure).
+
+:class:`UpdateRule` is the rule of one node, over all its models (one prefix each): what
+its three parameter callbacks share between calls (the prepared updates, the refusals).
 """
 
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 import math
 import re
@@ -40,9 +43,9 @@ from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
 from ..operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS
 
-__all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'Prepared', 'apply', 'axis_key', 'complete',
-           'is_off', 'limits_of', 'load', 'model_keys', 'model_params', 'ordered_limits',
-           'prepare', 'refusal', 'uncompensated']
+__all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'Prepared', 'UpdateRule', 'apply', 'axis_key',
+           'complete', 'is_off', 'limits_of', 'load', 'load_axes', 'model_keys', 'model_params',
+           'ordered_limits', 'prepare', 'refusal', 'touches', 'uncompensated']
 
 #: The two output limits [A]; node-wide without a prefix, one axis's under ``axis<k>.``.
 LIMIT_KEYS = ('output.min', 'output.max')
@@ -82,6 +85,116 @@ class Prepared:
     def __bool__(self) -> bool:
         """Tell whether there is anything to apply."""
         return self.model is not None or self.limits is not None or bool(self.switches)
+
+
+class UpdateRule:
+    """
+    One node's model-update rule over its models: complete, prepare, take; the refusals.
+
+    The node's three parameter callbacks call it in turn: the pre-set one
+    :meth:`complete`, the on-set one :meth:`prepare` (or :meth:`refuse` with the
+    reason), the post-set one :meth:`take`.  What the on-set step prepared waits here for
+    the post-set step; the refusals are counted for ``/diagnostics``.
+
+    Parameters
+    ----------
+    prefixes : iterable of str
+        The prefix of each model: ``('',)`` for the single-axis node, ``('axis0.', ...)``
+        for the axes of a multi-axis node.
+
+    Attributes
+    ----------
+    prefixes : tuple of str
+        As given (a multi-axis node sets them once it knows its axes).
+    rejected : int
+        Requests refused so far (``rejected_updates``).
+    last_rejection : str
+        The reason of the last refusal (``last_rejected_update``), ``''`` before one.
+
+    """
+
+    def __init__(self, prefixes: Iterable[str] = ('',)) -> None:
+        self.prefixes = tuple(prefixes)
+        self.rejected = 0
+        self.last_rejection = ''
+        self._prepared: list[Prepared] = []
+
+    @staticmethod
+    def current_keys(prefix: str) -> list[str]:
+        """
+        Return the keys whose current values :meth:`complete` and :meth:`prepare` need.
+
+        Parameters
+        ----------
+        prefix : str
+            A model's prefix.
+
+        Returns
+        -------
+        list of str
+            Its model keys and output limits and, for an axis, the node-wide limits.
+
+        """
+        return [prefix + key for key in model_keys() + LIMIT_KEYS] + (
+            list(LIMIT_KEYS) if prefix else [])
+
+    def complete(self, current: Callable[[str], Mapping[str, Any]],
+                 request: Mapping[str, Any]) -> dict[str, Any]:
+        """
+        Resolve ``null`` and complete whole models (:func:`complete`, for every prefix).
+
+        Parameters
+        ----------
+        current : callable
+            Returns the current values of :meth:`current_keys` of a prefix.
+        request : mapping of str to value
+            The request, in order; None is YAML ``null``.
+
+        Returns
+        -------
+        dict
+            The request to set, in order; a value left as it came is the same object.
+
+        """
+        completed = dict(request)
+        for prefix in self.prefixes:
+            completed = complete(current(prefix), completed, prefix)
+        return completed
+
+    def prepare(self, current: Callable[[str], Mapping[str, Any]],
+                request: Mapping[str, Any], running: Callable[[str], bool]) -> None:
+        """
+        Check a request and keep its updates for :meth:`take` (:func:`prepare` per prefix).
+
+        Parameters
+        ----------
+        current : callable
+            As for :meth:`complete`.
+        request : mapping of str to value
+            The keys about to be set.
+        running : callable
+            Tells whether the model of a prefix runs.
+
+        Raises
+        ------
+        ParameterRejected, ModelError
+            As :func:`prepare`; nothing is kept.
+
+        """
+        self._prepared = []
+        self._prepared = [prepare(current(prefix), request, prefix, running=running(prefix))
+                          for prefix in self.prefixes if touches(request, prefix)]
+
+    def refuse(self, reason: str) -> None:
+        """Drop what was prepared and count a refusal with its reason."""
+        self._prepared = []
+        self.rejected += 1
+        self.last_rejection = reason
+
+    def take(self) -> list[Prepared]:
+        """Return what :meth:`prepare` kept, and forget it (the post-set step)."""
+        prepared, self._prepared = self._prepared, []
+        return prepared
 
 
 def axis_key(axis: int, key: str) -> str:
@@ -351,6 +464,35 @@ def load(values: Mapping[str, Any], prefix: str = '') -> Any:
     return _whole_model(values, prefix, given + effects, loading=True)[0]
 
 
+def load_axes(values: Mapping[str, Any], prefixes: Iterable[str]) -> dict[int, Any]:
+    """
+    Check every axis's output range, then read the models of the axes that have one.
+
+    Parameters
+    ----------
+    values : mapping of str to value
+        Declared values of a multi-axis node (None: unset).
+    prefixes : iterable of str
+        Each axis's prefix, in axis order.
+
+    Returns
+    -------
+    dict of int to model
+        The model of each axis that has one (:func:`load`), by axis.
+
+    Raises
+    ------
+    ParameterRejected, ModelError
+        As :func:`limits_of` (first, for every axis) and :func:`load`.
+
+    """
+    prefixes = tuple(prefixes)
+    for prefix in prefixes:
+        limits_of(values, prefix)
+    models = {axis: load(values, prefix) for axis, prefix in enumerate(prefixes)}
+    return {axis: model for axis, model in models.items() if model is not None}
+
+
 def ordered_limits(output_min: float, output_max: float, *,
                    names: tuple[str, str] = LIMIT_KEYS) -> tuple[float, float]:
     """
@@ -423,6 +565,32 @@ def refusal(names: list[str], err: Exception, *, version: int | None,
     return (f'{changed} rejected, the whole model was checked: {err}. Nothing was '
             f'applied; {stays}. Keys that must change together (e.g. a new order) go '
             'in one request: ros2 param load FILE, or set_parameters_atomically')
+
+
+def touches(request: Mapping[str, Any], prefix: str) -> bool:
+    """
+    Tell whether a request concerns the model of ``prefix`` (its keys, limits, switches).
+
+    Parameters
+    ----------
+    request : mapping of str to value
+        The request.
+    prefix : str
+        ``''`` or ``'axis<k>.'``.
+
+    Returns
+    -------
+    bool
+        True when a name starts with ``prefix`` or is a node-wide limit or switch.
+
+    Examples
+    --------
+    >>> touches({'axis1.model.dead_time': 0.0}, 'axis0.'), touches({'enabled': 1}, 'axis0.')
+    (False, True)
+
+    """
+    return any(name.startswith(prefix) or name in LIMIT_KEYS or name in PLAIN_KEYS
+               for name in request)
 
 
 def uncompensated(model: Any) -> str | None:

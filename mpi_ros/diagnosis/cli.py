@@ -30,8 +30,8 @@ from .report import data_units, INPUT_UNITS, OUTPUT_UNITS, report_facts, summary
 from .signatures import diagnostic_excitation
 from ..app.cli_options import (
     add_data_options, add_order_option, ArgumentParser, data_options, order_option)
-from ..app.progress import Progress
 from ..errors import DataError, MPIError
+from ..progress import Progress
 from ..recordings import DataOptions, join_recordings, read_recording, Recording, \
     write_csv_columns
 from ..recordings.reading import source_kind

@@ -103,7 +103,7 @@ from .multi_axis import MultiAxisCompensatorNode
 from .parameters import declare_parameters, parameter_values
 from .spinning import run_node_main
 from ..compensation import Compensator
-from ..compensation.parameters import compensator_parameters, specs_by_name
+from ..compensation.parameters import compensator_parameters, specs_by_name, wants_multi_axis
 from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
@@ -348,19 +348,11 @@ def make_node(**kwargs: Any) -> Node:
                  **kwargs)
     try:
         # rclpy 7.1.6 has no public accessor of the overrides (see declare_parameters).
-        overrides = dict(getattr(probe, '_parameter_overrides', {}))
+        overrides = getattr(probe, '_parameter_overrides', {})
+        given = {name: override.value for name, override in overrides.items()}
     finally:
         probe.destroy_node()
-
-    def given(name: str) -> Any:
-        override = overrides.get(name)
-        return None if override is None else override.value
-
-    axes = given('axes')
-    joints = given('joints')
-    if ((isinstance(axes, int) and axes > 1)
-            or (isinstance(joints, (list, tuple)) and len(joints) > 0)
-            or given('output_layout') == 'flat' or given('input_message') == 'joint_state'):
+    if wants_multi_axis(given):
         return MultiAxisCompensatorNode(**kwargs)
     return CompensatorNode(**kwargs)
 

@@ -9,11 +9,13 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
 
 - the parameter rule's frame: the three parameter callbacks registered before any key is
   declared (rclpy runs the validator once per key while declaring, so a bad
-  ``--params-file`` override is rejected there), the validator that only checks and keeps
-  the prepared candidate, the rejection bookkeeping (``rejected_updates``,
-  ``last_rejected_update``, the warning), the post-set swap, the re-created diagnostics
-  timer on ``diagnostics_period``, and the grouped ``set_parameters`` (model keys and the
-  output limits set together, :func:`mpi_ros.nodes.parameters.set_parameters_in_groups`);
+  ``--params-file`` override is rejected there), the validator that only checks and has
+  the core keep the prepared candidate and count the refusals
+  (:class:`~mpi_ros.compensation.updates.UpdateRule`: ``rejected_updates``,
+  ``last_rejected_update``; the node logs the warning), the post-set swap, the re-created
+  diagnostics timer on ``diagnostics_period``, and the grouped ``set_parameters`` (model
+  keys and the output limits set together,
+  :func:`mpi_ros.nodes.parameters.set_parameters_in_groups`);
 - the topics: the raw subscription and publisher of the loop with their
   :class:`~mpi_ros.nodes.loss.LossMonitor`, ``/diagnostics`` and the two timers;
 - the lifecycle (a managed node, :class:`rclpy.lifecycle.LifecycleNode`): configure loads
@@ -22,12 +24,15 @@ What the two compensator nodes share: parameter rule, topics, loss, counters, di
   cleanup closes the topics and drops the core, shutdown does the same and completes
   :attr:`CompensatorNodeBase.finalized`; ``autostart`` (default true) configures and
   activates at start-up;
-- the message counters, the once-a-second log of losses and bad inputs, and the frame of
-  the diagnostics message (rate window, loss problems, common values);
+- the message counters, the once-a-second log of losses and bad inputs (throttled by
+  the core's :class:`~mpi_ros.compensation.loss.LossCounter` and
+  :class:`~mpi_ros.compensation.screening.FaultLog`, which also word them), and the frame
+  of the diagnostics message (the core's
+  :class:`~mpi_ros.compensation.status.RateWindow`, loss problems, common values);
 - the conversion between rclpy's ``Parameter`` and the dicts of the model-update rule
   (:mod:`mpi_ros.compensation.updates`: null handling and whole-model completion in the
-  pre-set callback, :func:`~mpi_ros.compensation.updates.prepare` per model prefix in the
-  on-set callback - ``''`` for the single-axis node, ``axis<k>.`` for each axis -,
+  pre-set callback, :func:`~mpi_ros.compensation.updates.prepare` per model prefix touched
+  in the on-set callback - ``''`` for the single-axis node, ``axis<k>.`` for each axis -,
   :func:`~mpi_ros.compensation.updates.apply` in the post-set callback), and the
   parameters ``sample_period`` and ``message_time`` of the extensions' lags.
 
@@ -47,7 +52,6 @@ Lifecycle states (what each publishes on the loop's output topic)
     ``/diagnostics`` reports ``lifecycle_state`` in every state.
 """
 
-import math
 import time
 import traceback
 from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple
@@ -66,25 +70,16 @@ from .parameters import (
 )
 from .qos import loop_qos
 from ..compensation.parameters import ParameterSpec, plain_value
-from ..compensation.screening import describe_faults, FAULT_KEYS, new_faults
-from ..compensation.status import lifecycle_status, status_values
-from ..compensation.updates import (
-    complete, LIMIT_KEYS, model_keys, PLAIN_KEYS, prepare, Prepared, uncompensated,
-)
+from ..compensation.screening import FaultLog
+from ..compensation.status import lifecycle_status, RateWindow, state_after, status_values
+from ..compensation.updates import Prepared, uncompensated, UpdateRule
 from ..errors import MPIError, ParameterRejected
 
-__all__ = [
-    'CompensatorNodeBase',
-    'DRAIN_LIMIT',
-    'describe_faults',
-    'new_faults',
-]
+__all__ = ['CompensatorNodeBase', 'DRAIN_LIMIT']
 
 
 #: Most messages served in one subscription callback (a flood still lets a stop through).
 DRAIN_LIMIT = 1000
-#: At most one log line about bad inputs per this period [s]; checked every second.
-_FAULT_LOG_PERIOD_S = 5.0
 
 
 class CompensatorNodeBase(LifecycleNode):
@@ -116,8 +111,9 @@ class CompensatorNodeBase(LifecycleNode):
     def __init__(self, node_name: str, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         self._declaring = True
-        self._prepared: List[Prepared] = []
-        self._prefixes: Tuple[str, ...] = ('',)
+        # The model-update rule's state between the callbacks; its prefixes are the
+        # node's models ('' here; a multi-axis node sets axis<k>. once it knows N).
+        self._rule = UpdateRule()
         self._specs: Mapping[str, ParameterSpec] = {}
         self._groups: Tuple[Tuple[str, ...], ...] = ()
         self._compensator: Any = None
@@ -130,15 +126,13 @@ class CompensatorNodeBase(LifecycleNode):
         self._publisher: Any = None
         self._transition_error: Optional[Exception] = None
         self.finalized = Future()
-        self._rejected_updates = 0
-        self._last_rejection = ''
         self._messages_in = 0
         self._messages_out = 0
         self._dropped_unconfigured = 0
         self._dropped_inactive = 0
         self._what = 'desired displacements'
-        self._last_report: Tuple[float, int, Dict[str, int]] = (time.monotonic(), 0, {})
-        self._fault_log: Tuple[float, Dict[str, int]] = (-math.inf, {})
+        self._window = RateWindow(time.monotonic())
+        self._fault_log = FaultLog()
         # Validator first: rclpy runs it once per key while declaring (a bad
         # --params-file override is rejected there), then once per request.
         self.add_pre_set_parameters_callback(self._complete_request)
@@ -310,7 +304,7 @@ class CompensatorNodeBase(LifecycleNode):
                 f'lifecycle: {name} raised {type(err).__name__}: {err}\n'
                 f'{traceback.format_exc()}')
             return TransitionCallbackReturn.ERROR
-        self.get_logger().info(f'lifecycle: {name} done, state {self._next_state(name)}')
+        self.get_logger().info(f'lifecycle: {name} done, state {state_after(name)}')
         return TransitionCallbackReturn.SUCCESS
 
     def _configure(self) -> None:
@@ -334,11 +328,6 @@ class CompensatorNodeBase(LifecycleNode):
         self._unload()
         self._compensator = None
         self._set_live()
-
-    @staticmethod
-    def _next_state(name: str) -> str:
-        return {'configure': 'inactive', 'activate': 'active', 'deactivate': 'inactive',
-                'shutdown': 'finalized'}.get(name, 'unconfigured')
 
     def _finalize(self) -> None:
         self._release()
@@ -372,7 +361,7 @@ class CompensatorNodeBase(LifecycleNode):
             dropped_unconfigured=self._dropped_unconfigured,
             dropped_inactive=self._dropped_inactive,
             **self._loss.counters(),
-            rejected_updates=self._rejected_updates,
+            rejected_updates=self._rule.rejected,
         )
         counters.update(self._node_counters())
         return counters
@@ -445,9 +434,7 @@ class CompensatorNodeBase(LifecycleNode):
 
     def _current(self, prefix: str) -> Dict[str, Any]:
         """Return the current values of one model's keys and of the limits it uses."""
-        names = [prefix + key for key in model_keys() + LIMIT_KEYS] + (
-            list(LIMIT_KEYS) if prefix else [])
-        return parameter_values(self, names)
+        return parameter_values(self, UpdateRule.current_keys(prefix))
 
     def _complete_request(self, parameters: List[Parameter]) -> List[Parameter]:
         """Pre-set: normalise values, resolve null, complete whole models (updates.complete)."""
@@ -457,9 +444,7 @@ class CompensatorNodeBase(LifecycleNode):
             return given
         request = {p.name: None if p.name in specs and is_null(specs[p.name], p)
                    else plain_value(p.value) for p in given}
-        completed = request
-        for prefix in self._prefixes:
-            completed = complete(self._current(prefix), completed, prefix)
+        completed = self._rule.complete(self._current, request)
         original = {p.name: p for p in given}
         return [original[name] if name in request and value is request[name]
                 else Parameter(name, Parameter.Type[specs[name].type_.upper()], value)
@@ -478,21 +463,17 @@ class CompensatorNodeBase(LifecycleNode):
                 # run once all keys are declared (the node's _load).
                 return SetParametersResult(successful=True)
             request = {p.name: plain_value(p.value) for p in parameters}
-            self._prepared = [
-                prepare(self._current(prefix), request, prefix, running=self._running(prefix))
-                for prefix in self._prefixes if _touches(request, prefix)]
+            self._rule.prepare(self._current, request, self._running)
         except (ParameterRejected, MPIError) as err:
-            self._prepared = []
-            self._rejected_updates += 1
             reason = self._rejection([p.name for p in parameters], err)
-            self._last_rejection = reason
+            self._rule.refuse(reason)
             self.get_logger().warning(f'rejected parameter update: {reason}')
             return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, parameters: List[Parameter]) -> None:
         """Swap in what the validator prepared (post-set: the values are stored)."""
-        prepared, self._prepared = self._prepared, []
+        prepared = self._rule.take()
         if self._declaring or not any(prepared):
             return
         self._install_prepared(prepared)
@@ -570,20 +551,12 @@ class CompensatorNodeBase(LifecycleNode):
             clamped inputs and the last such line is at least 5 s old).
 
         """
-        now = time.monotonic()
-        last_time, last_counters = self._fault_log
-        if now - last_time < _FAULT_LOG_PERIOD_S or self._compensator is None:
+        if self._compensator is None:
             return False
-        counters = self._compensator.counters
-        faults = new_faults(counters, last_counters)
-        if not any(faults.values()):
-            return False
-        self._fault_log = (now, {key: counters.get(key, 0) for key in FAULT_KEYS})
-        self.get_logger().warning(
-            f'{describe_faults(faults)} since the last report (non-finite: last command held; '
-            'out of range: beyond the displacement range of the model; clamped: command limited '
-            'to [output.min, output.max])')
-        return True
+        line = self._fault_log.report(time.monotonic(), self._compensator.counters)
+        if line is not None:
+            self.get_logger().warning(line)
+        return line is not None
 
     def diagnostics(self) -> DiagnosticArray:
         """
@@ -600,12 +573,8 @@ class CompensatorNodeBase(LifecycleNode):
             ``output_min`` and ``output_max``.
 
         """
-        now = time.monotonic()
-        last_time, last_count, before = self._last_report
         counters = self.counters
-        elapsed = now - last_time
-        rate = (self._messages_in - last_count) / elapsed if elapsed > 0.0 else 0.0
-        self._last_report = (now, self._messages_in, counters)
+        rate, before = self._window.close(time.monotonic(), self._messages_in, counters)
 
         status = DiagnosticStatus(name=self._status_name(),
                                   hardware_id=self.get_fully_qualified_name())
@@ -617,7 +586,7 @@ class CompensatorNodeBase(LifecycleNode):
         status.level = bytes([level])
         values = status_values(
             counters, self._status_values(), lifecycle_state=state,
-            last_rejected_update=self._last_rejection, rate_hz=round(rate, 3),
+            last_rejected_update=self._rule.last_rejection, rate_hz=round(rate, 3),
             max_backlog=self._loss.last_backlog, qos_depth=depth,
             input_publishers=self._loss.publishers,
             enabled=self.get_parameter('enabled').value,
@@ -628,12 +597,6 @@ class CompensatorNodeBase(LifecycleNode):
         array.header.stamp = self.get_clock().now().to_msg()
         array.status = [status]
         return array
-
-
-def _touches(request: Mapping[str, Any], prefix: str) -> bool:
-    """Tell whether a request concerns the model of ``prefix`` (its keys, limits, switches)."""
-    return any(name.startswith(prefix) or name in LIMIT_KEYS or name in PLAIN_KEYS
-               for name in request)
 
 
 def _same(current: Parameter, incoming: Parameter) -> bool:

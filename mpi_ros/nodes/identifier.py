@@ -50,7 +50,6 @@ import sys
 import time
 from typing import Any, List, Mapping, Optional
 
-import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParametersAtomically
 import rclpy
@@ -61,18 +60,17 @@ from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 
 from .parameters import check_parameters, declare_parameters, harden_parameter_services
-from .spinning import shutdown, StopSignals
-from ..compensation.parameters import specs_by_name
+from .spinning import shutdown
+from ..compensation.parameters import specs_by_name, typed_value
 from ..errors import MPIError, ParameterPushError, ParameterRejected
 from ..pipeline import BagFit, check_identifier_value, DATA_PARAMETERS, fit_bag, fit_bag_axes, \
     identify_bag, PARAMETERS, parse_order
+from ..stop_signals import StopSignals
 
 __all__ = [
     'IdentifierNode', 'BagFit', 'ParameterPushError', 'PARAMETERS', 'DATA_PARAMETERS',
     'fit_bag', 'fit_bag_axes', 'parse_order', 'push_model_parameters', 'main',
 ]
-
-Type = Parameter.Type
 
 _SPECS = specs_by_name(PARAMETERS)
 
@@ -231,12 +229,6 @@ def main(args: Optional[List[str]] = None) -> int:
 
 
 def _typed(name: str, value: Any) -> Parameter:
-    """Return an integer, double (scalar) or double-array parameter."""
-    if isinstance(value, bool):
-        msg = f'{name} must be a number or a list of numbers; found bool {value!r}'
-        raise ParameterPushError(msg)
-    if isinstance(value, (int, np.integer)):
-        return Parameter(name, Type.INTEGER, int(value))
-    if isinstance(value, (float, np.floating)):
-        return Parameter(name, Type.DOUBLE, float(value))
-    return Parameter(name, Type.DOUBLE_ARRAY, [float(v) for v in value])
+    """Return an integer, double (scalar) or double-array parameter (core: typed_value)."""
+    kind, plain = typed_value(name, value)
+    return Parameter(name, Parameter.Type[kind.upper()], plain)

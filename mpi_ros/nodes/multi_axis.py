@@ -103,28 +103,23 @@ from .parameters import declare_parameters, parameter_values
 from ..array_layout import (
     ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
 )
-from ..compensation import kind_of, MultiAxisCompensator
-from ..compensation.multi_axis import chunk_times, joint_names, JointOrder
+from ..compensation import MultiAxisCompensator
+from ..compensation.multi_axis import (
+    ArrivalTimes, AxisModels, chunk_times, InputCounts, joint_input, joint_names, JointOrder,
+    reported_counters,
+)
 from ..compensation.parameters import (
-    AXES, axis_limit_parameters, axis_parameters, INPUT_MESSAGE, JOINTS, multi_axis_parameters,
-    OUTPUT_LAYOUT, specs_by_name, WIRING,
+    AXES, axis_limit_parameters, axis_parameters, AxisKeys, INPUT_MESSAGE, JOINTS,
+    multi_axis_parameters, OUTPUT_LAYOUT, specs_by_name, WIRING,
 )
-from ..compensation.screening import FAULT_KEYS
 from ..compensation.status import multi_axis_status, multi_axis_values
-from ..compensation.updates import (
-    apply, axis_key, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
-)
-from ..errors import ParameterRejected
+from ..compensation.updates import apply, axis_key, load_axes, Prepared, refusal
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
 
 #: Most messages served in one subscription callback (patched by tests).
 _DRAIN_LIMIT = DRAIN_LIMIT
-
-
-#: The core's counters on /diagnostics, summed over the axes (bad_time: effect axes' lags).
-_CORE_COUNTERS = FAULT_KEYS + ('bad_time',)
 
 
 class MultiAxisCompensatorNode(CompensatorNodeBase):
@@ -152,39 +147,25 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self.axes = int(self.get_parameter('axes').value)
         per_axis = axis_parameters(self.axes) + axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
-        self._prefixes = tuple(axis_key(k, '') for k in range(self.axes))
-        self._limit_keys = [(axis_key(k, 'output.min'), axis_key(k, 'output.max'))
-                            for k in range(self.axes)]
-        self._all_limit_keys = LIMIT_KEYS + tuple(
-            key for keys in self._limit_keys for key in keys)
+        self._keys = AxisKeys.of(self.axes)
+        self._rule.prefixes = self._keys.prefixes
         # Models and limits of one set_parameters request succeed or fail together.
-        self._groups = (tuple(prefix + key for prefix in self._prefixes
-                              for key in model_keys()) + self._all_limit_keys,)
+        self._groups = (self._keys.group(),)
         declare_parameters(self, per_axis + multi_axis_parameters() + WIRING)
         self._declared()
         self.joints = joint_names(self.get_parameter('joints').value, self.axes)
         self._flat = self.get_parameter('output_layout').value == 'flat'
-        joint_state = self.get_parameter('input_message').value == 'joint_state'
-        if joint_state and not self.joints:
-            msg = ('input_message joint_state needs the joints parameter (one name per axis, '
-                   'in axis order) to map the JointState names to the axes')
-            raise ParameterRejected(msg)
+        joint_state = joint_input(self.joints, self.get_parameter('input_message').value)
 
-        self._models: List[Any] = [None] * self.axes
-        self._inverses: List[Any] = [None] * self.axes
+        self._axis_models = AxisModels(self.axes)
         self._compensator: Optional[MultiAxisCompensator] = None
-        self._model_versions = [0] * self.axes
         # message_time: arrival reads the steady clock (CLOCK_MONOTONIC) per message while
         # some axis has an effect with lags (_timed); nominal never does.
         self._arrival_clock: Optional[Callable[[], float]] = (
             time.monotonic if self.get_parameter('message_time').value == 'arrival' else None)
         self._timed = False
-        self._last_arrival: Optional[float] = None
-        self._samples_in = 0
-        self._malformed = 0
-        self._last_malformed = ''
-        self._missing_joints = 0
-        self._last_missing = ''
+        self._arrivals = ArrivalTimes()
+        self._inputs = InputCounts()
         self._joint_order = JointOrder(self.joints or ())
         # Last: with autostart, configure (_load: the models) and activate run here.
         if joint_state:
@@ -230,14 +211,15 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         # As the single-axis node: raw messages, every queued one served here, sequence
         # numbers of the ones taken here checked for gaps.  A block is decoded by one
         # numpy view of the bytes and answered by one tobytes (mpi_ros.array_layout).
+        inputs = self._inputs
+
         def serve(data: bytes) -> None:
             try:
                 block = block_of(data, self.axes)
             except ArrayLayoutError as err:
-                self._malformed += 1
-                self._last_malformed = str(err)
+                inputs.refuse('malformed', str(err))
                 return
-            self._samples_in += block.shape[0]
+            inputs.samples += block.shape[0]
             self._serve(block)
 
         self._drain(data, Float64MultiArray, serve, raw=True, limit=_DRAIN_LIMIT)
@@ -249,21 +231,13 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                     limit=_DRAIN_LIMIT)
 
     def _serve_joint_state(self, msg: Any) -> None:
-        block = self._joint_block(msg)
-        if block is not None:
-            self._samples_in += 1
-            self._serve(block)
-
-    def _joint_block(self, msg: Any) -> Any:
-        """Return the 1 x N block of a JointState in axis order, or None (refused, counted)."""
+        # The 1 x N block of a JointState in axis order, or None (refused, counted).
         block, fault, reason = self._joint_order.block(msg.name, msg.position)
-        if fault == 'missing_joints':
-            self._missing_joints += 1
-            self._last_missing = reason
-        elif fault:
-            self._malformed += 1
-            self._last_malformed = reason
-        return block
+        if block is None:
+            self._inputs.refuse(fault, reason)
+            return
+        self._inputs.samples += 1
+        self._serve(block)
 
     def _serve(self, block: Any) -> None:
         """Command one block and publish it in the output layout (no model or inactive: drop)."""
@@ -286,13 +260,12 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         """Command a block with its samples' times (message_time: arrival, see chunk_times)."""
         clock = self._arrival_clock
         now = clock() if clock is not None else 0.0      # _timed: always a clock
-        times = chunk_times(now, self._last_arrival, block.shape[0], compensator.sample_period)
-        self._last_arrival = now
-        return compensator.command(block, times)
+        return compensator.command(
+            block, self._arrivals.times(now, block.shape[0], compensator.sample_period))
 
     # -- parameters ---------------------------------------------------------------------
     def _running(self, prefix: str) -> bool:
-        return self._models[self._prefixes.index(prefix)] is not None
+        return self._axis_models.models[self._keys.prefixes.index(prefix)] is not None
 
     def _rejection(self, names: List[str], err: Exception) -> str:
         return refusal(names, err, version=None, axes=True)
@@ -302,39 +275,31 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         axes = compensator.axes if compensator is not None else None
         models = {}
         for update in prepared:
-            axis = self._prefixes.index(update.prefix)
+            axis = self._keys.prefixes.index(update.prefix)
             apply(update, axes[axis] if axes is not None else None)
             if update.model is not None:
                 models[axis] = update.model
-                self._inverses[axis] = update.inverse
+                self._axis_models.inverses[axis] = update.inverse
         # Lifecycle state unconfigured: the parameters hold them; configure loads them.
         if self._configured:
             self._install(models, installed=compensator is not None)
 
     def _load(self) -> None:
-        values = parameter_values(self, list(self._specs))
-        for prefix in self._prefixes:
-            limits_of(values, prefix)
-        models = {axis: load(values, prefix) for axis, prefix in enumerate(self._prefixes)}
-        self._install({axis: model for axis, model in models.items() if model is not None})
+        self._install(load_axes(parameter_values(self, list(self._specs)), self._keys.prefixes))
         if self._compensator is None:
             self.get_logger().info(
-                f'{self.axes} axes, {self._models.count(None)} without a model: publishing '
+                f'{self.axes} axes, {len(self._axis_models.missing)} without a model: publishing '
                 'nothing until every axis has one (axis<k>.model.* keys, e.g. pushed by the '
                 'identifier)')
 
     def _unload(self) -> None:
-        self._models = [None] * self.axes
-        self._inverses = [None] * self.axes
+        self._axis_models.reset()
         self._timed = False
-        self._last_arrival = None
+        self._arrivals.reset()
 
     def _effective_limits(self) -> Tuple[List[float], List[float]]:
         """Return each axis's applied range [A]: its own keys, else the node-wide ones."""
-        values = parameter_values(self, self._all_limit_keys)
-        pairs = [tuple(values[key] if values[key] is not None else values[common]
-                       for key, common in zip(keys, LIMIT_KEYS)) for keys in self._limit_keys]
-        return [pair[0] for pair in pairs], [pair[1] for pair in pairs]
+        return self._keys.effective_limits(parameter_values(self, self._keys.all_limits))
 
     def _install(self, models: Dict[int, Any], *, installed: bool = False) -> None:
         """Note validated axis models (``installed``: swapped into the core already)."""
@@ -342,39 +307,28 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             return
         for axis, model in models.items():
             self._warn_if_not_compensated(model, f'axis {axis}: ')
-            self._models[axis] = model
-            self._model_versions[axis] += 1
+            self._axis_models.note(axis, model)
             if self._compensator is not None and not installed:
                 self._compensator.install(axis, model)
-        if self._compensator is None and all(m is not None for m in self._models):
+        if self._compensator is None and not self._axis_models.missing:
             lows, highs = self._effective_limits()
             self._compensator = MultiAxisCompensator(
-                self._models, output_min=lows, output_max=highs,
+                self._axis_models.models, output_min=lows, output_max=highs,
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value,
-                inverses=self._inverses)
+                inverses=self._axis_models.inverses)
         self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
                        and any(axis.has_effect for axis in compensator.axes))
-        axes = ', '.join(f'{axis} ({kind_of(models[axis])})' for axis in sorted(models))
-        state = 'compensating' if compensator is not None else (
-            f'{sum(m is None for m in self._models)} axes still without a model')
-        self.get_logger().info(f'model applied to axis {axes} ({state})')
+        self.get_logger().info(self._axis_models.applied(models, compensator is not None))
 
     # -- diagnostics --------------------------------------------------------------------
     def _core_counters(self) -> Dict[str, int]:
-        counters: Dict[str, int] = dict.fromkeys(_CORE_COUNTERS, 0)
-        if self._compensator is not None:
-            summed = self._compensator.counters
-            counters.update((key, summed[key]) for key in _CORE_COUNTERS)
-        return counters
+        return reported_counters(self._compensator)
 
     def _node_counters(self) -> Dict[str, int]:
-        counters = {'samples_in': self._samples_in, 'malformed': self._malformed}
-        if self.joints:
-            counters['missing_joints'] = self._missing_joints
-        return counters
+        return self._inputs.counters(joints=bool(self.joints))
 
     def _status_name(self) -> str:
         return f'{self.get_name()}: feedforward ({self.axes} axes)'
@@ -382,14 +336,14 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
     def _status(self, losses: List[str], counters: Dict[str, int],
                 before: Dict[str, int]) -> Tuple[int, str]:
         return multi_axis_status(
-            losses, counters, before, what=self._what, last_malformed=self._last_malformed,
-            last_missing=self._last_missing,
-            missing_axes=[axis for axis, model in enumerate(self._models) if model is None])
+            losses, counters, before, what=self._what,
+            last_malformed=self._inputs.last_malformed, last_missing=self._inputs.last_missing,
+            missing_axes=self._axis_models.missing)
 
     def _status_values(self) -> Dict[str, Any]:
         compensator = self._compensator
-        slow_states = [] if compensator is None else [
-            axis.slow_state if axis.has_effect else None for axis in compensator.axes]
+        models = self._axis_models
         return multi_axis_values(
-            self._models, model_versions=self._model_versions, joints=self.joints or (),
-            flat=self._flat, limits=self._effective_limits(), slow_states=slow_states)
+            models.models, model_versions=models.versions, joints=self.joints or (),
+            flat=self._flat, limits=self._effective_limits(),
+            slow_states=[] if compensator is None else compensator.slow_states)

@@ -18,7 +18,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..compensation import parameters as core
-from ..compensation.parameters import ParameterSpec, plain_value
+from ..compensation.parameters import ParameterSpec, plain_value, request_steps
 
 __all__ = [
     'check_parameter',
@@ -244,7 +244,6 @@ def set_parameters_in_groups(node: Node, parameters: Sequence[Parameter], *,
         One result per parameter, in request order.
 
     """
-    groups = [frozenset(group) for group in groups]
     results: List[Optional[SetParametersResult]] = [None] * len(parameters)
     for i, parameter in enumerate(parameters):
         spec = specs.get(parameter.name) if specs is not None else None
@@ -252,17 +251,13 @@ def set_parameters_in_groups(node: Node, parameters: Sequence[Parameter], *,
                 and node.get_parameter(parameter.name).type_ == Type.NOT_SET):
             results[i] = SetParametersResult(
                 successful=True, reason=f'{parameter.name} is null: it stays unset')
-    for i, parameter in enumerate(parameters):
-        if results[i] is not None:
-            continue
-        group = next((g for g in groups if parameter.name in g), frozenset())
-        members = [j for j, other in enumerate(parameters)
-                   if results[j] is None and (j == i or other.name in group)]
+    answered = [i for i, result in enumerate(results) if result is not None]
+    for step in request_steps([p.name for p in parameters], groups, answered):
         try:
-            result = node.set_parameters_atomically([parameters[j] for j in members])
+            result = node.set_parameters_atomically([parameters[j] for j in step])
         except ParameterNotDeclaredException as err:
             result = SetParametersResult(successful=False, reason=str(err))
-        for j in members:
+        for j in step:
             results[j] = result
     return [result for result in results if result is not None]
 

@@ -54,7 +54,7 @@ Recording (``record.path``)
 
 import math
 import time
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, List, Optional
 
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
@@ -71,8 +71,9 @@ from .spinning import run_node_main
 from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray
 from ..compensation.parameters import specs_by_name
 from ..errors import ParameterRejected
-from ..plant.actuator import MagnetostrictiveActuator
-from ..plant.simulator import build_truth, describe_truth, excitation_schedule, plant_parameters
+from ..plant.simulator import (
+    describe_truth, excitation_schedule, ExcitationRun, plant_parameters, SimulatedPlants,
+)
 from ..recordings import BagRecorder
 
 __all__ = ['PlantSimulatorNode', 'plant_parameters', 'main']
@@ -117,22 +118,11 @@ class PlantSimulatorNode(Node):
         harden_parameter_services(self, specs=self._specs)
         values = parameter_values(self, list(self._specs))
         self._values = values
-        self._rng = np.random.default_rng(values['seed'])
-        self._noise_std = values['noise_std']
-        self.axes = int(values['axes'])
-        if self.axes > 1 and (values['excitation.enabled'] or values['record.path']):
-            msg = (f'axes={self.axes}: excitation.enabled and record.path are single-axis '
-                   'only; set axes:=1, or leave excitation and recording off')
-            raise ParameterRejected(msg)
-        self._plant = build_truth(values)
-        self._plants = [self._plant] + [build_truth(values, seed=values['seed'] + k)
-                                        for k in range(1, self.axes)]
-        self._held = np.zeros(self.axes)
+        self._plants = SimulatedPlants(values)
+        self.axes = self._plants.axes
         self.finished = Future()
-        self.counters: Dict[str, int] = {
-            'commands': 0, 'nonfinite_commands': 0, 'published': 0}
+        self.counters = self._plants.counters
         self._t0 = time.monotonic()
-        self._last_t = -math.inf
         self._recorder: Optional[BagRecorder] = None
         if values['record.path']:
             self._recorder = BagRecorder(values['record.path'],
@@ -147,15 +137,11 @@ class PlantSimulatorNode(Node):
         else:
             self._publisher = self.create_publisher(Float64, 'displacement', qos)
         self._command_publisher: Optional[Any] = None
-        self._excitation: Optional[Tuple[Any, Any]] = None
-        self._excitation_start: Optional[float] = None
+        self._excitation: Optional[ExcitationRun] = None
         if values['excitation.enabled']:
             self._command_publisher = self.create_publisher(Float64, 'current_command', qos)
             schedule_t, schedule_i = excitation_schedule(values)
-            self._excitation = (np.asarray(schedule_t, dtype=float),
-                                np.asarray(schedule_i, dtype=float))
-            self._excitation_index = 0
-            self._excitation_start = None
+            self._excitation = ExcitationRun(schedule_t, schedule_i)
             self._excitation_stamp = self._now()
             self._excitation_timer = self.create_timer(_EXCITATION_TICK_S, self._excite)
             self.get_logger().info(
@@ -190,65 +176,21 @@ class PlantSimulatorNode(Node):
 
     def measure(self, t: float, current: float) -> float:
         """
-        Advance the plant by one sample and return the measured displacement.
+        Advance the plant by one sample and return the measured displacement [m].
 
-        Parameters
-        ----------
-        t : float
-            Sample time [s], after the previous one (used by the built-in actuator).
-        current : float
-            Coil current [A], finite.
-
-        Returns
-        -------
-        float
-            Displacement [m] with sensor noise.
-
+        ``t`` is the sample time [s], ``current`` the (finite) coil current [A]; see
+        :meth:`mpi_ros.plant.simulator.SimulatedPlants.measure`.
         """
-        return self._measure(self._plant, t, current)
+        return self._plants.measure(t, current)
 
     def measure_block(self, t: float, currents: Any) -> np.ndarray:
         """
-        Advance every axis by the samples of a block; return the displacements.
+        Advance every axis by the samples of a block; return the displacements [m].
 
-        Parameters
-        ----------
-        t : float
-            Time of the block's last sample [s]; the others ``sample_period`` apart.
-        currents : array_like of float, shape (K, axes)
-            Coil currents [A]; a non-finite one is not applied (the axis's last current
-            is held) and counted.
-
-        Returns
-        -------
-        ndarray of float, shape (K, axes)
-            Displacements [m] with sensor noise.
-
+        ``t`` is the time of the block's last sample [s], ``currents`` the K x axes coil
+        currents [A]; see :meth:`mpi_ros.plant.simulator.SimulatedPlants.measure_block`.
         """
-        block = np.asarray(currents, dtype=np.float64)
-        out = np.empty_like(block)
-        period = self._values['sample_period']
-        samples = block.shape[0]
-        for row in range(samples):
-            ts = max(t - (samples - 1 - row) * period, self._last_t + 1e-9)
-            self._last_t = ts
-            for axis, plant in enumerate(self._plants):
-                current = float(block[row, axis])
-                if math.isfinite(current):
-                    self._held[axis] = current
-                else:
-                    self.counters['nonfinite_commands'] += 1
-                out[row, axis] = self._measure(plant, ts, float(self._held[axis]))
-        return out
-
-    def _measure(self, plant: Any, t: float, current: float) -> float:
-        if isinstance(plant, MagnetostrictiveActuator):
-            displacement = plant.step(t, current)
-        else:
-            displacement = plant.step(current)
-        if self._noise_std > 0.0:
-            displacement += self._noise_std * float(self._rng.standard_normal())
-        return float(displacement)
+        return self._plants.measure_block(t, currents)
 
     def close(self) -> None:
         """Finish the recording (the bag appears at ``record.path``); idempotent."""
@@ -294,30 +236,22 @@ class PlantSimulatorNode(Node):
                 f'ignoring non-finite current command {current!r}',
                 throttle_duration_sec=1.0)
             return
-        t = max(time.monotonic() - self._t0, self._last_t + 1e-9)
-        self._last_t = t
+        t = self._plants.sample_time(time.monotonic() - self._t0)
         self._emit(t, self._now(), current, publish_command=False)
 
     def _excite(self) -> None:
-        if self._excitation is None:
+        run = self._excitation
+        if run is None:
             return
-        schedule_t, schedule_i = self._excitation
-        now = time.monotonic()
-        if self._excitation_start is None:
-            self._excitation_start = now - float(schedule_t[0])
-        due = now - self._excitation_start
-        stop = int(np.searchsorted(schedule_t, due, side='right'))
-        for k in range(self._excitation_index, stop):
-            t = float(schedule_t[k])
-            self._last_t = t
-            self._emit(t, self._excitation_stamp + t - schedule_t[0], float(schedule_i[k]),
+        for t, current in run.due(time.monotonic()):
+            self._plants.last_t = t
+            self._emit(t, self._excitation_stamp + t - run.times[0], current,
                        publish_command=True)
-        self._excitation_index = stop
-        if stop >= len(schedule_t):
+        if run.done:
             self.destroy_timer(self._excitation_timer)
             self._excitation = None
-            self._t0 = time.monotonic() - self._last_t
-            self.get_logger().info(f'excitation done: {stop} samples')
+            self._t0 = time.monotonic() - self._plants.last_t
+            self.get_logger().info(f'excitation done: {run.index} samples')
             if self.exits_when_done:
                 self.close()
                 self.finished.set_result(True)

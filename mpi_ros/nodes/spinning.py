@@ -24,16 +24,14 @@ Signals (SIGINT, SIGTERM)
     launch`` sends its own SIGINT) finds Python's default handlers again and ends the
     process with -2 (SIGINT) or -15 (SIGTERM) while it tears DDS down. :func:`run_node_main`
     therefore starts rclpy with ``SignalHandlerOptions.NO`` and handles both signals itself
-    with :class:`StopSignals`: the first one only asks the spin loop to stop (it ends within
-    :data:`SPIN_PERIOD_S`); the node is destroyed and the context shut down in order on the
-    main thread, and every later signal is ignored, so the process exits 0.
+    with :class:`mpi_ros.stop_signals.StopSignals`: the first one only asks the spin loop
+    to stop (it ends within :data:`SPIN_PERIOD_S`); the node is destroyed and the context
+    shut down in order on the main thread, and every later signal is ignored, so the
+    process exits 0.
 """
 
-import signal
 import sys
-import threading
-from types import FrameType
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, List, Optional
 
 import rclpy
 from rclpy.context import Context
@@ -44,81 +42,12 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
-from ..pipeline import STOP_SIGNALS
+from ..stop_signals import StopSignals
 
-__all__ = ['STOP_SIGNALS', 'StopSignals', 'events_executor', 'run_node_main', 'shutdown',
-           'spin']
+__all__ = ['events_executor', 'run_node_main', 'shutdown', 'spin']
 
 #: Longest time one spin_once waits for work [s]; bounds the reaction to shutdown.
 SPIN_PERIOD_S = 0.1
-
-
-class StopSignals:
-    """
-    Turn the first SIGINT or SIGTERM into a stop request and ignore every later one.
-
-    Use it as a context manager around ``rclpy.init(..., signal_handler_options=
-    SignalHandlerOptions.NO)`` and the spin loop. In the main thread it installs Python
-    handlers for :data:`STOP_SIGNALS` (elsewhere it does nothing: only the main thread
-    receives signals in Python). The first signal sets :attr:`received`; with
-    ``interrupt=True`` it also raises ``KeyboardInterrupt`` (for work that no spin loop
-    polls, such as a fit). Later signals do nothing. On leaving, the previous handlers come
-    back if no signal arrived; after one, both signals are set to ``SIG_IGN``, so that a
-    late signal cannot kill the process while it exits (Python restores the default
-    handlers in place of Python functions, but keeps ``SIG_IGN``, when it finalises).
-
-    Parameters
-    ----------
-    interrupt : bool
-        Raise ``KeyboardInterrupt`` in the main thread on the first signal.
-
-    Examples
-    --------
-    >>> with StopSignals() as stop:
-    ...     stop.requested
-    False
-
-    """
-
-    def __init__(self, *, interrupt: bool = False) -> None:
-        self.received: Optional[int] = None
-        #: Raise KeyboardInterrupt on the first signal (set False before cleaning up).
-        self.interrupt = interrupt
-        self._previous: Dict[int, Any] = {}
-
-    @property
-    def requested(self) -> bool:
-        """Tell whether a stop signal arrived."""
-        return self.received is not None
-
-    @property
-    def name(self) -> str:
-        """Name the signal that arrived (``SIGINT``, ``SIGTERM``), or ``''``."""
-        return '' if self.received is None else signal.Signals(self.received).name
-
-    def __enter__(self) -> 'StopSignals':
-        """Install the handlers (main thread only)."""
-        if threading.current_thread() is threading.main_thread():
-            for signum in STOP_SIGNALS:
-                self._previous[signum] = signal.signal(signum, self._handle)
-        return self
-
-    def __exit__(self, *exc_info: Any) -> None:
-        """Restore the previous handlers, or ignore both signals if one arrived."""
-        previous, self._previous = self._previous, {}
-        for signum, handler in previous.items():
-            # signal.signal first runs the handlers of signals already caught, so none is
-            # left pending (Python would report it as 'ignored due to race condition').
-            signal.signal(signum, signal.SIG_IGN if self.received is not None else handler)
-
-    def _handle(self, signum: int, frame: Optional[FrameType]) -> None:
-        # No signal.signal here: inside a handler it would not run a signal caught at the
-        # same time, which would then be reported as 'ignored due to race condition'.
-        if self.received is not None:
-            return
-        self.received = signum
-        if self.interrupt:
-            raise KeyboardInterrupt
 
 
 def events_executor(context: Optional[Context] = None) -> Executor:

@@ -5,7 +5,7 @@ Fixtures of the fault, load and security tests (helpers in ``helpers.py``).
 Every test that starts processes asserts at the end that none of them is left running.
 """
 
-from mpi_ros.nodes.harness import LoopDriver
+from mpi_ros.harness.driver import LoopDriver
 from mpi_ros.nodes.identifier import fit_bag
 from mpi_ros.params import write_params_yaml
 from mpi_ros.plant.actuator import MagnetostrictiveActuator

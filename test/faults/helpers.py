@@ -10,7 +10,7 @@ the module's own ``ROS_DOMAIN_ID`` with local-only discovery (``ros_env`` of
 import time
 
 from mpi_ros.compensation import Compensator, operating_range
-from mpi_ros.nodes.harness import NodeProcess
+from mpi_ros.harness.processes import NodeProcess
 from mpi_ros.operators.model import MPIModel
 import numpy as np
 import pytest

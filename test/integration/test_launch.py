@@ -20,7 +20,7 @@ import threading
 import time
 import types
 
-from mpi_ros.nodes.harness import LoopDriver
+from mpi_ros.harness.driver import LoopDriver
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import write_bag_signals

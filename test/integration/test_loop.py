@@ -9,8 +9,9 @@ started and stopped here, by PID.
 
 from mpi_ros import identify, MPIModel
 from mpi_ros.compensation import Compensator, operating_range
+from mpi_ros.harness.driver import LoopDriver
+from mpi_ros.harness.processes import NodeProcess
 from mpi_ros.metrics import control_error
-from mpi_ros.nodes.harness import LoopDriver, NodeProcess
 from mpi_ros.nodes.identifier import ParameterPushError, push_model_parameters
 from mpi_ros.operators.inverse import invert_hysteresis_initial_states
 from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory

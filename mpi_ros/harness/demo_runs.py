@@ -3,7 +3,8 @@
 The demo's closed loops over DDS: node processes, the loop driver, the parameter pushes.
 
 ``mpi-ros demo`` (:mod:`mpi_ros.app.demo`) parses its options and calls :func:`run_demo` or
-:func:`run_effect_demo`; everything that needs rclpy is here, on the ROS side.
+:func:`run_effect_demo` with its report writer (:mod:`mpi_ros.app.demo_report`); everything
+that needs rclpy is here, on the ROS side, which imports nothing from :mod:`mpi_ros.app`.
 """
 
 import argparse
@@ -15,10 +16,10 @@ from typing import Any, TYPE_CHECKING
 
 import numpy as np
 
-from ..app.progress import Progress
+from ..progress import Progress
 
 if TYPE_CHECKING:
-    from .harness import NodeProcess
+    from .processes import NodeProcess
     from ..extensions import EffectModel
 
 __all__ = ['run_demo', 'run_effect_demo', 'ORDERS', 'EFFECTS']
@@ -44,7 +45,7 @@ class _DemoLoop:
 
     def start_plant(self) -> Any:
         """Start a plant simulator process and wait until it subscribes."""
-        from .harness import NodeProcess
+        from .processes import NodeProcess
         plant = NodeProcess('plant-simulator', self.plant_args,
                             self.out / 'plant_simulator.log')
         self.processes.append(plant)
@@ -55,8 +56,8 @@ class _DemoLoop:
     def start_compensated(self, params: dict[str, Any], compensator_args: list[str],
                           first: float) -> tuple[Any, Any]:
         """Start a fresh plant and compensator, push ``params``, handshake with ``first``."""
+        from .processes import NodeProcess
         from ..nodes.identifier import push_model_parameters
-        from .harness import NodeProcess
         plant = self.start_plant()
         comp = NodeProcess('compensator',
                            ['-p', f'output.min:={self.args.output_min!r}',
@@ -78,17 +79,22 @@ class _DemoLoop:
             self.processes.remove(proc)
 
 
-def run_demo(args: argparse.Namespace, progress: Progress) -> dict[str, Any]:
-    """Run the demo's closed loop (plant, compensator, identification) and its report."""
+def run_demo(args: argparse.Namespace, progress: Progress,
+             write_report: Callable[..., object]) -> dict[str, Any]:
+    """
+    Run the demo's closed loop (plant, compensator, identification) and its report.
+
+    ``write_report`` writes the report (:func:`mpi_ros.app.demo_report.write_report`).
+    """
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)      # the nodes it starts inherit it
     import rclpy
 
     from ..plant.excitation import identification_excitation
     from ..identification import identify
-    from ..app.demo_report import write_report
+    from .driver import LoopDriver
+    from .processes import NodeProcess
     from ..metrics import control_error
-    from .harness import LoopDriver, NodeProcess
     from ..recordings import BagRecorder, read_bag_signals
 
     out = Path(args.output)
@@ -171,8 +177,13 @@ def run_demo(args: argparse.Namespace, progress: Progress) -> dict[str, Any]:
     return results
 
 
-def run_effect_demo(args: argparse.Namespace, progress: Progress) -> dict[str, Any]:
-    """Run the demo on a plant with an effect: plain against extended compensator."""
+def run_effect_demo(args: argparse.Namespace, progress: Progress,
+                    write_report: Callable[..., object]) -> dict[str, Any]:
+    """
+    Run the demo on a plant with an effect: plain against extended compensator.
+
+    ``write_report`` writes the report (:func:`mpi_ros.app.demo_report.write_effect_report`).
+    """
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)      # the nodes it starts inherit it
     import rclpy
@@ -181,9 +192,9 @@ def run_effect_demo(args: argparse.Namespace, progress: Progress) -> dict[str, A
     from ..extensions import EFFECTS as REGISTRY
     from ..extensions.effect import plant_switch
     from ..identification import identify
-    from ..app.demo_report import write_effect_report
+    from .driver import LoopDriver
+    from .processes import NodeProcess
     from ..metrics import control_error
-    from .harness import LoopDriver, NodeProcess
     from ..recordings import BagRecorder, read_bag_signals
 
     n, l = ORDERS[-1]  # noqa: E741
@@ -284,7 +295,7 @@ def run_effect_demo(args: argparse.Namespace, progress: Progress) -> dict[str, A
                          f'(RMS {100 * rms:.2f} %)')
         results['elapsed_s'] = time.monotonic() - started
         progress('writing the report and the plot')
-        write_effect_report(out, t_track, desired_all[lead.size:], traces, results)
+        write_report(out, t_track, desired_all[lead.size:], traces, results)
         driver.destroy_node()
     finally:
         for p in processes:
