@@ -48,7 +48,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import least_squares
 
-from ._common import check_series, Order, resolve_order, scalar_parameter
+from ._common import AxisUnits, check_series, Order, resolve_order, scalar_parameter
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
 from ..errors import ModelError
@@ -392,6 +392,30 @@ def fit_resonance(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     return ResonanceModel(final.model, estimate.frequency, estimate.decay, estimate.deflection)
 
 
+def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
+          baseline: FloatArray, extended: FloatArray, start: int, *,
+          units: AxisUnits | None = None, parameters: Mapping[str, Any] | None = None) -> None:
+    # The largest step of the input in the scored part, and the output around it: the
+    # baseline settles at once, the mode rings with the measured output.
+    units = units or AxisUnits()
+    fitted = parameters or {}
+    f = float(fitted.get(RESONANCE_FREQUENCY, 0.0))
+    decay = float(fitted.get(RESONANCE_DECAY, 0.0))
+    x = current[start:]
+    k = start + (int(np.argmax(np.abs(np.diff(x)))) + 1 if x.size > 1 else 0)
+    span = 6.0 * decay if decay > 0.0 else 0.05
+    keep = (time >= time[k] - 0.2 * span) & (time <= time[k] + span)
+    ms = 1e3 * (time[keep] - time[k])
+    ax.plot(ms, units.scale * measured[keep], lw=0.8, color='k', label='measured')
+    ax.plot(ms, units.scale * baseline[keep], lw=0.8, label='baseline MPI')
+    ax.plot(ms, units.scale * extended[keep], lw=0.8, label='MPI + mode')
+    ax.set_xlabel('time after the largest input step [ms]')
+    ax.set_ylabel(f'displacement [{units.displacement}]')
+    mode = f' (f = {f:.4g} Hz, decay {1e3 * decay:.3g} ms)' if f > 0.0 else ''
+    ax.set_title(f'resonance: the output rings after a step;\nthe mode{mode} follows it',
+                 fontsize=10)
+
+
 def _plant_start(values: Mapping[str, Any]) -> FloatArray:
     f = float(values['resonance_frequency_hz'])
     return np.array([2.0 * math.pi * f, 1.0 / float(values['resonance_decay_s']),
@@ -444,4 +468,4 @@ EFFECT = Effect(
                         ' 0: at rest', 'm')),
     model_class=ResonanceModel, fit=fit_resonance,
     parameter_count=lambda p: 2 + int(float(p.get(RESONANCE_DEFLECTION, 0.0)) != 0.0),
-    stage='output', plant=PLANT)
+    plot=_plot, stage='output', plant=PLANT)
