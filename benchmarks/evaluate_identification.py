@@ -207,8 +207,19 @@ def evaluate_measured(directory):
         dyn = result.dynamics.describe()
         print(f'{head} {str(result.order):>8s} {_pct(result.whole_record_rms_error)}'
               f' {_pct(reference):>9s} {_pct(line)}  {result.start_state["kind"]}; {dyn};'
-              f' ringing {result.excluded} samples ({time.perf_counter() - started:.1f} s)')
+              f' ringing {result.excluded} samples{_mode(result)}'
+              f' ({time.perf_counter() - started:.1f} s)')
     return records
+
+
+def _mode(result):
+    # The output mode fitted on the ringing: frequency, decay, the static model's error.
+    mode = result.resonance
+    if mode.frequency <= 0.0:
+        return ''
+    kept = 'modelled' if mode.modelled else 'not modelled'
+    return (f', mode {mode.frequency:.4g} Hz {1e3 * mode.decay:.3g} ms {kept}'
+            f' (static {_pct(mode.static_error).strip()})')
 
 
 def evaluate_cross_rate(directory):
@@ -227,7 +238,7 @@ def evaluate_cross_rate(directory):
         cells = []
         for tv, xv, yv in data.values():
             model = result.full_model
-            sim = model.simulate(tv, xv) if result.dynamics.present else model.simulate(xv)
+            sim = model.response(tv, xv)
             keep = tv >= 0.1
             cells.append(f'{_pct(_rms(sim[keep], yv[keep])).strip()}'
                          f' ({_pct(_rms(np.polyval(line, xv[keep]), yv[keep])).strip()})')
@@ -240,7 +251,7 @@ def evaluate_synthetic(seeds=(1, 2, 3)):
           ' own zero'
           ' and sign), order auto with the time base: refusals, dynamics estimated (dead time'
           ' / lag, ms; the modelled one starred), the model from sample 0 (RMS %), the fitted'
-          ' samples (ringing left out), the plain (14, 7) QP')
+          ' samples (ringing left out), the plain (14, 7) QP; the output mode found')
     print(f'{"plant":32s} {"seed":>4s} {"order":>8s} {"dead time":>10s} {"lag":>10s}'
           f' {"truth":>12s} {"model":>6s} {"fitted":>6s} {"QP":>6s}')
     for kind in SYNTHETIC_KINDS:
@@ -262,7 +273,7 @@ def evaluate_synthetic(seeds=(1, 2, 3)):
             print(f'{kind:32s} {seed:4d} {str(result.order):>8s} {1e3 * e.dead_time:9.3g}'
                   f'{star_d} {1e3 * e.lag_time_constant:9.3g}{star_l} {true:>12s}'
                   f' {_pct(result.whole_record_rms_error)} {_pct(result.rms_error)}'
-                  f' {_pct(reference)}')
+                  f' {_pct(reference)}{_mode(result)}')
 
 
 def main() -> None:

@@ -292,13 +292,17 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     # As the compensator node: the inverse of the model, its commands clamped to the safe
     # current range (the forward state follows the clamped command), unless --no-clamp.
     # With an effect (time column needed) the compensator's streaming inverse (with a dead
-    # time: Gamma only, as the node does).
+    # time or an output mode: Gamma only, as the node does, and a note).
     import numpy as np
     from ..compensation import operating_range
+    from ..compensation.updates import uncompensated
     from .ranges import outside
     plain = not model.timed
     if model.timed:
         _check_time_column(model, time, time_column, args)
+    left_out = uncompensated(model)
+    if left_out is not None:
+        _progress(f'note: {left_out}')
     if limits is None:
         _progress(f'note: {_UNKNOWN_RANGE.format(params=args.params)}: no range check and no'
                   ' clamping; pass --output-min and --output-max to clamp')
@@ -419,8 +423,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--dynamics', choices=('auto', 'off'), default='auto',
                    help="auto (default): with a time base, estimate the input's dead time "
                         'and lag and model them when they cut the held-out error clearly '
-                        '(written as model.dead_time / model.rate_dependence.*); off: the '
-                        'static model only')
+                        '(written as model.dead_time / model.rate_dependence.*), and a '
+                        'lightly damped output mode when the output rings after steps '
+                        '(model.resonance.*); off: the static model only')
     p.add_argument('--quiet', action='store_true',
                    help='no progress line on stderr (it is drawn only when stderr is a '
                         'terminal)')

@@ -595,7 +595,7 @@ def touches(request: Mapping[str, Any], prefix: str) -> bool:
 
 def uncompensated(model: Any) -> str | None:
     """
-    Say why a model's effect is not compensated (a dead time cannot be inverted causally).
+    Say why a model's effect is not compensated (a dead time, a mode: no causal inverse).
 
     Parameters
     ----------
@@ -608,10 +608,19 @@ def uncompensated(model: Any) -> str | None:
         The warning; None when the whole model is inverted.
 
     """
-    if isinstance(model, MPIModel) or inverse_step_of(model) is not None:
+    if isinstance(model, MPIModel):
         return None
-    return (f'{model.cause} cannot be inverted causally: compensating Gamma only; the '
-            'displacement lags the desired one by it')
+    if inverse_step_of(model) is None:
+        left, kept = [model], 'Gamma only'
+    else:                                  # a composite: the parts without a causal inverse
+        left = [part for part in getattr(model, 'parts', ()) if part.inverse_step() is None]
+        kept = 'the other stages'
+    if not left:
+        return None
+    what = '; '.join(getattr(part, 'uncompensated_effect',
+                             'the displacement lags the desired one by it') for part in left)
+    names = ' and '.join(part.cause for part in left)
+    return f'{names} cannot be inverted causally: compensating {kept}; {what}'
 
 
 def _whole_model(values: Mapping[str, Any], prefix: str, given: list[str], *,

@@ -10,6 +10,7 @@ cause                  model                                          extra para
 ``rate_dependence``    ``Gamma[L_tau_e[x]]``                          ``model.rate_dependence.*``
 ``thermal_drift``      ``y0 + sign S[H[u] + w_T L_tau_T[x^2]]``       ``model.thermal_drift.*``
 ``dead_time``          ``Gamma[x](t - L)``                            ``model.dead_time``
+``resonance``          ``R_(f, T)[Gamma[x]]`` (an output mode)         ``model.resonance.*``
 =====================  =============================================  ===========================
 
 ``u = x - x0``; Gamma carries the operating point (``model.input_offset`` ``x0``,
@@ -30,31 +31,34 @@ name; :func:`extended_model_from_params` picks the class from the keys present.
 from collections.abc import Iterator, Mapping
 from typing import Any
 
-from . import creep, dead_time, rate_dependence, thermal_drift
+from . import creep, dead_time, rate_dependence, resonance, thermal_drift
 from .composite import CompositeModel, fit_composite
 from .creep import creep_time_constants, CreepModel, fit_creep
 from .dead_time import DeadTimeModel, fit_dead_time
 from .effect import Effect, EffectModel, EffectParameter, EFFECTS, effects_present, \
     ExtendedModelBase, register_effect, unregister_effect
 from .rate_dependence import fit_rate_dependence, RateDependentModel
+from .resonance import fit_resonance, ResonanceModel
 from .thermal_drift import fit_thermal_drift, ThermalDriftModel
 from ..operators.model import MPIModel
 
 __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeModel',
-           'CompositeModel', 'ExtendedModel', 'fit_composite', 'fit_creep', 'fit_rate_dependence',
-           'fit_thermal_drift', 'fit_dead_time', 'creep_time_constants',
+           'ResonanceModel', 'CompositeModel', 'ExtendedModel', 'fit_composite', 'fit_creep',
+           'fit_rate_dependence', 'fit_thermal_drift', 'fit_dead_time', 'fit_resonance',
+           'creep_time_constants',
            'extended_model_from_params', 'EXTENSION_KEYS', 'Effect', 'EffectModel',
            'EffectParameter', 'EFFECTS', 'ExtendedModelBase', 'register_effect',
            'unregister_effect']
 
 ExtendedModel = (CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
-                 | CompositeModel)
+                 | ResonanceModel | CompositeModel)
 
 # The registry of effects: one line per effect module.
 register_effect(creep.EFFECT)
 register_effect(rate_dependence.EFFECT)
 register_effect(thermal_drift.EFFECT)
 register_effect(dead_time.EFFECT)
+register_effect(resonance.EFFECT)
 
 
 class _ExtensionKeys(Mapping[str, tuple[str, ...]]):
@@ -82,7 +86,7 @@ def extended_model_from_params(mapping: Mapping[str, Any]) -> MPIModel | EffectM
     ----------
     mapping : Mapping[str, Any]
         Flat parameters: Gamma's ``model.*`` keys plus the keys of any effects that chain
-        (input stages and at most one material effect; see
+        (input stages, at most one material effect, output stages; see
         :mod:`mpi_ros.extensions.composite`).
 
     Returns

@@ -1,6 +1,6 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """
-Several effects at once: one Gamma, input stages before it and one material effect.
+Several effects at once: one Gamma, input stages before it, a material effect, output stages.
 
 An effect acts at one place of the actuator's signal chain (:attr:`Effect.stage`):
 
@@ -9,18 +9,24 @@ An effect acts at one place of the actuator's signal chain (:attr:`Effect.stage`
   :class:`~mpi_ros.extensions.rate_dependence.RateDependentModel`); its model has
   ``input_signal(time, current)``;
 - ``'material'``: it acts in or after the hysteresis (creep of the displacement, thermal
-  drift inside H).
+  drift inside H);
+- ``'output'``: a linear stage on the displacement after everything else (a lightly damped
+  mechanical mode: :class:`~mpi_ros.extensions.resonance.ResonanceModel`); its model has
+  ``output_signal(time, displacement)``.
 
 A :class:`CompositeModel` chains the input stages in the registry's order, then the material
-effect (or Gamma alone): ``s = M[I_k[... I_1[x]]]``.  Its parameter form is the union of its
+effect (or Gamma alone), then the output stages: ``s = O_m[... M[I_k[... I_1[x]]]]``.  Its
+parameter form is the union of its
 parts' (one Gamma), so ``extended_model_from_params`` builds it from the keys of several
 effects; its exact per-step inverse (:class:`CompositeInverse`) inverts the material effect
 first, then each input stage backwards (a lag by its lead filter).  A dead time is not
-inverted (it would need the future): the compensator of a composite with a dead time leaves
-it out, as it does for the dead-time model alone.
+inverted (it would need the future), nor is a lightly damped mode (its inverse differentiates
+twice): the compensator of a composite with either leaves it out, as it does for the model of
+that effect alone.
 
 :func:`fit_composite` fits the input stages first (each by its own fit, the lag or delay found
-on the record), then the material effect on the current the material sees.
+on the record), then the material effect on the current the material sees; an output stage
+is fitted by its own fit on that current when there is no material effect.
 """
 
 from collections.abc import Callable, Mapping, Sequence
@@ -46,7 +52,7 @@ def composite_cause(names: Sequence[str]) -> str:
     return ' + '.join(sorted(names))
 
 
-def check_combination(names: Sequence[str]) -> tuple[list[str], str | None]:
+def check_combination(names: Sequence[str]) -> tuple[list[str], str | None, list[str]]:
     """
     Order a combination of effects along the signal chain; refuse what cannot be chained.
 
@@ -61,6 +67,8 @@ def check_combination(names: Sequence[str]) -> tuple[list[str], str | None]:
         The input stages, in the registry's order.
     material : str or None
         The material effect, if any.
+    outputs : list of str
+        The output stages, in the registry's order.
 
     Raises
     ------
@@ -82,13 +90,16 @@ def check_combination(names: Sequence[str]) -> tuple[list[str], str | None]:
                ' keep the keys of one of them')
         raise ModelError(msg)
     inputs = [name for name in EFFECTS if name in names and EFFECTS[name].stage == 'input']
-    return inputs, (materials[0] if materials else None)
+    outputs = [name for name in EFFECTS if name in names and EFFECTS[name].stage == 'output']
+    return inputs, (materials[0] if materials else None), outputs
 
 
 @dataclass(frozen=True, eq=False)
 class CompositeModel(ExtendedModelBase):
     """
-    Gamma with input stages and at most one material effect: ``s = M[I_k[... I_1[x]]]``.
+    Gamma with input stages, at most one material effect and output stages.
+
+    ``s = O_m[... O_1[M[I_k[... I_1[x]]]]]``.
 
     Parameters
     ----------
@@ -96,7 +107,8 @@ class CompositeModel(ExtendedModelBase):
         The Gamma every part shares (its start state too).
     parts : tuple of extended models
         One model per effect: the input stages in the chain's order, then the material
-        effect (if any).  Their own Gamma is replaced by ``model`` where it is used.
+        effect (if any), then the output stages.  Their own Gamma is replaced by ``model``
+        where it is used.
 
     """
 
@@ -109,8 +121,8 @@ class CompositeModel(ExtendedModelBase):
         if len(names) < 2:
             msg = f'a composite model has at least two effects; got {names}'
             raise ModelError(msg)
-        inputs, material = check_combination(names)
-        order = [*inputs, *([material] if material else [])]
+        inputs, material, outputs = check_combination(names)
+        order = [*inputs, *([material] if material else []), *outputs]
         if names != order:
             by_name = {part.cause: part for part in self.parts}
             object.__setattr__(self, 'parts', tuple(by_name[name] for name in order))
@@ -135,6 +147,11 @@ class CompositeModel(ExtendedModelBase):
         """Return the material effect (with this model's Gamma), or None."""
         found = [p for p in self.parts if EFFECTS[p.cause].stage == 'material']
         return self._own(found[0]) if found else None
+
+    @property
+    def outputs(self) -> tuple[Any, ...]:
+        """Return the output stages (with this model's Gamma)."""
+        return tuple(self._own(p) for p in self.parts if EFFECTS[p.cause].stage == 'output')
 
     def _own(self, part: Any) -> Any:
         return part if part.model is self.model else replace(part, model=self.model)
@@ -166,23 +183,29 @@ class CompositeModel(ExtendedModelBase):
         t, x = check_series(time, current)
         seen = self.input_signal(t, x)
         material = self.material
-        if material is None:
-            return np.asarray(self.model.simulate(seen), dtype=np.float64)
-        return np.asarray(material.simulate(t, seen), dtype=np.float64)
+        out = (self.model.simulate(seen) if material is None else material.simulate(t, seen))
+        for stage in self.outputs:
+            out = stage.output_signal(t, out)
+        return np.asarray(out, dtype=np.float64)
 
     @property
     def not_inverted(self) -> tuple[str, ...]:
-        """Return the effects the compensator leaves out (no causal inverse: dead time)."""
+        """Return the effects the compensator leaves out (no causal inverse: dead time, mode)."""
         return tuple(p.cause for p in self.parts if p.inverse_step() is None)
 
     def inverse_step(self) -> 'CompositeInverse':
-        """Return the exact per-step inverse of the invertible parts (a dead time is left out)."""
-        steps = [step for step in (self._own(p).inverse_step() for p in self.parts)
-                 if step is not None]
+        """
+        Return the exact per-step inverse of the invertible parts.
+
+        A dead time and the output stages (a mode) are left out: Gamma and the other
+        stages are inverted, what they leave is the user's (feedback, input shaping).
+
+        """
+        steps = tuple(step for step in (p.inverse_step() for p in self.inputs)
+                      if step is not None)
         material = self.material
-        core = (steps.pop() if material is not None and material.cause not in self.not_inverted
-                else None)
-        return CompositeInverse(self, tuple(steps), core)
+        core = material.inverse_step() if material is not None else None
+        return CompositeInverse(self, steps, core)
 
 
 class CompositeInverse:
@@ -306,7 +329,11 @@ def fit_composite(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
 
     """
     t, x, y = check_series(time, current, displacement)
-    inputs, material = check_combination(list(names))
+    inputs, material, outputs = check_combination(list(names))
+    if outputs and material is not None:
+        msg = (f'effects {list(names)}: an output stage ({", ".join(outputs)}) and a material'
+               f' effect ({material}) are not fitted together; fit them one at a time')
+        raise ModelError(msg)
     parts: list[Any] = []
     seen = x
     for k, name in enumerate(inputs):
@@ -316,4 +343,6 @@ def fit_composite(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
         seen = stage.input_signal(t, seen)
     if material is not None:
         parts.append(EFFECTS[material].fit(t, seen, y, order=order))
+    for name in outputs:
+        parts.append(EFFECTS[name].fit(t, seen, y, order=order))
     return CompositeModel(parts[-1].model, tuple(parts))

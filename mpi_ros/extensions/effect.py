@@ -3,7 +3,8 @@
 The interface of a physical effect, and the registry that finds every effect.
 
 One module per effect (``creep.py``, ``rate_dependence.py``, ``thermal_drift.py``,
-``dead_time.py``) owns everything about it and describes it by one :class:`Effect`:
+``dead_time.py``, ``resonance.py``) owns everything about it and describes it by one
+:class:`Effect`:
 
 - its parameter keys, their units and the values that switch it off
   (:class:`EffectParameter`; the compensator node declares them from here);
@@ -42,7 +43,7 @@ from ..operators.model import MPIModel
 __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFFECTS',
            'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values',
            'effects_present', 'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT', 'PlantChunk', 'PlantEffect',
-           'PlantParameter', 'PLANT_STAGES', 'plant_effects', 'plant_switch']
+           'PlantParameter', 'PLANT_STAGES', 'EFFECT_STAGES', 'plant_effects', 'plant_switch']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -50,6 +51,9 @@ FloatArray = npt.NDArray[np.float64]
 #: current the material sees (before the compiled hysteresis core), ``'output'`` on the
 #: displacement (after it, before the sensor zero and the sensor noise).
 PLANT_STAGES = ('input', 'output')
+
+#: The places of an effect's model in the signal chain, in order (:attr:`Effect.stage`).
+EFFECT_STAGES = ('input', 'material', 'output')
 
 #: Longest dead time or rate lag [s] plausible for a smart-material actuator: amplifier,
 #: sensor and eddy-current delays are microseconds to milliseconds.  A fitted value above it
@@ -334,11 +338,14 @@ class Effect:
     plot : callable or None
         ``plot(ax, time, current, measured, baseline, extended, start)`` draws the
         effect's signature plot on a matplotlib axes (for the report).
-    stage : {'material', 'input'}
+    stage : {'material', 'input', 'output'}
         Where the effect acts in the actuator's signal chain: ``'input'`` changes the
         current the material sees (its model has ``input_signal(time, current)``);
-        ``'material'`` acts in or after the hysteresis.  Effects combine along the chain
-        (:mod:`mpi_ros.extensions.composite`): any input stages, at most one material effect.
+        ``'material'`` acts in or after the hysteresis; ``'output'`` is a linear stage on
+        the displacement after everything else (a mechanical mode; its model has
+        ``output_signal(time, displacement)``).  Effects combine along the chain
+        (:mod:`mpi_ros.extensions.composite`): any input stages, at most one material effect,
+        any output stages.
     plant : PlantEffect or None
         Its step in the simulated plant; None when the plant cannot show the effect.
 
@@ -360,8 +367,9 @@ class Effect:
 
     def __post_init__(self) -> None:
         """Check the stage."""
-        if self.stage not in ('material', 'input'):
-            msg = f'effect {self.name!r}: stage must be material or input, not {self.stage!r}'
+        if self.stage not in EFFECT_STAGES:
+            msg = (f'effect {self.name!r}: stage must be one of {", ".join(EFFECT_STAGES)},'
+                   f' not {self.stage!r}')
             raise ModelError(msg)
 
     @property

@@ -4,8 +4,8 @@ Identification of the MPI operator from measured data, section 4.2 of Kuhnen's p
 
 The names users call, re-exported: :func:`identify` and the order selection live in
 :mod:`.api`, which also explains the design on real records; the parts are :mod:`.qp`
-(the design and the QP, (28)-(36)), :mod:`.procedure`, :mod:`.dynamics` and
-:mod:`.start_state`.
+(the design and the QP, (28)-(36)), :mod:`.procedure`, :mod:`.dynamics`, :mod:`.resonance`
+and :mod:`.start_state`.
 """
 
 from .api import (DEFAULT_ORDERS, IdentificationResult, identify, model_with_dynamics,

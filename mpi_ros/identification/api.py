@@ -6,7 +6,8 @@ The entry of :mod:`mpi_ros.identification`: :func:`identify` (order given or cho
 held-out data by :func:`select_order` / :func:`select_record_order`) ties together
 :mod:`.qp` (operating point, thresholds (28)-(31), checks of the data, the QP (34)-(36), the
 straight-line baseline), :mod:`.procedure` (record, segments, start states, dynamics grid,
-refusals), :mod:`.dynamics` and :mod:`.start_state`.
+refusals), :mod:`.dynamics`, :mod:`.resonance` (the output mode of a record that rings) and
+:mod:`.start_state`.
 
 Three parts, as in the paper:
 
@@ -79,6 +80,7 @@ from .procedure import (DynamicsEstimate, estimate_dynamics, fit_record, held_ou
                         Segment)
 from .qp import _check_excitation, _check_signals, _errors, _quality_check, ANCHORS, \
     DEFAULT_ORDERS, FloatArray, output_sign
+from .resonance import estimate_resonance, model_with_resonance, ResonanceEstimate, with_mode
 from .start_state import StartState
 from ..errors import DataError, IdentificationError
 from ..operators.model import MPIModel
@@ -140,7 +142,10 @@ class IdentificationResult:
     findings : str
         What moves the output against the input (ringing, lag, dead time), in words.
     excluded : int
-        Samples of ringing left out of the fit.
+        Samples of ringing the analysis found after steps (left out of the static fit).
+    resonance : ResonanceEstimate
+        The lightly damped output mode fitted on the ringing (with a time base), and whether
+        the model carries it (:attr:`full_model`; see :mod:`.resonance`).
     notes : list of str
         What the identification changed or noticed (lowered order, burn-in, ...).
 
@@ -165,11 +170,13 @@ class IdentificationResult:
     findings: str = ''
     excluded: int = 0
     notes: list[str] = field(default_factory=list)
+    resonance: ResonanceEstimate = field(default_factory=ResonanceEstimate)
 
     @property
     def full_model(self) -> Any:
-        """Return the model with its input dynamics (Gamma itself when there are none)."""
-        return model_with_dynamics(self.model, self.dynamics)
+        """Return the model with its input dynamics and output mode (Gamma when none)."""
+        return model_with_resonance(model_with_dynamics(self.model, self.dynamics),
+                                    self.resonance)
 
     def summary(self) -> dict[str, Any]:
         """Return the result as a JSON-ready dict: ``order``, errors, ``samples``, table."""
@@ -184,6 +191,7 @@ class IdentificationResult:
                                     'output_sign': m.output_sign},
                 'start_state': self.start_state, 'segments': self.segments,
                 'dynamics': {**self.dynamics_estimate.to_json(), 'findings': self.findings},
+                'resonance': self.resonance.to_json(),
                 'notes': list(self.notes),
                 'solver_status': self.solver_status, 'iterations': self.iterations,
                 'solve_time': self.solve_time, 'order_table': self.order_table}
@@ -228,7 +236,10 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
 
     The whole record is used from its first sample: the start state is estimated (see
     :mod:`.start_state`), ringing after steps is left out, lag and dead time are measured
-    and, with a time base, modelled (see :mod:`.procedure`).  The record may have any
+    and, with a time base, modelled (see :mod:`.procedure`); with a time base, ringing after
+    steps is then modelled as a lightly damped output mode when that lowers the whole-record
+    error clearly (see :mod:`.resonance`; :attr:`IdentificationResult.full_model` carries
+    it).  The record may have any
     sensor zero, input bias or output sign.  The fit is refused, never returned, for a
     butterfly loop or switching transients, an output unrelated to the input, a fit no
     better than a straight line on the same data or absurd, or too little excitation.
@@ -259,8 +270,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         (``dynamics``); a stitched record's clock may restart (a join).
     dynamics : {'auto', 'off'}
         ``'auto'``: with a time base, estimate the input's dead time and lag and model them
-        when they cut the held-out error clearly; ``'off'``: the static model only (the
-        diagnosis' baseline).
+        when they cut the held-out error clearly, and an output mode when the output rings
+        after steps; ``'off'``: the static model only (the diagnosis' baseline).
     progress : callable, optional
         Called with a line of text at each phase, each trial fit of the dynamics grid and
         each order tried (for a progress display such as :class:`mpi_ros.app.progress.Progress`).
@@ -358,13 +369,17 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     say(f'fitting n={n}, l={l} on the whole record')
     fit = fit_record(record, n, l, dynamics=found, choose=choose)
     notes.extend(fit.notes)
+    resonance = ResonanceEstimate()
+    if t is not None and dynamics == 'auto' and record.analysis.ringing:
+        say('ringing: fitting the output mode')
+        resonance, fit = estimate_resonance(record, fit, n, l, found)
     say('judging the fit against the straight line')
-    sim = fit.simulate()                 # each segment from its start state
+    sim = with_mode(t, fit.simulate(), resonance)    # each segment from its start state
     fitted = fit.fitted if fit.fitted is not None else keep
     rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
     # What `mpi-ros simulate` gives: the model from its initial states, straight through.
-    straight = (model_with_dynamics(fit.model, found).simulate(t, x) if found.present
-                else fit.model.simulate(x))
+    full = model_with_resonance(model_with_dynamics(fit.model, found), resonance)
+    straight = full.simulate(t, x) if full is not fit.model else fit.model.simulate(x)
     whole = float(np.sqrt(np.mean((straight - y) ** 2)) / np.ptp(y))
     design = fit.design
     first = fit.segments[0].start_state
@@ -384,8 +399,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
                      f'{", ".join(str(s.start) for s in fit.segments[1:])}: '
                      f'{"; ".join(s.reason for s in fit.segments[1:])}), each with its own'
                      ' start state')
-    findings = '; '.join(part for part in (record.analysis.describe(), estimate.describe())
-                         if part)
+    findings = '; '.join(part for part in (record.analysis.describe(), resonance.describe(),
+                                           estimate.describe()) if part)
     info = fit.info
     return IdentificationResult(
         model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
@@ -394,7 +409,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         linear_rms_error=linear, burn_in=int(fit.burn_in), whole_record_rms_error=whole,
         start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
         findings=findings,
-        excluded=int(np.count_nonzero(~keep)), notes=notes)
+        excluded=int(np.count_nonzero(~keep)), notes=notes, resonance=resonance)
 
 
 def _silent(text: str) -> None:

@@ -7,7 +7,10 @@ actuator of :mod:`mpi_ros.plant.actuator` (not an MPI model) driven through an u
 before the record starts (at rest after a descent, virgin, or mid-history), with the rig's
 dynamics (an input lag, a dead time, a lightly damped mechanical resonance that rings after
 steps), sensor noise, an arbitrary sensor zero and sign.  Each record says what is in it
-(:attr:`SyntheticRecord.truth`), so an identification can be checked against it.
+(:attr:`SyntheticRecord.truth`), so an identification can be checked against it.  The
+dynamics are the registered effects' plant steps (:func:`~mpi_ros.extensions.effect.plant_switch`):
+the eddy-current lag, the dead time and the mechanical resonance
+(:mod:`mpi_ros.extensions.resonance`, natural frequency 500-1000 Hz, envelope decay 13 ms).
 
 The kinds (:data:`SYNTHETIC_KINDS`) are the plants of issue 17: lag 0.5-5 ms at 1-10 kHz,
 dead time of 1-10 samples, 500-1000 Hz ringing after steps, starts at rest, virgin and
@@ -19,7 +22,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy import signal
 
 from .actuator import ActuatorConfig, MagnetostrictiveActuator
 from .excitation import identification_excitation
@@ -27,12 +29,16 @@ from ..errors import DataError
 from ..extensions.effect import plant_switch
 
 __all__ = ['SyntheticRecord', 'synthetic_record', 'SYNTHETIC_KINDS', 'rising_amplitude_sine',
-           'resonance']
+           'RING_DECAY']
 
 FloatArray = npt.NDArray[np.float64]
 
 #: Displacement range of the built-in actuator over 0.2-1.8 A [m] (about).
 _RANGE_M = 3.4e-5
+
+#: Time constant of the ringing envelope of the ringing kinds [s] (a damping ratio of
+#: 0.012-0.024 at 1000-500 Hz; the TUM piezo rig's is 12-15 ms).
+RING_DECAY = 0.013
 
 #: The kinds of record :func:`synthetic_record` builds.
 SYNTHETIC_KINDS = (
@@ -58,8 +64,9 @@ class SyntheticRecord:
     displacement : ndarray of float, shape (N,)
         Measured output [m] (sensor zero, sign, noise included).
     truth : dict
-        ``lag_time_constant`` [s], ``dead_time`` [s], ``resonance_hz``, ``noise`` (RMS noise
-        over the output's range), ``start`` (the history before the record).
+        ``lag_time_constant`` [s], ``dead_time`` [s], ``resonance_hz`` (natural frequency of
+        the output mode, 0: none), ``resonance_decay`` [s], ``noise`` (RMS noise over the
+        output's range), ``start`` (the history before the record).
 
     """
 
@@ -110,36 +117,6 @@ def rising_amplitude_sine(sample_rate: float, frequency: float, *, cycles: int =
     return np.arange(current.size) / sample_rate, current
 
 
-def resonance(displacement: FloatArray, sample_rate: float, frequency: float,
-              decay: float) -> FloatArray:
-    """
-    Pass a displacement through a lightly damped second-order resonance of unit DC gain.
-
-    Parameters
-    ----------
-    displacement : ndarray of float, shape (N,)
-        Displacement [m], starting at rest.
-    sample_rate : float
-        Samples per second [Hz].
-    frequency : float
-        Natural frequency [Hz].
-    decay : float
-        Time constant of the ringing's envelope [s] (damping ratio ``1 / (w decay)``).
-
-    Returns
-    -------
-    ndarray of float, shape (N,)
-        The measured displacement: it rings after every step.
-
-    """
-    w = 2.0 * np.pi * frequency
-    zeta = 1.0 / (w * decay)
-    b, a = signal.bilinear([w * w], [1.0, 2.0 * zeta * w, w * w], sample_rate)
-    state = signal.lfilter_zi(b, a) * displacement[0]
-    out, _ = signal.lfilter(b, a, displacement, zi=state)
-    return np.asarray(out, dtype=np.float64)
-
-
 def synthetic_record(kind: str, seed: int, *, noise: float = 0.002) -> SyntheticRecord:
     """
     Build one synthetic rig record of a kind in :data:`SYNTHETIC_KINDS`.
@@ -167,7 +144,8 @@ def synthetic_record(kind: str, seed: int, *, noise: float = 0.002) -> Synthetic
     sign = 1 if rng.random() < 0.7 else -1
     rest = [0.0, 2.0]                            # a descent from above: at rest, low end
     truth: dict[str, Any] = {'lag_time_constant': 0.0, 'dead_time': 0.0,
-                             'resonance_hz': 0.0, 'start': 'at rest after a descent'}
+                             'resonance_hz': 0.0, 'resonance_decay': 0.0,
+                             'start': 'at rest after a descent'}
     config: dict[str, float] = {}
     rate = 1000.0
     if kind.startswith(('lag', 'dead time')):
@@ -187,7 +165,9 @@ def synthetic_record(kind: str, seed: int, *, noise: float = 0.002) -> Synthetic
     elif kind.startswith('ringing'):
         rate = 10000.0
         t, x = _steps_and_sines(rate, rng)
-        truth['resonance_hz'] = float(kind.split()[1])
+        # A mechanical mode after the actuator (output side), from the registry's plant step.
+        truth['resonance_hz'] = config[plant_switch('resonance')] = float(kind.split()[1])
+        truth['resonance_decay'] = config['resonance_decay_s'] = RING_DECAY
     elif kind == 'at rest, rising-amplitude sine':
         rate = 10000.0
         t, x = rising_amplitude_sine(rate, 20.0, cycles=15)
@@ -210,15 +190,14 @@ def synthetic_record(kind: str, seed: int, *, noise: float = 0.002) -> Synthetic
                       noise)
         truth['start'] = 'one period of a repeated loop'
         return SyntheticRecord(None, x, zero + sign * y, {**truth, 'noise': noise})
-    y = _measured(t, x, config, seed, rest + [float(x[0])] if rest else [], noise,
-                  ringing=truth['resonance_hz'])
+    y = _measured(t, x, config, seed, rest + [float(x[0])] if rest else [], noise)
     return SyntheticRecord(t, x, zero + sign * y, {**truth, 'noise': noise})
 
 
 def _measured(t: FloatArray, x: FloatArray, config: dict[str, float], seed: int,
-              history: list[float], noise: float, ringing: float = 0.0) -> FloatArray:
+              history: list[float], noise: float) -> FloatArray:
     # The actuator driven through `history` (ramps of 0.3 s, then 0.1 s at the first
-    # value) before the record; the record's part of its output, rung and noisy.
+    # value) before the record; the record's part of its output, noisy.
     actuator = MagnetostrictiveActuator(ActuatorConfig.from_mapping(config), seed=seed)
     dt = float(t[1] - t[0])
     if history:
@@ -230,8 +209,6 @@ def _measured(t: FloatArray, x: FloatArray, config: dict[str, float], seed: int,
         y = y[before.size:]
     else:
         y = actuator.simulate(t, x)
-    if ringing > 0.0:
-        y = resonance(y, 1.0 / dt, ringing, 0.013)
     rng = np.random.default_rng(seed + 1000)
     return y + rng.normal(0.0, noise * _RANGE_M, y.size)
 

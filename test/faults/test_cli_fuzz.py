@@ -34,6 +34,7 @@ from mpi_ros.app.cli import main
 from mpi_ros.diagnosis import report as diagnosis_report
 from mpi_ros.diagnosis.diagnose import CAUSES
 from mpi_ros.errors import DataError
+from mpi_ros.extensions import EFFECTS
 from mpi_ros.operators.model import MPIModel
 from mpi_ros.params import read_params_yaml
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
@@ -473,7 +474,9 @@ def test_fuzz_cases_as_processes(tmp_path, good_record, case):
     if case.startswith('diagnose'):
         assert done.returncode == 0, done.stderr
         plots = sorted((tmp_path / 'report').glob('*.png'))
-        assert len(plots) == 6 and all(p.stat().st_size > 1000 for p in plots)
+        # The loops, the residual and one signature plot per registered effect that draws one.
+        drawn = sum(effect.plot is not None for effect in EFFECTS.values())
+        assert len(plots) == 2 + drawn == 7 and all(p.stat().st_size > 1000 for p in plots)
         assert done.stdout.strip() == json.loads((tmp_path / 'r.json').read_text())['cause']
     else:
         assert done.returncode == 1
