@@ -362,9 +362,10 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     sim = fit.simulate()                 # each segment from its start state
     fitted = fit.fitted if fit.fitted is not None else keep
     rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
-    # What `mpi-ros simulate` gives: the model from its initial states, straight through.
-    straight = (model_with_dynamics(fit.model, found).simulate(t, x) if found.present
-                else fit.model.simulate(x))
+    # What `mpi-ros simulate` gives: the model from its initial states, straight through
+    # (Gamma of the input after the dynamics); one segment from sample 0 is that already.
+    one = len(fit.segments) == 1 and fit.segments[0].start == 0
+    straight = sim if one else fit.model.simulate(fit.material_input)
     whole = float(np.sqrt(np.mean((straight - y) ** 2)) / np.ptp(y))
     design = fit.design
     first = fit.segments[0].start_state

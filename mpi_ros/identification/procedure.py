@@ -326,8 +326,8 @@ class RecordFit:
                 z = state
             else:
                 z = self._state_of(seg) if seg.start != 0 else z_first
-            h, state = self.model.hysteresis_output(part, z)
-            out[seg.start:seg.stop] = self.model.output(h)
+            # The compiled Gamma (plays, H, S in one pass), as ``MPIModel.simulate``.
+            out[seg.start:seg.stop], state = self.model.run(part, z)
         return out
 
     def _state_of(self, seg: Segment) -> FloatArray:
