@@ -670,42 +670,58 @@ def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: Flo
     grams = np.zeros((n_classes, nv, nv))
     sums = np.zeros((n_classes, nv))
     counts = np.zeros(n_classes, dtype=np.int64)
-    # Many rows: the compiled pass fills a chunk of rows, BLAS multiplies it.
-    buffer = np.empty((min(chunk, stop - start), nv))
-    nh = r_h.size + r_s_inv.size
+    # Many rows: the compiled pass fills a chunk's rows, grouped by class, and their column
+    # sums; BLAS multiplies each class's rows.
+    size = min(chunk, stop - start)
+    buffer = np.empty((n_classes, size, nv))
+    chunk_sums = np.empty((n_classes, nv))
+    chunk_counts = np.empty(n_classes, dtype=np.int64)
+    columns = np.empty((0, 0)) if extra is None else extra
     for a in range(start, stop, chunk):
         b = min(a + chunk, stop)
-        phi = buffer[:b - a]
-        _fill_rows(xs, ys, r_h, r_s_inv, z, a, b, phi)
-        if extra is not None:
-            phi[:, nh:] = extra[a:b]
-        labels = classes[a:b]
+        chunk_sums[:] = 0.0
+        chunk_counts[:] = 0
+        _fill_rows(xs, ys, r_h, r_s_inv, columns, z, classes, a, b, buffer, chunk_sums,
+                   chunk_counts)
         for c in range(n_classes):
-            mask = labels == c
-            rows = phi if bool(np.all(mask)) else phi[mask]
-            if rows.shape[0]:
+            m = int(chunk_counts[c])
+            if m:
+                rows = buffer[c, :m]
                 grams[c] += rows.T @ rows
-                sums[c] += rows.sum(axis=0)
-                counts[c] += rows.shape[0]
+                sums[c] += chunk_sums[c]
+                counts[c] += m
     return GramParts(grams, sums, counts, z)
 
 
 @numba.njit(cache=True, nogil=True)
 def _fill_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
-               z: FloatArray, start: int, stop: int,
-               out: FloatArray) -> None:  # pragma: no cover - compiled
-    # Rows [plays, -dead zones] (4), (17) of samples start..stop; the plays advance z.
+               extra: FloatArray, z: FloatArray, classes: npt.NDArray[np.int8], start: int,
+               stop: int, out: FloatArray, sums: FloatArray,
+               counts: npt.NDArray[np.int64]) -> None:  # pragma: no cover - compiled
+    # Rows [plays, -dead zones, extra] (4), (17) of samples start..stop into out[class],
+    # their column sums into sums[class]; the plays advance z (rows of class -1 only that).
     nh = r_h.shape[0]
     ns = r_s.shape[0]
+    ne = extra.shape[1]
     for k in range(start, stop):
         x = xs[k]
-        row = out[k - start]
         for i in range(nh):
             z[i] = play_clamp(x, r_h[i], z[i])
+        c = classes[k]
+        if c < 0:
+            continue
+        row = out[c, counts[c]]
+        counts[c] += 1
+        for i in range(nh):
             row[i] = z[i]
         y = ys[k]
         for j in range(ns):
             row[nh + j] = -_dead_zone(y, r_s[j])
+        for j in range(ne):
+            row[nh + ns + j] = extra[k, j]
+        total = sums[c]
+        for i in range(row.shape[0]):
+            total[i] += row[i]
 
 
 @numba.njit(cache=True, nogil=True)
