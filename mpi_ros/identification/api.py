@@ -354,7 +354,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose)
         (n, l), table = select_record_order(trial, held, found, base.segments,
                                             burn_in=base.burn_in, progress=progress)
-    _check_excitation(x, y, n, l, anchor=anchor)
+    if auto:                             # an explicit order was checked above
+        _check_excitation(x, y, n, l, anchor=anchor)
     say(f'fitting n={n}, l={l} on the whole record')
     fit = fit_record(record, n, l, dynamics=found, choose=choose)
     notes.extend(fit.notes)
