@@ -262,26 +262,56 @@ def burn_in(x: npt.ArrayLike, sweep: float, *, to_turning_point: bool = False) -
         Index of the first sample whose play outputs are determined; ``N`` when never.
 
     """
-    arr = np.asarray(x, dtype=np.float64)
+    arr = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
     if sweep <= 0.0 or arr.size == 0:
         return 0
-    covered = np.maximum.accumulate(arr) - np.minimum.accumulate(arr)
-    hits = np.flatnonzero(covered >= sweep * (1.0 - 1e-12))
-    if not hits.size:
-        return int(arr.size)
-    start = int(hits[0])
-    if not to_turning_point:
-        return start
-    rising = arr[start] - np.min(arr[:start + 1]) >= np.max(arr[:start + 1]) - arr[start]
-    tail = arr[start:] if rising else -arr[start:]
-    peak = np.maximum.accumulate(tail)
-    retreat = np.flatnonzero(peak - tail >= 0.01 * float(np.ptp(arr)))
-    end = int(retreat[0]) if retreat.size else tail.size
-    return start + int(np.argmax(tail[:end])) if end > 0 else start
+    # Compiled scans that stop where they find what they look for (a long record's
+    # determined start is near its beginning).
+    start, lo, hi = _covered(arr, sweep * (1.0 - 1e-12))
+    if start == arr.size or not to_turning_point:
+        return int(start)
+    value = float(arr[start])
+    rising = value - lo >= hi - value
+    return int(_turning_point(arr, start, rising, 0.01 * float(np.ptp(arr))))
+
+
+@numba.njit(cache=True, nogil=True)
+def _covered(x: FloatArray, sweep: float) -> tuple[int, float, float]:  # pragma: no cover
+    # The first sample by which x has covered a range of sweep (x.size if never), and the
+    # lowest and highest input up to it.
+    lo = x[0]
+    hi = x[0]
+    for k in range(x.shape[0]):
+        v = x[k]
+        if v > hi:
+            hi = v
+        if v < lo:
+            lo = v
+        if hi - lo >= sweep:
+            return k, lo, hi
+    return x.shape[0], lo, hi
+
+
+@numba.njit(cache=True, nogil=True)
+def _turning_point(x: FloatArray, start: int, rising: bool,
+                   retreat: float) -> int:  # pragma: no cover - compiled
+    # The extreme (the first of equal ones) the input reaches after start, in the direction
+    # it moves there, before it first retreats from its running extreme by retreat.
+    sign = 1.0 if rising else -1.0
+    peak = sign * x[start]
+    best = 0
+    for j in range(x.shape[0] - start):
+        v = sign * x[start + j]
+        if v > peak:
+            peak = v
+            best = j
+        if peak - v >= retreat:
+            return start + best
+    return start + best
 
 
 def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
-                  anchor: str = 'operating_point') -> ScaledDesign:
+                  anchor: str = 'operating_point', sign: int | None = None) -> ScaledDesign:
     """
     Return the operating point, scaling and thresholds (28)-(31) :func:`identify` uses.
 
@@ -298,6 +328,9 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
         the output's sign detected, a constant term, and a burn-in until the largest play
         is determined.  ``'origin'``: the paper's design as printed (scales
         ``||x||_inf``, ``||y||_inf``, plays from 0 at x = 0, no constant, no burn-in).
+    sign : int, optional
+        The output's sign with ``anchor='operating_point'`` (+1 rising, -1 falling), when
+        already known; detected from the data by default.
 
     Returns
     -------
@@ -324,7 +357,8 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
     y_lo, y_hi = float(np.min(y)), float(np.max(y))
     x_scale = 0.5 * (x_hi - x_lo)
     y_scale = 0.5 * (y_hi - y_lo)
-    sign, _ = output_sign(x, y)
+    if sign is None:
+        sign, _ = output_sign(x, y)
     r_s_inv = inverse_superposition_thresholds(1.0, -1.0, l)                    # (29)-(31)
     c = int(np.flatnonzero(r_s_inv == 0.0)[0])
     # Plays are determined once the input covered 2 r_Hn; the actuator itself (any
@@ -531,7 +565,7 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     a_mat = sp.csc_matrix(np.array(rows))
     lo = np.array(lower)
     hi = np.array(upper)
-    solver = osqp.OSQP()
+    solver = osqp.OSQP(algebra='builtin')        # no search for other backends per solve
     solver.setup(P=sp.csc_matrix(np.triu(gram)), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
                  verbose=False, eps_abs=tolerance, eps_rel=tolerance, max_iter=200000,
                  polishing=tolerance <= 1e-9, polish_refine_iter=10)
