@@ -534,39 +534,17 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     gram[np.diag_indices(nv)] += ridge
     hysteresis_center = 0
     floor = max(epsilon, SLOPE_FLOOR if slope_floor is None else slope_floor)
-    # Constraint rows: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
-    rows = [np.concatenate([equality_row, np.zeros(m + k)])]
-    lower = [1.0]
-    upper = [1.0]
     zero = set() if fixed_zero is None else {int(i) for i in np.ravel(fixed_zero)} - {0}
-    for i in range(n1):                                    # (8): U_H w_H <= u_H
-        row = np.zeros(nv)
-        row[i] = 1.0
-        rows.append(row)
-        lower.append(epsilon if i == hysteresis_center else 0.0)
-        upper.append(0.0 if i in zero else np.inf)
-    c = superposition_center
-    for i in range(m):                                     # (19): slopes outward from 0
-        row = np.zeros(nv)
-        if i >= c:
-            row[n1 + c:n1 + i + 1] = 1.0
-        else:
-            row[n1 + i:n1 + c + 1] = 1.0
-        rows.append(row)
-        lower.append(floor)
-        upper.append(np.inf)
     x_lower = np.zeros(k) if extra_lower is None else np.asarray(extra_lower, dtype=float)
-    for i in range(k):
-        row = np.zeros(nv)
-        row[n1 + m + i] = 1.0
-        rows.append(row)
-        lower.append(float(x_lower[i]))
-        upper.append(np.inf)
-    a_mat = sp.csc_matrix(np.array(rows))
-    lo = np.array(lower)
-    hi = np.array(upper)
+    c = superposition_center
+    a_mat = _constraint_matrix(np.asarray(equality_row, dtype=np.float64), n1, m, k, c)
+    # Bounds: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
+    lo = np.concatenate([[1.0], np.zeros(n1), np.full(m, floor), x_lower])
+    lo[1 + hysteresis_center] = epsilon
+    hi = np.concatenate([[1.0], np.full(n1 + m + k, np.inf)])
+    hi[[1 + i for i in range(n1) if i in zero]] = 0.0
     solver = osqp.OSQP(algebra='builtin')        # no search for other backends per solve
-    solver.setup(P=sp.csc_matrix(np.triu(gram)), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
+    solver.setup(P=_upper_csc(gram), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
                  verbose=False, eps_abs=tolerance, eps_rel=tolerance, max_iter=200000,
                  polishing=tolerance <= 1e-9, polish_refine_iter=10)
     res = solver.solve(raise_error=False)
@@ -608,6 +586,47 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     w_s[:c] = -np.diff(slopes[:c + 1])
     w_x = np.maximum(v[n1 + m:], x_lower) if k else v[n1 + m:]
     return w_h, w_s, w_x, res.info
+
+
+#: Constraint matrices of the QP by (equality row, n+1, m, extras, centre of S'): the trial
+#: fits of one order share one.
+_CONSTRAINTS: dict[tuple[bytes, int, int, int, int], Any] = {}
+
+
+def _constraint_matrix(equality_row: FloatArray, n1: int, m: int, k: int, c: int) -> Any:
+    # Rows (36), (8) on w_H, (19) on w'_S (slopes outward from the zero threshold), bounds
+    # on the extras; a CSC matrix (read only), built once per shape.
+    key = (equality_row.tobytes(), n1, m, k, c)
+    cached = _CONSTRAINTS.get(key)
+    if cached is not None:
+        return cached
+    nv = n1 + m + k
+    rows = np.zeros((1 + nv, nv))
+    rows[0, :n1] = equality_row
+    rows[1:1 + n1, :n1] = np.eye(n1)
+    for i in range(m):
+        if i >= c:
+            rows[1 + n1 + i, n1 + c:n1 + i + 1] = 1.0
+        else:
+            rows[1 + n1 + i, n1 + i:n1 + c + 1] = 1.0
+    rows[1 + n1 + m:, n1 + m:] = np.eye(k)
+    if len(_CONSTRAINTS) >= 64:
+        _CONSTRAINTS.clear()
+    matrix = _CONSTRAINTS[key] = sp.csc_matrix(rows)
+    return matrix
+
+
+def _upper_csc(gram: FloatArray) -> Any:
+    # The upper triangle of the symmetric matrix in CSC form, its zeros left out: what
+    # sp.csc_matrix(np.triu(gram)) gives, without the dense detour.
+    nv = gram.shape[0]
+    col, row = np.tril_indices(nv)              # column by column, rows ascending
+    data = gram[row, col]
+    nonzero = data != 0.0
+    counts = np.bincount(col[nonzero], minlength=nv)
+    indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    return sp.csc_matrix((data[nonzero], row[nonzero].astype(np.int32), indptr),
+                         shape=(nv, nv))
 
 
 @dataclass(frozen=True)
