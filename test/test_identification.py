@@ -5,9 +5,12 @@ from mpi_ros import IdentificationError, identify, MPIModel
 from mpi_ros.errors import DataError
 from mpi_ros.identification import (fit_model, hysteresis_thresholds,
                                     inverse_superposition_thresholds, select_order)
+from mpi_ros.identification.qp import burn_in, regressor_gram
+from mpi_ros.operators.deadzone import dead_zone_operator
 from mpi_ros.operators.hysteresis import PIHysteresisOperator
 from mpi_ros.operators.inverse import invert_superposition
 from mpi_ros.operators.model import check_model_parameters
+from mpi_ros.operators.play import play_operator
 from mpi_ros.operators.superposition import PISuperpositionOperator
 import numpy as np
 import pytest
@@ -225,3 +228,59 @@ def test_single_loop_start_state_from_the_data_or_periodic():
         identify(x[:600], y[:600], n=6, l=3, periodic=True)
     with pytest.raises(DataError, match="order 'auto'"):
         identify(x, y, order='auto', periodic=True)
+
+
+def _burn_in_by_definition(x, sweep, to_turning_point):
+    # The first sample by which the input covered the sweep (running max - running min), then
+    # the extreme before the input first retreats 1 % of its range from it.
+    if sweep <= 0.0:
+        return 0
+    covered = np.maximum.accumulate(x) - np.minimum.accumulate(x)
+    hits = np.flatnonzero(covered >= sweep * (1.0 - 1e-12))
+    if not hits.size:
+        return x.size
+    start = int(hits[0])
+    if not to_turning_point:
+        return start
+    rising = x[start] - np.min(x[:start + 1]) >= np.max(x[:start + 1]) - x[start]
+    tail = x[start:] if rising else -x[start:]
+    retreat = np.flatnonzero(np.maximum.accumulate(tail) - tail >= 0.01 * np.ptp(x))
+    end = int(retreat[0]) if retreat.size else tail.size
+    return start + int(np.argmax(tail[:end])) if end > 0 else start
+
+
+@pytest.mark.parametrize('seed', [0, 1, 2])
+def test_burn_in_scans_match_the_definition(seed):
+    rng = np.random.default_rng(seed)
+    x = random_walk(rng, 3000, scale=0.2)
+    span = float(np.ptp(x))
+    for sweep in (0.0, 0.05 * span, 0.5 * span, 0.99 * span, span, 1.5 * span):
+        for turning in (False, True):
+            assert burn_in(x, sweep, to_turning_point=turning) == _burn_in_by_definition(
+                x, sweep, turning), (sweep, turning)
+    step = np.r_[np.zeros(5), np.ones(5)]                  # a step: covered at the step
+    assert burn_in(step, 1.0) == 5 and burn_in(step, 1.0, to_turning_point=True) == 5
+
+
+def test_regressor_gram_chunks_and_classes_match_the_regressor_matrix():
+    # Chunked accumulation with rows of three classes (and left-out rows) against the
+    # regressor matrix [plays, -dead zones] written out.
+    rng = np.random.default_rng(4)
+    xs = np.clip(random_walk(rng, 1500, scale=0.15), -1.0, 1.0)
+    ys = np.tanh(1.5 * xs) + 0.01 * rng.normal(size=xs.size)
+    r_h = hysteresis_thresholds(1.0, 6)
+    r_s = inverse_superposition_thresholds(1.0, -1.0, 3)
+    classes = rng.integers(-1, 3, xs.size).astype(np.int8)
+    state = np.linspace(-0.3, 0.3, r_h.size)
+    start, stop = 37, 1400
+    parts = regressor_gram(xs, ys, r_h, r_s, state=state, classes=classes, n_classes=3,
+                           extra=np.empty((xs.size, 0)), start=start, stop=stop, chunk=97)
+    plays, end = play_operator(xs[start:stop], r_h, state)
+    phi = np.hstack([plays, -dead_zone_operator(ys[start:stop], r_s)])
+    labels = classes[start:stop]
+    np.testing.assert_array_equal(parts.end_state, end)
+    for c in range(3):
+        rows = phi[labels == c]
+        assert parts.counts[c] == rows.shape[0]
+        np.testing.assert_allclose(parts.grams[c], rows.T @ rows, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(parts.sums[c], rows.sum(axis=0), rtol=1e-12, atol=1e-12)

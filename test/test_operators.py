@@ -4,7 +4,7 @@
 from mpi_ros.errors import ModelError
 from mpi_ros.operators.deadzone import dead_zone_operator
 from mpi_ros.operators.hysteresis import PIHysteresisOperator
-from mpi_ros.operators.play import play_operator, PlayOperatorStream
+from mpi_ros.operators.play import play_end_state, play_operator, PlayOperatorStream
 from mpi_ros.operators.superposition import PISuperpositionOperator
 import numpy as np
 import pytest
@@ -31,6 +31,20 @@ def test_play_matches_definition_with_initial_state():
     for i in range(r.size):
         np.testing.assert_allclose(z[:, i], _reference_play(x, r[i], z0[i]), atol=TOL)
     np.testing.assert_array_equal(z_end, z[-1])
+
+
+def test_play_end_state_is_the_batch_end_state():
+    # The plays run without their outputs end where the batch ends, bit for bit, and on the
+    # definition (4) (the compiled clamp is written with selects).
+    rng = np.random.default_rng(7)
+    x = random_walk(rng, 2000, scale=0.3)
+    r = np.array([0.0, 0.05, 0.4, 1.3])
+    z0 = np.array([0.2, -0.1, 0.9, -2.0])
+    z, z_end = play_operator(x, r, z0)
+    np.testing.assert_array_equal(play_end_state(x, r, z0), z_end)
+    np.testing.assert_array_equal(play_end_state(x, r), play_operator(x, r)[1])
+    for i in range(r.size):
+        np.testing.assert_array_equal(z[:, i], _reference_play(x, r[i], z0[i]))
 
 
 def test_play_zero_threshold_is_identity():

@@ -365,7 +365,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose)
         (n, l), table = select_record_order(trial, held, found, base.segments,
                                             burn_in=base.burn_in, progress=progress)
-    _check_excitation(x, y, n, l, anchor=anchor)
+    if auto:                             # an explicit order was checked above
+        _check_excitation(x, y, n, l, anchor=anchor)
     say(f'fitting n={n}, l={l} on the whole record')
     fit = fit_record(record, n, l, dynamics=found, choose=choose)
     notes.extend(fit.notes)
@@ -377,9 +378,15 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     sim = with_mode(t, fit.simulate(), resonance)    # each segment from its start state
     fitted = fit.fitted if fit.fitted is not None else keep
     rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
-    # What `mpi-ros simulate` gives: the model from its initial states, straight through.
-    full = model_with_resonance(model_with_dynamics(fit.model, found), resonance)
-    straight = full.simulate(t, x) if full is not fit.model else fit.model.simulate(x)
+    # What `mpi-ros simulate` gives: the model from its initial states, straight through
+    # (Gamma of the input after the dynamics, then the output mode if one is modelled); one
+    # segment from sample 0 without a mode is that already.
+    if resonance.modelled:
+        full = model_with_resonance(model_with_dynamics(fit.model, found), resonance)
+        straight = full.simulate(t, x)
+    else:
+        one = len(fit.segments) == 1 and fit.segments[0].start == 0
+        straight = sim if one else fit.model.simulate(fit.material_input)
     whole = float(np.sqrt(np.mean((straight - y) ** 2)) / np.ptp(y))
     design = fit.design
     first = fit.segments[0].start_state

@@ -326,8 +326,8 @@ class RecordFit:
                 z = state
             else:
                 z = self._state_of(seg) if seg.start != 0 else z_first
-            h, state = self.model.hysteresis_output(part, z)
-            out[seg.start:seg.stop] = self.model.output(h)
+            # The compiled Gamma (plays, H, S in one pass), as ``MPIModel.simulate``.
+            out[seg.start:seg.stop], state = self.model.run(part, z)
         return out
 
     def _state_of(self, seg: Segment) -> FloatArray:
@@ -492,9 +492,8 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
             raise DataError(msg)
         x = dynamics.apply(record.time, x)
     y = record.displacement
-    design = scaled_design(x, y, n, l, anchor=record.anchor)
-    if record.sign != design.sign and record.anchor != 'origin':
-        design = replace(design, sign=record.sign)
+    design = scaled_design(x, y, n, l, anchor=record.anchor,
+                           sign=record.sign if record.anchor != 'origin' else None)
     xs, ys = design.scaled_input(x), design.scaled_output(y)
     classes = np.where(record.keep, 0, -1).astype(np.int8)
     if held is not None:

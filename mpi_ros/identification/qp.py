@@ -262,26 +262,56 @@ def burn_in(x: npt.ArrayLike, sweep: float, *, to_turning_point: bool = False) -
         Index of the first sample whose play outputs are determined; ``N`` when never.
 
     """
-    arr = np.asarray(x, dtype=np.float64)
+    arr = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
     if sweep <= 0.0 or arr.size == 0:
         return 0
-    covered = np.maximum.accumulate(arr) - np.minimum.accumulate(arr)
-    hits = np.flatnonzero(covered >= sweep * (1.0 - 1e-12))
-    if not hits.size:
-        return int(arr.size)
-    start = int(hits[0])
-    if not to_turning_point:
-        return start
-    rising = arr[start] - np.min(arr[:start + 1]) >= np.max(arr[:start + 1]) - arr[start]
-    tail = arr[start:] if rising else -arr[start:]
-    peak = np.maximum.accumulate(tail)
-    retreat = np.flatnonzero(peak - tail >= 0.01 * float(np.ptp(arr)))
-    end = int(retreat[0]) if retreat.size else tail.size
-    return start + int(np.argmax(tail[:end])) if end > 0 else start
+    # Compiled scans that stop where they find what they look for (a long record's
+    # determined start is near its beginning).
+    start, lo, hi = _covered(arr, sweep * (1.0 - 1e-12))
+    if start == arr.size or not to_turning_point:
+        return int(start)
+    value = float(arr[start])
+    rising = value - lo >= hi - value
+    return int(_turning_point(arr, start, rising, 0.01 * float(np.ptp(arr))))
+
+
+@numba.njit(cache=True, nogil=True)
+def _covered(x: FloatArray, sweep: float) -> tuple[int, float, float]:  # pragma: no cover
+    # The first sample by which x has covered a range of sweep (x.size if never), and the
+    # lowest and highest input up to it.
+    lo = x[0]
+    hi = x[0]
+    for k in range(x.shape[0]):
+        v = x[k]
+        if v > hi:
+            hi = v
+        if v < lo:
+            lo = v
+        if hi - lo >= sweep:
+            return k, lo, hi
+    return x.shape[0], lo, hi
+
+
+@numba.njit(cache=True, nogil=True)
+def _turning_point(x: FloatArray, start: int, rising: bool,
+                   retreat: float) -> int:  # pragma: no cover - compiled
+    # The extreme (the first of equal ones) the input reaches after start, in the direction
+    # it moves there, before it first retreats from its running extreme by retreat.
+    sign = 1.0 if rising else -1.0
+    peak = sign * x[start]
+    best = 0
+    for j in range(x.shape[0] - start):
+        v = sign * x[start + j]
+        if v > peak:
+            peak = v
+            best = j
+        if peak - v >= retreat:
+            return start + best
+    return start + best
 
 
 def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
-                  anchor: str = 'operating_point') -> ScaledDesign:
+                  anchor: str = 'operating_point', sign: int | None = None) -> ScaledDesign:
     """
     Return the operating point, scaling and thresholds (28)-(31) :func:`identify` uses.
 
@@ -298,6 +328,9 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
         the output's sign detected, a constant term, and a burn-in until the largest play
         is determined.  ``'origin'``: the paper's design as printed (scales
         ``||x||_inf``, ``||y||_inf``, plays from 0 at x = 0, no constant, no burn-in).
+    sign : int, optional
+        The output's sign with ``anchor='operating_point'`` (+1 rising, -1 falling), when
+        already known; detected from the data by default.
 
     Returns
     -------
@@ -324,7 +357,8 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
     y_lo, y_hi = float(np.min(y)), float(np.max(y))
     x_scale = 0.5 * (x_hi - x_lo)
     y_scale = 0.5 * (y_hi - y_lo)
-    sign, _ = output_sign(x, y)
+    if sign is None:
+        sign, _ = output_sign(x, y)
     r_s_inv = inverse_superposition_thresholds(1.0, -1.0, l)                    # (29)-(31)
     c = int(np.flatnonzero(r_s_inv == 0.0)[0])
     # Plays are determined once the input covered 2 r_Hn; the actuator itself (any
@@ -500,39 +534,17 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     gram[np.diag_indices(nv)] += ridge
     hysteresis_center = 0
     floor = max(epsilon, SLOPE_FLOOR if slope_floor is None else slope_floor)
-    # Constraint rows: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
-    rows = [np.concatenate([equality_row, np.zeros(m + k)])]
-    lower = [1.0]
-    upper = [1.0]
     zero = set() if fixed_zero is None else {int(i) for i in np.ravel(fixed_zero)} - {0}
-    for i in range(n1):                                    # (8): U_H w_H <= u_H
-        row = np.zeros(nv)
-        row[i] = 1.0
-        rows.append(row)
-        lower.append(epsilon if i == hysteresis_center else 0.0)
-        upper.append(0.0 if i in zero else np.inf)
-    c = superposition_center
-    for i in range(m):                                     # (19): slopes outward from 0
-        row = np.zeros(nv)
-        if i >= c:
-            row[n1 + c:n1 + i + 1] = 1.0
-        else:
-            row[n1 + i:n1 + c + 1] = 1.0
-        rows.append(row)
-        lower.append(floor)
-        upper.append(np.inf)
     x_lower = np.zeros(k) if extra_lower is None else np.asarray(extra_lower, dtype=float)
-    for i in range(k):
-        row = np.zeros(nv)
-        row[n1 + m + i] = 1.0
-        rows.append(row)
-        lower.append(float(x_lower[i]))
-        upper.append(np.inf)
-    a_mat = sp.csc_matrix(np.array(rows))
-    lo = np.array(lower)
-    hi = np.array(upper)
-    solver = osqp.OSQP()
-    solver.setup(P=sp.csc_matrix(np.triu(gram)), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
+    c = superposition_center
+    a_mat = _constraint_matrix(np.asarray(equality_row, dtype=np.float64), n1, m, k, c)
+    # Bounds: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
+    lo = np.concatenate([[1.0], np.zeros(n1), np.full(m, floor), x_lower])
+    lo[1 + hysteresis_center] = epsilon
+    hi = np.concatenate([[1.0], np.full(n1 + m + k, np.inf)])
+    hi[[1 + i for i in range(n1) if i in zero]] = 0.0
+    solver = osqp.OSQP(algebra='builtin')        # no search for other backends per solve
+    solver.setup(P=_upper_csc(gram), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
                  verbose=False, eps_abs=tolerance, eps_rel=tolerance, max_iter=200000,
                  polishing=tolerance <= 1e-9, polish_refine_iter=10)
     res = solver.solve(raise_error=False)
@@ -574,6 +586,47 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     w_s[:c] = -np.diff(slopes[:c + 1])
     w_x = np.maximum(v[n1 + m:], x_lower) if k else v[n1 + m:]
     return w_h, w_s, w_x, res.info
+
+
+#: Constraint matrices of the QP by (equality row, n+1, m, extras, centre of S'): the trial
+#: fits of one order share one.
+_CONSTRAINTS: dict[tuple[bytes, int, int, int, int], Any] = {}
+
+
+def _constraint_matrix(equality_row: FloatArray, n1: int, m: int, k: int, c: int) -> Any:
+    # Rows (36), (8) on w_H, (19) on w'_S (slopes outward from the zero threshold), bounds
+    # on the extras; a CSC matrix (read only), built once per shape.
+    key = (equality_row.tobytes(), n1, m, k, c)
+    cached = _CONSTRAINTS.get(key)
+    if cached is not None:
+        return cached
+    nv = n1 + m + k
+    rows = np.zeros((1 + nv, nv))
+    rows[0, :n1] = equality_row
+    rows[1:1 + n1, :n1] = np.eye(n1)
+    for i in range(m):
+        if i >= c:
+            rows[1 + n1 + i, n1 + c:n1 + i + 1] = 1.0
+        else:
+            rows[1 + n1 + i, n1 + i:n1 + c + 1] = 1.0
+    rows[1 + n1 + m:, n1 + m:] = np.eye(k)
+    if len(_CONSTRAINTS) >= 64:
+        _CONSTRAINTS.clear()
+    matrix = _CONSTRAINTS[key] = sp.csc_matrix(rows)
+    return matrix
+
+
+def _upper_csc(gram: FloatArray) -> Any:
+    # The upper triangle of the symmetric matrix in CSC form, its zeros left out: what
+    # sp.csc_matrix(np.triu(gram)) gives, without the dense detour.
+    nv = gram.shape[0]
+    col, row = np.tril_indices(nv)              # column by column, rows ascending
+    data = gram[row, col]
+    nonzero = data != 0.0
+    counts = np.bincount(col[nonzero], minlength=nv)
+    indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    return sp.csc_matrix((data[nonzero], row[nonzero].astype(np.int32), indptr),
+                         shape=(nv, nv))
 
 
 @dataclass(frozen=True)
@@ -670,42 +723,58 @@ def regressor_gram(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s_inv: Flo
     grams = np.zeros((n_classes, nv, nv))
     sums = np.zeros((n_classes, nv))
     counts = np.zeros(n_classes, dtype=np.int64)
-    # Many rows: the compiled pass fills a chunk of rows, BLAS multiplies it.
-    buffer = np.empty((min(chunk, stop - start), nv))
-    nh = r_h.size + r_s_inv.size
+    # Many rows: the compiled pass fills a chunk's rows, grouped by class, and their column
+    # sums; BLAS multiplies each class's rows.
+    size = min(chunk, stop - start)
+    buffer = np.empty((n_classes, size, nv))
+    chunk_sums = np.empty((n_classes, nv))
+    chunk_counts = np.empty(n_classes, dtype=np.int64)
+    columns = np.empty((0, 0)) if extra is None else extra
     for a in range(start, stop, chunk):
         b = min(a + chunk, stop)
-        phi = buffer[:b - a]
-        _fill_rows(xs, ys, r_h, r_s_inv, z, a, b, phi)
-        if extra is not None:
-            phi[:, nh:] = extra[a:b]
-        labels = classes[a:b]
+        chunk_sums[:] = 0.0
+        chunk_counts[:] = 0
+        _fill_rows(xs, ys, r_h, r_s_inv, columns, z, classes, a, b, buffer, chunk_sums,
+                   chunk_counts)
         for c in range(n_classes):
-            mask = labels == c
-            rows = phi if bool(np.all(mask)) else phi[mask]
-            if rows.shape[0]:
+            m = int(chunk_counts[c])
+            if m:
+                rows = buffer[c, :m]
                 grams[c] += rows.T @ rows
-                sums[c] += rows.sum(axis=0)
-                counts[c] += rows.shape[0]
+                sums[c] += chunk_sums[c]
+                counts[c] += m
     return GramParts(grams, sums, counts, z)
 
 
 @numba.njit(cache=True, nogil=True)
 def _fill_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
-               z: FloatArray, start: int, stop: int,
-               out: FloatArray) -> None:  # pragma: no cover - compiled
-    # Rows [plays, -dead zones] (4), (17) of samples start..stop; the plays advance z.
+               extra: FloatArray, z: FloatArray, classes: npt.NDArray[np.int8], start: int,
+               stop: int, out: FloatArray, sums: FloatArray,
+               counts: npt.NDArray[np.int64]) -> None:  # pragma: no cover - compiled
+    # Rows [plays, -dead zones, extra] (4), (17) of samples start..stop into out[class],
+    # their column sums into sums[class]; the plays advance z (rows of class -1 only that).
     nh = r_h.shape[0]
     ns = r_s.shape[0]
+    ne = extra.shape[1]
     for k in range(start, stop):
         x = xs[k]
-        row = out[k - start]
         for i in range(nh):
             z[i] = play_clamp(x, r_h[i], z[i])
+        c = classes[k]
+        if c < 0:
+            continue
+        row = out[c, counts[c]]
+        counts[c] += 1
+        for i in range(nh):
             row[i] = z[i]
         y = ys[k]
         for j in range(ns):
             row[nh + j] = -_dead_zone(y, r_s[j])
+        for j in range(ne):
+            row[nh + ns + j] = extra[k, j]
+        total = sums[c]
+        for i in range(row.shape[0]):
+            total[i] += row[i]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .qp import burn_in, FloatArray
-from ..operators.play import play_operator
+from ..operators.play import play_end_state, play_operator
 
 __all__ = ['StartState', 'estimate_start_state', 'refine_memory', 'start_candidates',
            'turning_point_candidates', 'with_initial_states', 'START_KINDS']
@@ -308,8 +308,7 @@ def determined_from(u: FloatArray, largest_threshold: float) -> int:
 def end_state(u: FloatArray, thresholds: FloatArray) -> FloatArray:
     """Return the plays' state after the record, started at rest after a descent."""
     z0 = np.clip(float(u[0]) + thresholds, float(u[0]) - thresholds, float(u[0]) + thresholds)
-    _, z = play_operator(u, thresholds, z0)
-    return np.asarray(z, dtype=np.float64)
+    return play_end_state(u, thresholds, z0)
 
 
 def finite_or(value: float, fallback: float) -> float:

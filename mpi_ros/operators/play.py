@@ -16,7 +16,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['play_operator', 'PlayOperatorStream', 'play_step', 'play_clamp']
+__all__ = ['play_end_state', 'play_operator', 'PlayOperatorStream', 'play_step', 'play_clamp']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -44,13 +44,11 @@ def play_clamp(x: float, r: float, z: float) -> float:  # pragma: no cover - com
         Output after the sample.
 
     """
-    lo = x - r
-    if z < lo:
-        return lo
+    # Selects, not branches (the same values): the compiled loops need no jumps.
     hi = x + r
-    if z > hi:
-        return hi
-    return z
+    a = hi if z > hi else z
+    lo = x - r
+    return lo if a < lo else a
 
 
 @numba.njit(cache=True, nogil=True)
@@ -65,6 +63,15 @@ def _play_batch(x: FloatArray, r: FloatArray,
             z[i] = play_clamp(xk, r[i], z[i])
             out[k, i] = z[i]
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _play_run(x: FloatArray, r: FloatArray, z: FloatArray) -> None:  # pragma: no cover - compiled
+    # The plays over a sequence, keeping only their state (no N x m output to write).
+    for k in range(x.shape[0]):
+        xk = x[k]
+        for i in range(r.shape[0]):
+            z[i] = play_clamp(xk, r[i], z[i])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -122,6 +129,36 @@ def play_operator(x: npt.ArrayLike, thresholds: npt.ArrayLike,
          else np.array(initial_states, dtype=np.float64).reshape(-1))
     out = _play_batch(x_arr, r, z)
     return out, z
+
+
+def play_end_state(x: npt.ArrayLike, thresholds: npt.ArrayLike,
+                   initial_states: npt.ArrayLike | None = None) -> FloatArray:
+    """
+    Return the play outputs after a whole input sequence (:func:`play_operator`'s ``z_end``).
+
+    The outputs along the way are not kept: a long sequence costs no ``N x m`` array.
+
+    Parameters
+    ----------
+    x : array_like of float, shape (N,)
+        Input sequence.
+    thresholds : array_like of float, shape (m,)
+        Thresholds ``r >= 0``, unit of the input.
+    initial_states : array_like of float, shape (m,), optional
+        Play outputs before the first sample; zeros (32) by default.
+
+    Returns
+    -------
+    ndarray of float, shape (m,)
+        Play outputs after the last sample.
+
+    """
+    x_arr = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
+    r = np.ascontiguousarray(thresholds, dtype=np.float64).reshape(-1)
+    z = (np.zeros_like(r) if initial_states is None
+         else np.array(initial_states, dtype=np.float64).reshape(-1))
+    _play_run(x_arr, r, z)
+    return z
 
 
 class PlayOperatorStream:
