@@ -72,7 +72,7 @@ from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
 from ..extensions.composite import check_combination, composite_cause
 from ..identification import burn_in, identify, output_sign
-from ..identification.start_state import estimate_start_state
+from ..identification.procedure import estimate_start_state
 from ..metrics import range_error, rms_range_error
 from ..operators.model import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording

@@ -240,7 +240,7 @@ def determined_start(time: FloatArray, current: FloatArray, displacement: FloatA
     Return the first sample the data determine, for the raw current and its transforms.
 
     The samples no start state explains in a fit of the raw current (usually none: the
-    start state is estimated, see :mod:`mpi_ros.identification.start_state`), plus
+    start state is estimated, see :mod:`mpi_ros.identification.procedure`), plus
     ``settle`` seconds for a delayed or lagged version of it to have forgotten its own
     start.
 

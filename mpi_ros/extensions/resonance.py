@@ -31,7 +31,7 @@ The identification (:func:`mpi_ros.identification.identify`, with a time base) f
 when the record rings after steps (:func:`fit_mode`, least squares of ``R[Gamma[x]]`` against
 the measured output, from the ringing frequency the analysis detected), then Gamma again on the
 output with the mode's part taken out; the mode is kept when it lowers the whole-record error
-clearly (see :mod:`mpi_ros.identification.resonance`).
+clearly (see :mod:`mpi_ros.identification.api`, "The output mode").
 
 Parameter keys (besides Gamma's ``model.*`` keys, operating point included):
 ``model.resonance.frequency`` (``f`` [Hz], 0: no mode), ``model.resonance.decay`` (``T``
@@ -52,8 +52,8 @@ from ._common import AxisUnits, check_series, Order, resolve_order, scalar_param
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
 from ..errors import ModelError
+from ..identification.api import estimate_resonance
 from ..identification.procedure import fit_record, prepare_record
-from ..identification.resonance import estimate_resonance
 from ..operators.model import MPIModel
 
 __all__ = ['ResonanceModel', 'ModeFit', 'fit_mode', 'fit_resonance', 'output_mode',
@@ -363,7 +363,7 @@ def fit_resonance(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
 
     Gamma is fitted as :func:`mpi_ros.identification.identify` fits it (ringing left out),
     the mode on the ringing after steps, then Gamma again on the output without the mode's
-    part (:func:`mpi_ros.identification.resonance.estimate_resonance`).  A record that does
+    part (:func:`mpi_ros.identification.api.estimate_resonance`).  A record that does
     not ring, or whose ringing the mode does not explain clearly, gives no mode
     (``frequency`` 0: the model is Gamma).
 

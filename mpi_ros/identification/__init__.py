@@ -4,17 +4,16 @@ Identification of the MPI operator from measured data, section 4.2 of Kuhnen's p
 
 The names users call, re-exported: :func:`identify` and the order selection live in
 :mod:`.api`, which also explains the design on real records; the parts are :mod:`.qp`
-(the design and the QP, (28)-(36)), :mod:`.procedure`, :mod:`.dynamics`, :mod:`.resonance`
-and :mod:`.start_state`.
+(the design and the QP, (28)-(36)), :mod:`.procedure` (record, segments, start states,
+trial fits, dynamics grid) and :mod:`.dynamics` (what moves the output against the input).
 """
 
 from .api import (DEFAULT_ORDERS, IdentificationResult, identify, model_with_dynamics,
                   select_order, select_record_order)
-from .procedure import InputDynamics
+from .procedure import InputDynamics, StartState
 from .qp import (ANCHORS, burn_in, fit_generalized_error, fit_model, fit_plain,
                  generalized_error_gram, hysteresis_thresholds, identify_weights,
                  inverse_superposition_thresholds, output_sign, scaled_design, ScaledDesign)
-from .start_state import StartState
 
 __all__ = [
     'IdentificationResult', 'identify', 'select_order', 'hysteresis_thresholds',
