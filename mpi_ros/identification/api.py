@@ -609,7 +609,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     if auto:                             # an explicit order was checked above
         _check_excitation(x, y, n, l, anchor=anchor)
     say(f'fitting n={n}, l={l} on the whole record')
-    fit = fit_record(record, n, l, dynamics=found, choose=choose)
+    fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True)
     notes.extend(fit.notes)
     resonance = ResonanceEstimate()
     if t is not None and dynamics == 'auto' and record.analysis.ringing:
