@@ -228,7 +228,8 @@ def refine_memory(u: FloatArray, thresholds: FloatArray, start: FloatArray,
     sweeps : int
         Passes over the plays.
     tails : bool
-        Also move the steps between neighbouring plays (every play from one on together).
+        First move the steps between neighbouring plays (every play from one on together),
+        in one sweep.
 
     Returns
     -------
@@ -243,7 +244,7 @@ def refine_memory(u: FloatArray, thresholds: FloatArray, start: FloatArray,
     residual = plays @ weights - target
     count = max(int(np.count_nonzero(rows)), 1)
     best = float(np.sum(residual[rows] ** 2))
-    for _ in range(sweeps if tails else 0):
+    for _ in range(1 if tails else 0):
         for i in range(1, r.size):
             # The step between plays i-1 and i: plays i.. move together.
             gap = r[i] - r[i - 1]
@@ -1152,7 +1153,7 @@ class _Fitter:
                 if not trial_error < error * (1.0 - 1e-6):
                     break
                 # The steps may fit the generalised error of transients (ringing tails)
-                # while the output gets worse: they must lower the output's error too.
+                # while the output gets worse: they must lower the output's error there too.
                 if tails and trial_weights is not None and not (
                         self._output_error(seg, refined, trial_weights)
                         < self._output_error(seg, z, weights)):
@@ -1162,8 +1163,9 @@ class _Fitter:
         return seg
 
     def _output_error(self, seg: Segment, z0: FloatArray, weights: Any) -> float:
-        # RMS error (scaled) of the model's output over the segment's training rows.
-        rows_ = slice(seg.start, seg.stop)
+        # RMS error (scaled) of the model's output before the segment's plays are
+        # determined (after that, the start state does not matter).
+        rows_ = slice(seg.start, self.split(seg))
         train = self.classes[rows_] == 0
         if not np.any(train):
             return 0.0
