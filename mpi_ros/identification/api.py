@@ -628,7 +628,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     else:
         one = len(fit.segments) == 1 and fit.segments[0].start == 0
         straight = sim if one else fit.model.simulate(fit.material_input)
-    whole = float(np.sqrt(np.mean((straight - y) ** 2)) / np.ptp(y))
+    whole = _rms(straight, y, float(np.ptp(y)))
     design = fit.design
     first = fit.segments[0].start_state
 

@@ -919,14 +919,13 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
     if held is not None:
         classes[held & record.keep] = 1
     fitter = _Fitter(xs, ys, design, classes, record.epsilon)
-    fitter.memory_steps = memory_steps
     segments = list(starts) if starts is not None else list(record.segments)
     if record.anchor == 'origin':
         segments = [replace(s, start_state=StartState('virgin', (0.0,))) for s in segments]
         choose = False
     notes: list[str] = []
     if choose or any(s.start_state is None and s.start == 0 for s in segments):
-        segments = fitter.choose_starts(segments)
+        segments = fitter.choose_starts(segments, memory_steps=memory_steps)
     if burn_in:
         classes[:burn_in] = -1
         fitter = _Fitter(xs, ys, design, classes, record.epsilon)
@@ -987,8 +986,6 @@ class _Fitter:
         self._dead_zones: dict[int, FloatArray] = {}
         self._splits: dict[tuple[int, int], int] = {}
         self._ends: dict[tuple[int, int], FloatArray] = {}
-        #: Refine a winning memory by the steps between plays too (see refine_memory).
-        self.memory_steps = False
 
     def _state(self, seg: Segment, previous: FloatArray | None) -> FloatArray:
         u = self.xs[seg.start:seg.stop]
@@ -1081,14 +1078,16 @@ class _Fitter:
                                                             float(self.r_h[-1]))
         return self._splits[key]
 
-    def choose_starts(self, segments: list[Segment]) -> list[Segment]:
+    def choose_starts(self, segments: list[Segment], *,
+                      memory_steps: bool = False) -> list[Segment]:
         """
         Choose each segment's start state (see "Start states" above).
 
         The simple candidates (and, after the first segment, "continues") are one QP each;
         the histories with turning points are scored with the best simple candidate's
         weights on the rows before the plays are determined, and the best of those is
-        refitted; the smallest generalised error wins.
+        refitted; the smallest generalised error wins.  A winning memory is refined by the
+        steps between plays too with ``memory_steps`` (see :func:`refine_memory`).
         """
         chosen = _placeholder(segments)
         for i, seg in enumerate(segments):
@@ -1119,12 +1118,12 @@ class _Fitter:
                 if error < best[0] * (1.0 - 1e-6):
                     chosen[i] = replace(seg, start_state=top[1])
                     best = (error, top[1], weights)
-            chosen[i] = self._refine_memory(chosen, i, best, previous)
+            chosen[i] = self._refine_memory(chosen, i, best, previous, memory_steps)
         return chosen
 
     def _refine_memory(self, chosen: list[Segment], i: int,
                        best: tuple[float, StartState | None, Any],
-                       previous: FloatArray | None) -> Segment:
+                       previous: FloatArray | None, memory_steps: bool) -> Segment:
         # A joint estimate of every play's start state (a history with more turning points
         # than the grid), kept when its refit beats the best history.
         seg = chosen[i]
@@ -1136,7 +1135,7 @@ class _Fitter:
         rows = slice(seg.start, self.split(seg))
         # One play at a time; where that memory beats every simple history, the steps
         # between plays too (see refine_memory).
-        for tails in (False, True) if self.memory_steps else (False,):
+        for tails in (False, True) if memory_steps else (False,):
             if tails and not (seg.start_state is not None
                               and seg.start_state.kind == 'memory'):
                 break
