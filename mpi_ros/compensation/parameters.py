@@ -28,7 +28,8 @@ from ..extensions import EFFECTS
 from ..operators.model import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN
 
 __all__ = [
-    'AUTOSTART', 'AXES', 'DIAGNOSTICS_PERIOD', 'ENABLED', 'INPUT_MESSAGE', 'JOINTS',
+    'ADAPTATION_PARAMETERS', 'AUTOSTART', 'AXES', 'DIAGNOSTICS_PERIOD', 'ENABLED',
+    'INPUT_MESSAGE', 'JOINTS',
     'LIMIT_PARAMETERS', 'MESSAGE_TIME', 'OUTPUT_LAYOUT', 'SAMPLE_PERIOD', 'WIRING',
     'axis_limit_parameters', 'axis_parameters', 'compensator_parameters',
     'multi_axis_parameters',
@@ -310,6 +311,53 @@ INPUT_MESSAGE = ParameterSpec(
 #: The ros2_control options, declared by the multi-axis node only.
 WIRING = (JOINTS, OUTPUT_LAYOUT, INPUT_MESSAGE)
 
+#: Online adaptation (:mod:`mpi_ros.compensation.adaptation`); read-only: given at start-up.
+ADAPTATION_PARAMETERS = (
+    ParameterSpec(
+        'adaptation.enabled', 'bool', False,
+        'true: subscribe to the measured displacement (displacement, std_msgs/Float64, one '
+        'reading per command, in order) and adapt the running model: recursive QP on '
+        'forgetting Gram matrices, a candidate applied through the ordinary parameter '
+        'validation only when it is better on the newest readings it was not fitted to',
+        read_only=True),
+    ParameterSpec(
+        'adaptation.forgetting_time', 'double', 20.0,
+        'Memory of the recursive fit (exponential forgetting)', 's',
+        value_range=(0.1, 1.0e5), read_only=True),
+    ParameterSpec(
+        'adaptation.offset_time', 'double', 1.0,
+        'Memory of the operating point (the constant term): a zero drifts faster than a '
+        'shape changes', 's', value_range=(0.01, 1.0e5), read_only=True),
+    ParameterSpec(
+        'adaptation.holdout', 'double', 5.0,
+        'Newest readings held out of the fit; a candidate must win there', 's',
+        value_range=(0.01, 1.0e4), read_only=True),
+    ParameterSpec(
+        'adaptation.period', 'double', 1.0,
+        'Interval between candidate solves', 's', value_range=(0.01, 1.0e4), read_only=True),
+    ParameterSpec(
+        'adaptation.margin', 'double', 0.1,
+        "A candidate's held-out RMS error must be at most 1 - margin of the running model's",
+        value_range=(0.0, 0.99), read_only=True),
+    ParameterSpec(
+        'adaptation.max_step', 'double', 0.05,
+        'Largest change of the modelled displacement per update, fraction of the '
+        'displacement range', value_range=(1.0e-6, 1.0), read_only=True),
+    ParameterSpec(
+        'adaptation.min_excitation', 'double', 0.3,
+        'Fraction of the identified input range the recent commands must span; below it '
+        'adaptation pauses (a hold, a tiny motion)', value_range=(0.0, 0.99),
+        read_only=True),
+    ParameterSpec(
+        'adaptation.delay', 'integer', 0,
+        'Samples by which the displacement readings lag the commands (0: lock step, the '
+        'k-th reading answers the k-th command)', value_range=(0, 100000), read_only=True),
+    ParameterSpec(
+        'adaptation.hysteresis', 'bool', False,
+        "false: adapt S' (gain, shape) and the operating point; true: the weights of H too",
+        read_only=True),
+)
+
 
 def compensator_parameters() -> Tuple[ParameterSpec, ...]:
     """
@@ -330,7 +378,7 @@ def compensator_parameters() -> Tuple[ParameterSpec, ...]:
         *loop_qos_parameters('desired_displacement and current_command'),
         AXES,
         AUTOSTART,
-    )
+    ) + ADAPTATION_PARAMETERS
 
 
 def multi_axis_parameters() -> Tuple[ParameterSpec, ...]:

@@ -477,7 +477,9 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
                           extra_lower: FloatArray | None = None,
                           fixed_zero: npt.ArrayLike | None = None,
                           tolerance: float = 1e-9,
-                          slope_floor: float | None = None) -> tuple[
+                          slope_floor: float | None = None,
+                          linear: FloatArray | None = None,
+                          warm_start: FloatArray | None = None) -> tuple[
                               FloatArray, FloatArray, FloatArray, Any]:
     """
     Solve the QP (34)-(36) for the weights ``w_H``, ``w'_S`` (and optional extras).
@@ -512,6 +514,11 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     slope_floor : float, optional
         Lower bound of the slopes of S' in (19), scaled units (at least ``epsilon``);
         :data:`SLOPE_FLOOR` by default.
+    linear : ndarray of float, shape (nv,), optional
+        A linear term ``q`` added to the objective, ``v^T G v + q^T v`` (e.g. a pull
+        towards prior weights in the recursive identification); none by default.
+    warm_start : ndarray of float, shape (nv,), optional
+        Weights to start OSQP from (the previous solution of a recursive fit).
 
     Returns
     -------
@@ -544,9 +551,12 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     hi = np.concatenate([[1.0], np.full(n1 + m + k, np.inf)])
     hi[[1 + i for i in range(n1) if i in zero]] = 0.0
     solver = osqp.OSQP(algebra='builtin')        # no search for other backends per solve
-    solver.setup(P=_upper_csc(gram), q=np.zeros(nv), A=a_mat, l=lo, u=hi,
+    q = np.zeros(nv) if linear is None else np.asarray(linear, dtype=np.float64)
+    solver.setup(P=_upper_csc(gram), q=q, A=a_mat, l=lo, u=hi,
                  verbose=False, eps_abs=tolerance, eps_rel=tolerance, max_iter=200000,
                  polishing=tolerance <= 1e-9, polish_refine_iter=10)
+    if warm_start is not None:
+        solver.warm_start(x=np.asarray(warm_start, dtype=np.float64))
     res = solver.solve(raise_error=False)
     # 'solved inaccurate' and 'maximum iterations reached' (tolerances of 1e-9 not met,
     # typical when the data determine some weights only weakly, e.g. no hysteresis) are

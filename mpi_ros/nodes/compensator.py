@@ -96,18 +96,22 @@ import time
 from typing import Any, Dict, List, Optional, Tuple
 
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
 from .compensator_base import CompensatorNodeBase, DRAIN_LIMIT
 from .multi_axis import MultiAxisCompensatorNode
 from .parameters import declare_parameters, parameter_values
+from .qos import loop_qos
 from .spinning import run_node_main
 from ..compensation import Compensator
+from ..compensation.adaptation import Adaptation, AdaptationSettings, AdaptationWorker
 from ..compensation.parameters import compensator_parameters, specs_by_name, wants_multi_axis
 from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
+from ..operators.model import MPIModel
 
 __all__ = ['CompensatorNode', 'main', 'make_node']
 
@@ -160,8 +164,16 @@ class CompensatorNode(CompensatorNodeBase):
         self._extended = False
         self._model_kind = 'none'
         self._model_version = 0
+        self._adaptation: Optional[Adaptation] = None
+        self._worker: Optional[AdaptationWorker] = None
+        self._readings: Any = None
+        self._record: Optional[Any] = None    # Adaptation.record_command while adapting
+        self._own_update = False
         declare_parameters(self, specs)
         self._declared()
+        self._adapt = bool(self.get_parameter('adaptation.enabled').value)
+        if self._adapt:
+            self._adaptation_timer = self.create_timer(0.1, self._adaptation_tick)
         # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
         # Time object per message) or None: sample_period apart.
         self._stamp = (time.monotonic if self.get_parameter('message_time').value == 'arrival'
@@ -180,6 +192,11 @@ class CompensatorNode(CompensatorNodeBase):
     def compensator(self) -> Optional[Compensator]:
         """Return the core compensator: plain, extended, or ``None`` while unconfigured."""
         return self._compensator
+
+    @property
+    def adaptation(self) -> Optional[Adaptation]:
+        """Online adaptation of the model (``adaptation.enabled`` and a model), else None."""
+        return self._adaptation
 
     def command(self, desired_displacement: float, *,
                 stamp: Optional[float] = None) -> Optional[float]:
@@ -206,7 +223,10 @@ class CompensatorNode(CompensatorNodeBase):
         if compensator is None:
             self._drop()
             return None
-        return compensator.command(desired_displacement, time=stamp)
+        current = compensator.command(desired_displacement, time=stamp)
+        if self._record is not None:
+            self._record(current)
+        return current
 
     # -- message path -----------------------------------------------------------------
     def _on_desired_displacement(self, data: bytes) -> None:
@@ -218,6 +238,7 @@ class CompensatorNode(CompensatorNodeBase):
         # by one, in order, each with its own command and, for an extended model, its own
         # arrival time.
         publish = self._publisher.handle.publish_raw
+        record = self._record
 
         def serve(data: bytes) -> None:
             value = (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0]
@@ -229,6 +250,8 @@ class CompensatorNode(CompensatorNodeBase):
                        else compensator.command(value))
             publish(_PACK(_CDR_LE, current))
             self._messages_out += 1
+            if record is not None:
+                record(current)
 
         self._drain(data, Float64, serve, raw=True, limit=_DRAIN_LIMIT)
 
@@ -262,6 +285,7 @@ class CompensatorNode(CompensatorNodeBase):
     def _unload(self) -> None:
         self._extended = False
         self._model_kind = 'none'
+        self._stop_adaptation()
 
     def _installed(self, model: Any, inverse: Any = None) -> None:
         """Count a model swapped in; build the core when there was none (``model`` given)."""
@@ -279,6 +303,87 @@ class CompensatorNode(CompensatorNodeBase):
         self._model_kind = compensator.kind
         self.get_logger().info(
             f'model version {self._model_version} applied ({self._model_kind})')
+        if self._adapt and not self._own_update:
+            self._start_adaptation(compensator.model)
+
+    # -- online adaptation ----------------------------------------------------------------
+    def _open_loop(self) -> None:
+        super()._open_loop()
+        if self._adapt:
+            qos = loop_qos(self.get_parameter('qos_depth').value,
+                           self.get_parameter('qos_reliability').value)
+            self._readings = self.create_subscription(
+                Float64, 'displacement', self._on_displacement, qos, raw=True)
+
+    def _close_loop(self) -> None:
+        readings, self._readings = self._readings, None
+        if readings is not None:
+            self.destroy_subscription(readings)
+        super()._close_loop()
+
+    def _on_displacement(self, data: bytes) -> None:
+        adaptation = self._adaptation
+        if adaptation is None or len(data) < 12:
+            return                      # no model to adapt, or not a Float64's CDR
+        adaptation.record_measurement((_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0])
+
+    def _start_adaptation(self, model: Any) -> None:
+        # A model that arrives from outside (configure, a push) starts the adaptation
+        # afresh; the adaptation's own updates continue it.
+        if not isinstance(model, MPIModel) or model.n < 1:
+            self._stop_adaptation()
+            self.get_logger().warning(
+                f'adaptation.enabled: adaptation adapts a plain Gamma with n >= 1 only; off'
+                f' for this model ({self._model_kind})')
+            return
+        if self._adaptation is not None:
+            self._adaptation.reset(model)
+            self.get_logger().info('adaptation restarted from the new model')
+            return
+        values = parameter_values(self, [k for k in self._specs if k.startswith('adaptation.')])
+        settings = AdaptationSettings.from_values(
+            values, self.get_parameter('sample_period').value)
+        self._adaptation = Adaptation(model, settings)
+        self._record = self._adaptation.record_command
+        self._worker = AdaptationWorker(
+            self._adaptation,
+            on_error=lambda text: self.get_logger().error(f'adaptation step failed: {text}'))
+        self._worker.start()
+        self.get_logger().info(
+            f'adaptation on: readings on {self.resolve_topic_name("displacement")}, paired'
+            f' in lock step (delay {settings.delay} samples), memory'
+            f' {settings.forgetting_time:g} s, candidates every {settings.period:g} s,'
+            f' held out {settings.holdout:g} s, margin {100 * settings.margin:g} %')
+
+    def _stop_adaptation(self) -> None:
+        worker, self._worker = self._worker, None
+        if worker is not None:
+            worker.stop()
+        self._adaptation = None
+        self._record = None
+
+    def _adaptation_tick(self) -> None:
+        adaptation = self._adaptation
+        if adaptation is None:
+            return
+        candidate = adaptation.take_candidate()
+        if candidate is not None:
+            parameters = [Parameter(key, value=value)
+                          for key, value in candidate.params().items()]
+            self._own_update = True
+            try:
+                results = self.set_parameters(parameters)
+            finally:
+                self._own_update = False
+            refused = [r.reason for r in results if not r.successful]
+            adaptation.applied(candidate, not refused, '; '.join(refused))
+        for event in adaptation.events():
+            self.get_logger().info(f'adaptation: {event}')
+
+    def destroy_node(self) -> None:
+        """Stop the adaptation's thread, then destroy the node."""
+        self._stop_adaptation()
+        super().destroy_node()
 
     # -- diagnostics --------------------------------------------------------------------
     def _core_counters(self) -> Dict[str, int]:
@@ -300,8 +405,11 @@ class CompensatorNode(CompensatorNodeBase):
         compensator = self._compensator
         if compensator is None:
             return {}
-        return single_axis_values(
+        values = single_axis_values(
             self._model_kind, compensator.slow_state if compensator.has_effect else None)
+        if self._adaptation is not None:
+            values.update(self._adaptation.status())
+        return values
 
 
 def main(args: Optional[List[str]] = None) -> int:
