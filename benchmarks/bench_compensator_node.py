@@ -74,7 +74,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                   reliability: str = 'reliable', pin: bool = False,
                   node_kind: str = 'compensator',
                   receiver_kind: str = 'ordinary', axes: int = 1,
-                  chunk: int = 1) -> dict[str, Any]:
+                  chunk: int = 1, adaptation: bool = False) -> dict[str, Any]:
     """
     Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
@@ -115,6 +115,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     chunk : int
         Samples per array message (``axes`` > 1): ``rate`` messages/s carry ``rate *
         chunk`` samples of every axis per second.
+    adaptation : bool
+        Single axis: run the compensator with ``adaptation.enabled`` and let the receiver
+        act as the actuator: it answers every command with the benchmark model's
+        displacement on ``displacement`` (lock step), so the adaptation pairs, fits and
+        solves a candidate every second while the command path is measured.
 
     Returns
     -------
@@ -164,8 +169,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         raise RuntimeError(msg)
     node_cpus, load_cpus = set(cores[-1:]), set(cores[:-1])
     if node_kind == 'compensator':
+        extra = (['-p', 'adaptation.enabled:=true', '-p', f'sample_period:={1.0 / rate!r}']
+                 if adaptation else [])
         comp = NodeProcess('compensator', ['--params-file', str(params), '-p',
-                                           'diagnostics_period:=5.0'], tmp / 'compensator.log')
+                                           'diagnostics_period:=5.0', *extra],
+                           tmp / 'compensator.log')
     else:
         comp = _ScriptProcess(
             [str(Path(__file__).with_name('relay.py')), '--mode', node_kind.split(':')[1],
@@ -177,7 +185,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         [sys.executable, __file__, '--role', 'receiver', '--out', out, '--count', str(count),
          '--duration', str(duration + 60.0), '--qos-depth', str(qos_depth),
          '--reliability', reliability, '--receiver', receiver_kind, '--axes', str(axes),
-         '--chunk', str(chunk)], env=dict(os.environ))
+         '--chunk', str(chunk), *(['--adaptation'] if adaptation else [])],
+        env=dict(os.environ))
     if pin:
         # Right after the start, before rclpy creates any thread: every later thread
         # (DDS receive and event threads) inherits the affinity.
@@ -290,6 +299,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'latency_us': {}, 'windows': [], 'rss_kib': rss,
         'rss_growth_mib': (rss[-1][1] - rss[1][1]) / 1024 if len(rss) > 2 else None,
         'compensator_exit': status, 'workdir': str(tmp), 'processes_left': left,
+        'adaptation_log': ([line.strip() for line in
+                            (tmp / 'compensator.log').read_text().splitlines()
+                            if 'adaptation' in line][-3:] if adaptation else []),
         'cpu_percent': cpu_percent, 'compensator_threads': thread_percent,
         'qos_depth': qos_depth, 'reliability': reliability,
         'pinned': pin, 'node': node_kind, 'receiver': receiver_kind,
@@ -364,6 +376,7 @@ def format_results(results: dict[str, Any]) -> str:
         lines.append('relay: largest |command - desired| (the values relayed): '
                      f'{r["max_error_vs_desired"]:.1e}')
     lines.append(f'compensator exit status: {r["compensator_exit"]}')
+    lines.extend(f'  {line}' for line in r.get('adaptation_log', []))
     return '\n'.join(lines)
 
 
@@ -385,25 +398,30 @@ def main() -> None:
     parser.add_argument('--axes', type=int, default=1,
                         help='1: Float64 topics; N > 1: the multi-axis node, array topics')
     parser.add_argument('--chunk', type=int, default=1, help='samples per array message')
+    parser.add_argument('--adaptation', action='store_true',
+                        help='online adaptation on, the receiver answering as the actuator '
+                             '(single axis; use with --receiver raw)')
     parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
     parser.add_argument('--out', default='', help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.role == 'receiver':
         _receiver(args.out, args.count, args.duration, args.qos_depth, args.reliability,
-                  args.receiver, args.axes, args.chunk)
+                  args.receiver, args.axes, args.chunk, echo=args.adaptation)
         return
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
     print(format_results(run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
                                        reliability=args.reliability, pin=args.pin,
                                        node_kind=args.node, receiver_kind=args.receiver,
-                                       axes=args.axes, chunk=args.chunk)),
+                                       axes=args.axes, chunk=args.chunk,
+                                       adaptation=args.adaptation)),
           flush=True)
 
 
 def _receiver(out: str, count: int, timeout: float, qos_depth: int,
-              reliability: str, kind: str, axes: int, chunk: int) -> None:
+              reliability: str, kind: str, axes: int, chunk: int,
+              echo: bool = False) -> None:
     import struct
 
     import rclpy
@@ -419,6 +437,15 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
     received = [0]
 
     little, big = struct.Struct('<d').unpack_from, struct.Struct('>d').unpack_from
+    if echo:
+        # The actuator: the benchmark model's displacement for every command, published
+        # raw (4-byte CDR header, the double) on displacement for the adaptation.
+        from mpi_ros import MPIModel
+        from mpi_ros.nodes.qos import loop_qos as _qos
+        actuator = MPIModel.from_params(BENCH_MODEL).stream()
+        pack = struct.Struct('<H2xd').pack
+        readings = node.create_publisher(Float64, 'displacement', _qos(qos_depth, reliability))
+        publish_raw = readings.handle.publish_raw
 
     def on_command(data: bytes) -> None:
         # Serialized messages (CDR: 4-byte encapsulation header, then the double; byte 1
@@ -430,6 +457,8 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
             if k < count:
                 stamps[k] = time.monotonic_ns()
                 values[k] = (little if data[1] == 1 else big)(data, 4)[0]
+                if echo:
+                    publish_raw(pack(0x0100, actuator.step(values[k])))
             received[0] = k + 1
             taken = take(Float64, True)
             if taken is None:
