@@ -35,6 +35,7 @@ from pathlib import Path
 import sys
 import time
 
+from bench_closed_loop_effects import claimed_domain, DDSLoop
 import numpy as np
 
 NOISE = 2e-8
@@ -112,25 +113,8 @@ def offline_run(scenario, seed, rate, duration, adaptive):
     return windows(measured, desired, hi - lo, rate), updates
 
 
-class DDSLoop:
-    """The node processes of one benchmark run, each stopped by its PID."""
-
-    def __init__(self, out, rate):
-        from mpi_ros.harness.driver import LoopDriver
-        self.out, self.rate = out, rate
-        self.processes = []
-        self.driver = LoopDriver('mpi_ros_bench_adaptation')
-
-    def start(self, node, args, log):
-        from mpi_ros.harness.processes import NodeProcess
-        proc = NodeProcess(node, args, self.out / log)
-        self.processes.append(proc)
-        return proc
-
-    def stop(self, *procs):
-        for proc in procs:
-            proc.stop()
-            self.processes.remove(proc)
+class AdaptationLoop(DDSLoop):
+    """The node processes of one benchmark run (the effects benchmark's), stopped by PID."""
 
     def identify(self, scenario, seed):
         """Record the undrifted plant's excitation, identify; return params file and range."""
@@ -180,37 +164,13 @@ class DDSLoop:
         text = (self.out / log).read_text()
         return measured, text.count('adaptation: update ')
 
-    def close(self):
-        for proc in list(self.processes):
-            self.stop(proc)
-        self.driver.destroy_node()
-
 
 @contextlib.contextmanager
 def _domain(given):
-    import fcntl
-    import tempfile
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    if given is not None:
-        os.environ['ROS_DOMAIN_ID'] = str(given)
-        yield given
-        return
-    folder = Path(tempfile.gettempdir()) / 'mpi_ros_test_domains'
-    folder.mkdir(exist_ok=True)
-    for domain in (231, 232):
-        handle = open(folder / f'{domain}.lock', 'w')  # noqa: SIM115 - closed below
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            handle.close()
-            continue
-        try:
-            os.environ['ROS_DOMAIN_ID'] = str(domain)
-            yield domain
-        finally:
-            handle.close()
-        return
-    raise RuntimeError('domains 231-232 are held by other runs; pass --domain-id')
+    with claimed_domain(given) as domain:
+        os.environ['ROS_DOMAIN_ID'] = str(domain)
+        yield domain
 
 
 def plot(rows, path):
@@ -268,7 +228,7 @@ def main():
             stack.enter_context(_domain(args.domain_id))
             import rclpy
             rclpy.init(args=['bench_adaptation'])
-            loop = DDSLoop(out, args.rate)
+            loop = AdaptationLoop(out, args.rate)
             stack.callback(rclpy.try_shutdown)
             stack.callback(loop.close)
         for scenario in args.scenarios:

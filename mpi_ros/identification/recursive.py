@@ -166,7 +166,7 @@ class RecursiveFit:
         plays = np.full(d.hysteresis_thresholds.size, -1.0)
         _accumulate(d.scaled_input(x), d.scaled_output(y), np.ones(x.size, dtype=np.bool_),
                     d.hysteresis_thresholds, d.inverse_superposition_thresholds, plays, 1.0,
-                    gram, sums, count)
+                    gram, sums, count, 1.0, np.zeros(nv), np.zeros(1))
         mean = sums / count[0]
         self._memory = gram / count[0] - np.outer(mean, mean)
 
@@ -201,12 +201,9 @@ class RecursiveFit:
         if not self._started and u.size:
             self._plays[:] = u[0]           # at rest at the first input: wiped out later
             self._started = True
-        plays = self._plays.copy()
         _accumulate(u, v, mask, d.hysteresis_thresholds, d.inverse_superposition_thresholds,
-                    self._plays, self.forgetting, self._gram, self._sums, self._count)
-        _accumulate_means(u, v, mask, d.hysteresis_thresholds,
-                          d.inverse_superposition_thresholds, plays, self.offset_forgetting,
-                          self._fast_sums, self._fast_count)
+                    self._plays, self.forgetting, self._gram, self._sums, self._count,
+                    self.offset_forgetting, self._fast_sums, self._fast_count)
 
     def solve(self, prior: WeightPoint, *, strength: float = PRIOR_STRENGTH,
               memory: float = MEMORY_WEIGHT, hysteresis: bool = False) -> WeightPoint:
@@ -307,8 +304,11 @@ class RecursiveFit:
 @numba.njit(cache=True, nogil=True)
 def _accumulate(u: FloatArray, v: FloatArray, use: npt.NDArray[np.bool_], r_h: FloatArray,
                 r_s: FloatArray, z: FloatArray, forgetting: float, gram: FloatArray,
-                sums: FloatArray, count: FloatArray) -> None:  # pragma: no cover - compiled
-    # G <- lambda G + phi phi^T with phi = [plays (4), -dead zones (17)] per used sample.
+                sums: FloatArray, count: FloatArray, fast_forgetting: float,
+                fast_sums: FloatArray, fast_count: FloatArray) -> None:  # pragma: no cover
+    # G <- lambda G + phi phi^T with phi = [plays (4), -dead zones (17)] per used sample;
+    # the column sums twice: with lambda (the Gram matrix's) and with the operating
+    # point's shorter memory.
     nh = r_h.shape[0]
     ns = r_s.shape[0]
     nv = nh + ns
@@ -326,30 +326,10 @@ def _accumulate(u: FloatArray, v: FloatArray, use: npt.NDArray[np.bool_], r_h: F
         for j in range(ns):
             phi[nh + j] = -dz[j]
         for a in range(nv):
-            sums[a] = forgetting * sums[a] + phi[a]
             pa = phi[a]
+            sums[a] = forgetting * sums[a] + pa
+            fast_sums[a] = fast_forgetting * fast_sums[a] + pa
             for b in range(nv):
                 gram[a, b] = forgetting * gram[a, b] + pa * phi[b]
         count[0] = forgetting * count[0] + 1.0
-
-
-@numba.njit(cache=True, nogil=True)
-def _accumulate_means(u: FloatArray, v: FloatArray, use: npt.NDArray[np.bool_],
-                      r_h: FloatArray, r_s: FloatArray, z: FloatArray, forgetting: float,
-                      sums: FloatArray, count: FloatArray) -> None:  # pragma: no cover
-    # The forgotten column sums of [plays, -dead zones] alone (the constant's memory).
-    nh = r_h.shape[0]
-    ns = r_s.shape[0]
-    dz = np.empty(ns)
-    for k in range(u.shape[0]):
-        x = u[k]
-        for i in range(nh):
-            z[i] = play_clamp(x, r_h[i], z[i])
-        if not use[k]:
-            continue
-        for i in range(nh):
-            sums[i] = forgetting * sums[i] + z[i]
-        dead_zone_step(v[k], r_s, dz)
-        for j in range(ns):
-            sums[nh + j] = forgetting * sums[nh + j] - dz[j]
-        count[0] = forgetting * count[0] + 1.0
+        fast_count[0] = fast_forgetting * fast_count[0] + 1.0
