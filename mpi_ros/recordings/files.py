@@ -14,6 +14,7 @@ import os
 from pathlib import Path
 import re
 import shutil
+import stat
 import tempfile
 from typing import Any, IO, Iterator, Mapping, Sequence
 
@@ -40,7 +41,8 @@ def atomic_write(path: PathLike, *, binary: bool = False) -> Iterator[IO[Any]]:
     that process is gone).
 
     A symbolic link at `path` is written through: its target is replaced and the
-    link stays. A file being replaced keeps its mode (a 600 file stays 600).
+    link stays. A file being replaced keeps its mode (a 600 file stays 600). A
+    device, pipe or socket (``/dev/null``, ``/dev/stdout``) is written in place.
 
     Parameters
     ----------
@@ -95,18 +97,27 @@ def atomic_writes(paths: Sequence[PathLike], *,
         As :func:`atomic_write`, or when two paths name the same file.
 
     """
-    targets = [write_target(Path(path)) for path in paths]
-    for target in targets:
-        _check_target(target, overwrite=True, kind='file')
+    special = [_is_special(Path(path)) for path in paths]
+    targets = [Path(path) if device else write_target(Path(path))
+               for path, device in zip(paths, special)]
+    for target, device in zip(targets, special):
+        if not device:
+            _check_target(target, overwrite=True, kind='file')
     if len({str(t) for t in targets}) != len(targets):
         msg = (f'cannot write {", ".join(map(str, paths))}: two of them are the same file; '
                'give each output its own path')
         raise DataError(msg)
-    temps: list[tuple[Path, IO[Any]]] = []
+    temps: list[tuple[Path | None, IO[Any]]] = []
     try:
-        for target in targets:
-            _remove_stale_temps(target)
+        for target, device in zip(targets, special):
             try:
+                if device:          # /dev/null, /dev/stdout, a pipe: written in place
+                    device_handle: IO[Any] = (
+                        open(target, 'wb') if binary
+                        else open(target, 'w', encoding='utf-8', newline=''))
+                    temps.append((None, device_handle))
+                    continue
+                _remove_stale_temps(target)
                 fd, tmpname = tempfile.mkstemp(prefix=f'.{target.name}.{os.getpid()}.',
                                                suffix='.tmp', dir=target.parent)
             except OSError as err:
@@ -121,13 +132,17 @@ def atomic_writes(paths: Sequence[PathLike], *,
         for (tmp, handle), target in zip(temps, targets):
             try:
                 handle.flush()
-                os.fsync(handle.fileno())
+                if tmp is not None:
+                    os.fsync(handle.fileno())
                 handle.close()
-                os.chmod(tmp, _new_file_mode(target))
+                if tmp is not None:
+                    os.chmod(tmp, _new_file_mode(target))
             except OSError as err:
                 msg = f'cannot write {target}: {err}'
                 raise DataError(msg) from err
         for (tmp, _), target in zip(temps, targets):
+            if tmp is None:
+                continue
             try:
                 os.replace(tmp, target)
             except OSError as err:
@@ -138,8 +153,9 @@ def atomic_writes(paths: Sequence[PathLike], *,
         for tmp, handle in temps:
             with contextlib.suppress(OSError):
                 handle.close()
-            with contextlib.suppress(OSError):
-                tmp.unlink()
+            if tmp is not None:
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
 
 
 def write_target(path: Path) -> Path:
@@ -182,6 +198,16 @@ def same_file(first: PathLike, second: PathLike) -> bool:
     with contextlib.suppress(OSError):
         return os.path.samefile(first, second)
     return os.path.realpath(first) == os.path.realpath(second)
+
+
+def _is_special(path: Path) -> bool:
+    # A device, pipe or socket (e.g. /dev/null, /dev/stdout): renaming over it would
+    # replace the device node, so it is written in place.
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
 
 
 def _remove_stale_temps(target: Path) -> None:

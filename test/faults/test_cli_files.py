@@ -396,6 +396,16 @@ def test_atomic_writes_leave_nothing_after_an_error(tmp_path):
             pass
 
 
+def test_a_device_is_written_in_place_not_replaced(files, tmp_path):
+    before = os.stat(os.devnull)
+    assert main(['simulate', str(files / 'p.yaml'), '--input', str(files / 'x.csv'),
+                 '--output', os.devnull]) == 0
+    after = os.stat(os.devnull)
+    assert (after.st_ino, after.st_mode, after.st_rdev) == (
+        before.st_ino, before.st_mode, before.st_rdev)
+    assert not list(Path(os.devnull).parent.glob('.null.*'))
+
+
 def test_diagnose_on_a_constant_output_says_constant(files, tmp_path):
     t, x, _ = _signals()
     write_csv_columns(tmp_path / 'c.csv', {'time': t, 'current': x,
