@@ -199,14 +199,29 @@ def check_outputs(inputs: Sequence[tuple[str, str | None]],
         for source, data in inputs:
             if not data:
                 continue
-            inside = Path(data).is_dir() and Path(real).is_relative_to(os.path.realpath(data))
-            if same_file(path, data) or inside:
-                where = 'is' if not inside else 'is inside'
-                msg = (f'{option} {path} {where} the input {source} {data}: writing it would '
+            inside = _is_bag_folder(Path(data)) and Path(real).is_relative_to(
+                os.path.realpath(data))
+            if same_file(path, data):
+                msg = (f'{option} {path} is the input {source} {data}: writing it would '
                        'destroy the input; choose another output path (nothing was written)')
+                raise UsageError(msg)
+            if inside:
+                msg = (f'{option} {path} is inside the input bag {source} {data}: writing it '
+                       'would change the input; choose another output path (nothing was '
+                       'written)')
                 raise UsageError(msg)
         for other, earlier in given[:k]:
             if same_file(path, earlier):
                 msg = (f'{option} {path} and {other} {earlier} are the same file; give each '
                        'output its own path (nothing was written)')
                 raise UsageError(msg)
+
+
+def _is_bag_folder(path: Path) -> bool:
+    # A folder the command reads as a bag (another folder is refused by the reader).
+    try:
+        return path.is_dir() and any(
+            entry.name == 'metadata.yaml' or entry.suffix.lower() in ('.db3', '.mcap')
+            for entry in path.iterdir())
+    except OSError:
+        return False

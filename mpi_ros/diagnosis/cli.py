@@ -131,6 +131,10 @@ def _check_outputs(args: argparse.Namespace) -> None:
                ('--json', args.json)]
     if args.report:
         folder = Path(args.report)
+        if folder.exists() and not folder.is_dir():
+            msg = (f'--report {folder} is a file; give a folder for summary.md and the plots '
+                   '(nothing was written)')
+            raise DataError(msg)
         names = ['summary.md', 'loops.png', 'residual.png'] + [
             Path(path).name for _, path in inputs
             if path and Path(path).name.startswith('signature_')

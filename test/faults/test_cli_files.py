@@ -184,7 +184,8 @@ def test_no_command_writes_over_its_own_input(files, tmp_path):
     for name, argv in cases.items():
         done = _run(*argv)
         line = _one_error(done, 'nothing was written')
-        assert 'destroy the input' in line or 'same file' in line, (name, line)
+        assert any(text in line for text in ('destroy the input', 'change the input',
+                                             'same file')), (name, line)
         assert _digests(files) == before, name
     assert sorted(p.name for p in tmp_path.iterdir()) == ['link.csv']
 
@@ -417,3 +418,19 @@ def test_diagnose_on_a_constant_output_says_constant(files, tmp_path):
         line = _one_error(done, 'the displacement is constant')
         assert 'butterfly' not in line
     assert not (tmp_path / 'r.json').exists()
+
+
+@pytest.mark.parametrize('argv, needle', [
+    (['simulate', '{p}', '--input', '/dev/zero', '--output', '{t}/o.csv'], 'is a device'),
+    (['simulate', '/dev/zero', '--input', '{x}', '--output', '{t}/o.csv'], 'larger than'),
+    (['simulate', '{p}', '--input', '{t}', '--output', '{t}/o.csv'], 'is a directory'),
+    (['diagnose', '{d}', *ORDER, '--json', '{t}/r.json', '--report', '{x}'], 'is a file'),
+], ids=['device as CSV', 'device as YAML', 'folder as CSV', 'file as report folder'])
+def test_odd_paths_give_one_error_line_before_any_work(files, tmp_path, capsys, argv, needle):
+    names = {'p': files / 'p.yaml', 'x': files / 'x.csv', 'd': files / 'd.csv', 't': tmp_path}
+    before = _digests(files)
+    status = main([arg.format(**names) for arg in argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 1 and err[-1].startswith('error: ') and needle in err[-1], err
+    assert [line for line in err if 'error' in line.lower()] == err[-1:]
+    assert _digests(files) == before and list(tmp_path.iterdir()) == []
