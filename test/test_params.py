@@ -5,7 +5,8 @@ import math
 
 from mpi_ros import MPIModel
 from mpi_ros.errors import DataError, ModelError
-from mpi_ros.params import read_params_yaml, write_params_yaml
+from mpi_ros.params import closest_key, load_params_document, MAX_DEPTH, \
+    read_params_yaml, unknown_keys, write_params_yaml
 import numpy as np
 import pytest
 
@@ -97,3 +98,32 @@ def test_yaml_errors(tmp_path):
     with pytest.raises(ModelError, match='non-finite'):
         write_params_yaml(tmp_path / 'nan.yaml', {'model.hysteresis.weights': [math.nan]})
     assert not (tmp_path / 'nan.yaml').exists()
+
+
+def test_the_loader_refuses_aliases_and_deep_nesting_in_one_line(tmp_path):
+    anchored = tmp_path / 'alias.yaml'
+    anchored.write_text('a: &x [1.0, 2.0]\nb: *x\n')
+    with pytest.raises(DataError, match=r'alias \*x; YAML aliases are not allowed.* line 2'):
+        load_params_document(anchored)
+    at_limit = tmp_path / 'limit.yaml'
+    at_limit.write_text('[' * MAX_DEPTH + ']' * MAX_DEPTH + '\n')
+    assert load_params_document(at_limit) is not None
+    deeper = tmp_path / 'deep.yaml'
+    deeper.write_text('[' * (MAX_DEPTH + 1) + ']' * (MAX_DEPTH + 1) + '\n')
+    with pytest.raises(DataError, match=f'nested more than {MAX_DEPTH} deep') as raised:
+        load_params_document(deeper)
+    assert '\n' not in str(raised.value)
+    broken = tmp_path / 'broken.yaml'
+    broken.write_text('a:\n\tb: 1\n')
+    with pytest.raises(DataError, match='not valid YAML: .* at line 2, column 1') as raised:
+        load_params_document(broken)
+    assert '\n' not in str(raised.value)
+
+
+def test_unknown_keys_and_the_closest_known_one():
+    known = ['model.output_offset', 'model.input_offset', 'output.min', 'output.max']
+    given = ['model.output_ofset', 'output.min', 'qos_overrides./x.depth', 'zzz']
+    assert unknown_keys(given, known, prefixes=('qos_overrides.',)) == [
+        'model.output_ofset', 'zzz']
+    assert closest_key('model.output_ofset', known) == 'model.output_offset'
+    assert closest_key('zzz', known) is None

@@ -20,6 +20,7 @@ stderr when it is a terminal (:mod:`mpi_ros.progress`; ``--quiet``: none).
 
 import argparse
 from collections.abc import Sequence
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -66,13 +67,15 @@ def _check_output(path: str | None, option: str) -> None:
 def _cmd_identify(args: argparse.Namespace) -> int:
     from .cli_options import data_options, order_option
     from ..order import format_order
-    from ..params import write_params_yaml
+    from .cli_options import check_outputs
+    from ..params import params_yaml_text
     from ..pipeline import fit_recording
     from ..progress import Progress
     from .ranges import range_header
-    from ..recordings import atomic_write, read_recording
+    from ..recordings import atomic_writes, read_recording
     _check_output(args.output, '--output')
     _check_output(args.json, '--json')
+    check_outputs([('DATA', args.data)], [('--output', args.output), ('--json', args.json)])
     options = data_options(args)             # refuse bad options before reading
     order = order_option(args)
     with Progress(quiet=args.quiet) as progress:
@@ -106,26 +109,26 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     for note in result.notes:
         _progress(f'note: {note}')
     summary = dict(result.summary(), source=str(args.data))
-    # Both files appear only when both are complete: each is written to a temporary
-    # file and renamed; a YAML this run created is removed again if the JSON fails.
-    created = not Path(args.output).exists()
+    text = params_yaml_text(
+        result.full_model.to_params(), node_name=args.node_name,
+        header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
+                f'order n={n}, l={l}; nonlinearity error (37) '
+                f'{100 * result.nonlinearity_error:.2f} %\n'
+                f'{record_range}'))
+    # The pair: both are written to temporary files, then the YAML is renamed over
+    # --output and the JSON over --json last. The JSON names the YAML it describes by its
+    # SHA-256, so a crash between the two renames (a new YAML beside an old JSON) shows.
+    summary['params_file'] = {'path': str(args.output),
+                              'sha256': hashlib.sha256(text.encode('utf-8')).hexdigest()}
+    paths = [args.output] + ([args.json] if args.json else [])
     try:
-        write_params_yaml(args.output, result.full_model.to_params(), node_name=args.node_name,
-                          header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
-                                  f'order n={n}, l={l}; nonlinearity error (37) '
-                                  f'{100 * result.nonlinearity_error:.2f} %\n'
-                                  f'{record_range}'))
+        with atomic_writes(paths) as handles:
+            handles[0].write(text)
+            if args.json:
+                json.dump(_finite(summary), handles[1], indent=2, allow_nan=False)
     except OSError as err:
-        msg = f'cannot write --output {args.output}: {err}'
+        msg = f'cannot write {" and ".join(paths)}: {err}'
         raise MPIError(msg) from err
-    if args.json:
-        try:
-            with atomic_write(args.json) as f:
-                json.dump(_finite(summary), f, indent=2, allow_nan=False)
-        except BaseException:
-            if created:
-                Path(args.output).unlink(missing_ok=True)
-            raise
     _progress(f'wrote {args.output}')
     if args.json:
         _progress(f'wrote {args.json}')
@@ -163,22 +166,43 @@ def order_table_lines(table: list[dict[str, Any]]) -> list[str]:
 
 def _model_parameters(path: str, node_name: str | None) -> dict[str, Any]:
     """Read the model keys of `node_name` (None: the file's compensator or only entry)."""
-    import yaml
-    from ..params import read_params_yaml
-    if node_name is None:
-        return read_params_yaml(path)
-    parameters = read_params_yaml(path, node_name=node_name)
-    # read_params_yaml falls back to a file's only entry whatever its name; an explicit
-    # --node-name must name an entry that is there.
-    document = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
-    entries = [str(key) for key, value in document.items()
-               if isinstance(value, dict) and 'ros__parameters' in value]
-    if node_name.lstrip('/') not in {entry.lstrip('/') for entry in entries}:
-        msg = (f'--node-name {node_name}: parameter file {path} has no entry for node '
-               f'{node_name!r}; entries found: {", ".join(entries)}; pass --node-name with '
-               'one of them, or leave it out')
-        raise MPIError(msg)
+    from ..params import load_params_document, read_params_yaml
+    parameters = read_params_yaml(path) if node_name is None else read_params_yaml(
+        path, node_name=node_name)
+    if node_name is not None:
+        # read_params_yaml falls back to a file's only entry whatever its name; an explicit
+        # --node-name must name an entry that is there.
+        document = load_params_document(path)
+        entries = [str(key) for key, value in document.items()
+                   if isinstance(value, dict) and 'ros__parameters' in value]
+        if node_name.lstrip('/') not in {entry.lstrip('/') for entry in entries}:
+            msg = (f'--node-name {node_name}: parameter file {path} has no entry for node '
+                   f'{node_name!r}; entries found: {", ".join(entries)}; pass --node-name with '
+                   'one of them, or leave it out')
+            raise MPIError(msg)
+    _refuse_unknown_keys(path, parameters)
     return parameters
+
+
+def _refuse_unknown_keys(path: str, parameters: dict[str, Any]) -> None:
+    # An error, not a warning: simulate and compensate read only the compensator's keys, so
+    # a key they do not know is a typo (model.output_ofset) or a file for another node, and
+    # either would silently give another result than the user meant.
+    from ..compensation.parameters import compensator_parameters, RCLPY_PARAMETERS
+    from ..params import closest_key, unknown_keys
+    known = [spec.name for spec in compensator_parameters()] + list(RCLPY_PARAMETERS)
+    unknown = unknown_keys(parameters, known, prefixes=('qos_overrides.',))
+    if not unknown:
+        return
+    hints = []
+    for name in unknown[:5]:
+        near = closest_key(name, known)
+        hints.append(f'{name} (did you mean {near}?)' if near else name)
+    more = f' and {len(unknown) - 5} more' if len(unknown) > 5 else ''
+    msg = (f'parameter file {path} has parameters the compensator does not know: '
+           f'{", ".join(hints)}{more}; correct or remove them (the known keys are the '
+           "compensator node's, as `ros2 param describe` lists them)")
+    raise MPIError(msg)
 
 
 def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool) -> tuple[
@@ -210,10 +234,13 @@ def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool)
 
 
 def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
+    from .cli_options import check_outputs
+    check_outputs([('PARAMS', args.params), ('--input', args.input)],
+                  [('--output', args.output)])
+    parameters = _model_parameters(args.params, args.node_name)
     from ..extensions import extended_model_from_params
     from .ranges import identified_range, outside, recorded_range
     from ..recordings import read_csv_table, write_csv_columns
-    parameters = _model_parameters(args.params, args.node_name)
     described = extended_model_from_params(parameters)
     header, table = read_csv_table(args.input,
                                    nonfinite_hint='remove those rows or fill in the values')
@@ -407,8 +434,12 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser('identify', help='fit a model from a bag or CSV, write params YAML')
     p.add_argument('data', help='rosbag2 directory (sqlite3/mcap) or CSV file')
     add_order_option(p, default='14,7')
-    p.add_argument('-o', '--output', required=True, help='parameter YAML to write')
-    p.add_argument('--json', help='fit statistics to write (order, errors, samples)')
+    p.add_argument('-o', '--output', required=True,
+                   help='parameter YAML to write (written first; see --json)')
+    p.add_argument('--json', help='fit statistics to write (order, errors, samples), written '
+                                  'last, after --output: its params_file.sha256 is the '
+                                  'SHA-256 of the YAML it belongs to (a crash between the '
+                                  'two leaves a YAML whose digest differs)')
     p.add_argument('--node-name', default='compensator',
                    help='node the YAML is keyed by (default: compensator)')
     p.add_argument('--anchor', choices=('operating_point', 'origin'), default='operating_point',

@@ -9,11 +9,14 @@ Command-line pieces shared by ``mpi-ros`` and ``mpi-ros diagnose``.
   :class:`~mpi_ros.recordings.DataOptions`.
 * :func:`add_order_option` / :func:`order_option`: ``--order auto|N,L|N L``,
   parsed by :func:`mpi_ros.order.parse_order`.
+* :func:`check_outputs`: no output replaces an input (or another output), before any work.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+from pathlib import Path
 import sys
 from typing import Any, Mapping, NoReturn, Sequence
 
@@ -22,7 +25,7 @@ from ..order import Order, parse_order
 from ..recordings.options import DATA_OPTIONS, DataOptions, JOINT_FIELDS
 
 __all__ = ['ArgumentParser', 'UsageError', 'add_data_options', 'data_options',
-           'add_order_option', 'order_option']
+           'add_order_option', 'order_option', 'check_outputs']
 
 
 class UsageError(MPIError, ValueError):
@@ -165,3 +168,60 @@ def order_option(args: argparse.Namespace) -> Order:
 
     """
     return parse_order(args.order, option='--order')
+
+
+def check_outputs(inputs: Sequence[tuple[str, str | None]],
+                  outputs: Sequence[tuple[str, str | None]]) -> None:
+    """
+    Refuse, before any work, an output that would replace an input or another output.
+
+    Paths are compared as files (``os.path.samefile``: through symbolic and hard links)
+    and as resolved paths (for outputs not written yet); an output inside an input
+    directory (a bag) counts as replacing it.
+
+    Parameters
+    ----------
+    inputs : sequence of (option, path or None)
+        The files and bag directories the command reads, e.g. ``('DATA', 'd.csv')``.
+    outputs : sequence of (option, path or None)
+        The files the command writes, e.g. ``('--output', 'p.yaml')``.
+
+    Raises
+    ------
+    UsageError
+        Naming both options and what to do; nothing has been written.
+
+    """
+    from ..recordings.files import same_file
+    given = [(option, path) for option, path in outputs if path]
+    for k, (option, path) in enumerate(given):
+        real = os.path.realpath(path)
+        for source, data in inputs:
+            if not data:
+                continue
+            inside = _is_bag_folder(Path(data)) and Path(real).is_relative_to(
+                os.path.realpath(data))
+            if same_file(path, data):
+                msg = (f'{option} {path} is the input {source} {data}: writing it would '
+                       'destroy the input; choose another output path (nothing was written)')
+                raise UsageError(msg)
+            if inside:
+                msg = (f'{option} {path} is inside the input bag {source} {data}: writing it '
+                       'would change the input; choose another output path (nothing was '
+                       'written)')
+                raise UsageError(msg)
+        for other, earlier in given[:k]:
+            if same_file(path, earlier):
+                msg = (f'{option} {path} and {other} {earlier} are the same file; give each '
+                       'output its own path (nothing was written)')
+                raise UsageError(msg)
+
+
+def _is_bag_folder(path: Path) -> bool:
+    # A folder the command reads as a bag (another folder is refused by the reader).
+    try:
+        return path.is_dir() and any(
+            entry.name == 'metadata.yaml' or entry.suffix.lower() in ('.db3', '.mcap')
+            for entry in path.iterdir())
+    except OSError:
+        return False

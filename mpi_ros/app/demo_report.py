@@ -137,7 +137,7 @@ def write_report(out: Path, data: Any, models: dict[tuple[int, int], Any], t: np
     fig.tight_layout()
     files = [out / 'loops.png', out / 'tracking_error.png', out / 'report.md',
              out / 'results.json', out / 'tracking.npz']
-    fig.savefig(files[0], dpi=110)
+    _save_figure(fig, files[0])
     plt.close(fig)
     _tracking_figure(files[1], t, desired, traces, control,
                      'Tracking error while following the same desired trajectory: the closer '
@@ -182,8 +182,8 @@ def write_report(out: Path, data: Any, models: dict[tuple[int, int], Any], t: np
               '*Top*: measured minus desired displacement over time for every controller. '
               '*Bottom*: the MPI compensators only, enlarged. The largest excursion of each '
               'trace, over the largest desired displacement, is its control error (38).', '']
-    files[2].write_text('\n'.join(lines), encoding='utf-8')
-    files[3].write_text(json.dumps(results, indent=2), encoding='utf-8')
+    _write_text(files[2], '\n'.join(lines))
+    _write_text(files[3], json.dumps(results, indent=2))
     _save_traces(files[4], t, desired, traces)
     return files
 
@@ -258,8 +258,8 @@ def write_effect_report(out: Path, t: np.ndarray, desired: np.ndarray,
               'Measured minus desired displacement over time for both compensators; the '
               'extended one should stay closer to 0.', '']
     _, report, summary, arrays_file = files
-    report.write_text('\n'.join(lines), encoding='utf-8')
-    summary.write_text(json.dumps(results, indent=2), encoding='utf-8')
+    _write_text(report, '\n'.join(lines))
+    _write_text(summary, json.dumps(results, indent=2))
     _save_traces(arrays_file, t, desired, traces)
     return files
 
@@ -269,7 +269,9 @@ def _save_traces(path: Path, t: np.ndarray, desired: np.ndarray,
     # time [s], desired [m] and measured_<k> [m] per controller, k in the report's order.
     arrays: dict[str, Any] = {'time': t, 'desired': desired,
                               **{f'measured_{k}': v for k, v in enumerate(traces.values())}}
-    np.savez(path, **arrays)
+    from ..recordings import atomic_write
+    with atomic_write(path, binary=True) as handle:
+        np.savez(handle, **arrays)
 
 
 def _tracking_figure(path: Path, t: np.ndarray, desired: np.ndarray,
@@ -295,5 +297,18 @@ def _tracking_figure(path: Path, t: np.ndarray, desired: np.ndarray,
             ax.set_title('The MPI compensators only (enlarged)', fontsize=10.5)
     axes[-1, 0].set_xlabel('time [s]')
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save_figure(fig, path)
     plt.close(fig)
+
+
+def _write_text(path: Path, text: str) -> None:
+    # Every output file atomically: the old file or the new one after a crash.
+    from ..recordings import atomic_write
+    with atomic_write(path) as handle:
+        handle.write(text)
+
+
+def _save_figure(fig: Any, path: Path) -> None:
+    from ..recordings import atomic_write
+    with atomic_write(path, binary=True) as handle:
+        fig.savefig(handle, format='png', dpi=110)

@@ -29,7 +29,8 @@ from .report import data_units, INPUT_UNITS, OUTPUT_UNITS, report_facts, summary
     write_extended_params, write_json, write_report
 from .signatures import diagnostic_excitation
 from ..app.cli_options import (
-    add_data_options, add_order_option, ArgumentParser, data_options, order_option)
+    add_data_options, add_order_option, ArgumentParser, check_outputs, data_options,
+    order_option)
 from ..errors import DataError, MPIError
 from ..progress import Progress
 from ..recordings import DataOptions, join_recordings, read_recording, Recording, \
@@ -54,8 +55,10 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p.add_argument('--split', type=float, default=0.6,
                    help='training fraction when no --validate is given (default 0.6)')
     add_order_option(p, default='auto')
-    p.add_argument('--json', help='report.json to write (required with DATA)')
-    p.add_argument('--report', help='directory for summary.md and plots (required with DATA)')
+    p.add_argument('--json', help='report.json to write (required with DATA); written last, '
+                                  'after the --report folder')
+    p.add_argument('--report', help='directory for summary.md and plots (required with DATA); '
+                                    'each file is replaced atomically, summary.md last')
     p.add_argument('--params-out', help='parameter YAML of the extended model')
     p.add_argument('--excitation', metavar='OUT.csv',
                    help='write the diagnostic validation excitation (time [s], current [A])')
@@ -121,6 +124,25 @@ def _signal_names(path: str, options: DataOptions) -> tuple[str, str]:
     return name_in, name_out
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    # No output may replace an input (or another output): the report folder's files too.
+    inputs = [('DATA', path) for path in args.data] + [('--validate', args.validate)]
+    outputs = [('--excitation', args.excitation), ('--params-out', args.params_out),
+               ('--json', args.json)]
+    if args.report:
+        folder = Path(args.report)
+        if folder.exists() and not folder.is_dir():
+            msg = (f'--report {folder} is a file; give a folder for summary.md and the plots '
+                   '(nothing was written)')
+            raise DataError(msg)
+        names = ['summary.md', 'loops.png', 'residual.png'] + [
+            Path(path).name for _, path in inputs
+            if path and Path(path).name.startswith('signature_')
+            and Path(path).suffix == '.png']
+        outputs += [('--report', str(folder / name)) for name in names]
+    check_outputs(inputs, outputs)
+
+
 def _units(args: argparse.Namespace) -> dict[str, str]:
     options = data_options(args)
     try:
@@ -173,6 +195,7 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
         if args.data and (args.json is None or args.report is None):
             parser.error('--json and --report are required with DATA')
         data_options(args)                   # refuse bad data options before any work
+        _check_outputs(args)
         if args.excitation:
             _write_excitation(args)
             say(f'wrote {args.excitation}')
@@ -192,8 +215,9 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
                           progress=say)
         report.data['units'] = _units(args)
         facts = report_facts(report)       # the JSON, the summary and summary.md: one dict
-        write_json(facts, args.json)
+        # The folder first, the JSON last: a JSON of this run means a complete folder.
         files = write_report(report, args.report, facts=facts)
+        write_json(facts, args.json)
         for line in summary_lines(facts):
             progress.say(line)
         say(f'wrote {args.json} and {len(files)} file(s) in {args.report}')

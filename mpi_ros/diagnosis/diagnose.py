@@ -251,6 +251,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     data['output_sign'] = sign
     series: dict[str, Any] = {'time': tv, 'current': xv, 'displacement': yv,
                               'start': start}
+    _refuse_constant_output(yt, yv, validation is not None)
     check = _class_check(xt, sign * yt, xv[start:], sign * yv[start:], validation is not None)
     if not check.inside:
         say(f'outside the invertible class: {check.reason}')
@@ -675,6 +676,19 @@ def _zero_shift(sim: FloatArray, measured: FloatArray, reestimate: bool) -> floa
 def _linear_fit(x: FloatArray, y: FloatArray) -> FloatArray:
     # Coefficients of the best straight line y = a x + b (np.polyval order).
     return np.asarray(np.polyfit(x, y, 1), dtype=np.float64)
+
+
+def _refuse_constant_output(yt: FloatArray, yv: FloatArray, separate: bool) -> None:
+    # A constant output (to rounding) has no loops: say so before the class check, whose
+    # branch ratio would read rounding noise as a butterfly, and before the baseline's
+    # error relative to a range of zero.
+    for name, y in (('training', yt), ('validation', yv)):
+        if y.size and np.ptp(y) <= 1e-9 * np.max(np.abs(y)):
+            where = f' in the {name} record' if separate else (
+                '' if name == 'training' else ' in the validation part')
+            msg = (f'the displacement is constant{where}: check the output topic or column'
+                   ' and that the actuator moved')
+            raise DataError(msg)
 
 
 def _class_check(xt: FloatArray, yt: FloatArray, xv: FloatArray, yv: FloatArray,

@@ -31,6 +31,7 @@ from .diagnose import DiagnosisReport
 from ..extensions import EFFECTS
 from ..extensions._common import AxisUnits
 from ..params import write_params_yaml
+from ..recordings.files import atomic_write
 
 __all__ = ['report_facts', 'write_report', 'write_json', 'write_extended_params', 'summary_lines',
            'markdown', 'data_units', 'significant', 'z_wording', 'INPUT_UNITS',
@@ -59,9 +60,17 @@ _PREFIXES = ((1.0, 'm'), (1e-3, 'mm'), (1e-6, 'µm'), (1e-9, 'nm'), (1e-12, 'pm'
 
 def write_json(report: DiagnosisReport | Mapping[str, Any],
                path: str | os.PathLike[str]) -> None:
-    """Write the report's dictionary (``report.to_json()``) to ``path`` (UTF-8, indented)."""
+    """
+    Write the report's dictionary (``report.to_json()``) to ``path`` (UTF-8, indented).
+
+    Written atomically (:func:`mpi_ros.recordings.atomic_write`): ``path`` holds the old
+    file or the new one, never a part.
+
+    """
     facts = report_facts(report) if isinstance(report, DiagnosisReport) else report
-    Path(path).write_text(json.dumps(facts, indent=2) + '\n', encoding='utf-8')
+    text = json.dumps(facts, indent=2) + '\n'
+    with atomic_write(path) as handle:
+        handle.write(text)
 
 
 def report_facts(report: DiagnosisReport) -> dict[str, Any]:
@@ -302,6 +311,10 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
     """
     Write ``summary.md`` and the PNG plots into ``directory`` (created if missing).
 
+    Each file is written atomically (:func:`mpi_ros.recordings.atomic_write`), the plots
+    first and ``summary.md``, which lists them, last. A crash leaves every file old or
+    new; ``mpi-ros diagnose`` writes its ``--json`` after this folder.
+
     Parameters
     ----------
     report : DiagnosisReport
@@ -370,15 +383,19 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
             if plot is not None:
                 written.append(plot)
     summary = out / 'summary.md'
-    summary.write_text(markdown(facts, [p.name for p in written]), encoding='utf-8')
+    with atomic_write(summary) as handle:
+        handle.write(markdown(facts, [p.name for p in written]))
     written.append(summary)
     return written
 
 
 def _save(fig: Any, path: Path, plt: Any) -> Path:
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        with atomic_write(path, binary=True) as handle:
+            fig.savefig(handle, format='png', dpi=110)
+    finally:
+        plt.close(fig)
     return path
 
 

@@ -27,7 +27,7 @@ from .bag_reader import MESSAGE_READERS, MessageReader, read_bag_signals, Select
     SelectionError
 from .bag_writer import BagRecorder, write_bag_signals
 from .csv_files import read_csv_signals, read_csv_table, write_csv_columns
-from .files import atomic_write
+from .files import atomic_write, atomic_writes, same_file, write_target
 from .options import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS
 from .reading import read_recording, read_signals
 from .recording import join_recordings, MIN_SAMPLES, Recording
@@ -53,4 +53,7 @@ __all__ = [
     'read_csv_table',
     'write_csv_columns',
     'atomic_write',
+    'atomic_writes',
+    'same_file',
+    'write_target',
 ]

@@ -247,7 +247,15 @@ def read_bag(path: PathLike, options: DataOptions, *, time_source: str = 'receiv
         raise DataError(msg)
     selections = _selections(options)
     storage_path, notes = _locate_bag(bag)
-    raw = _read_bag_topics(bag, storage_path, selections, options)
+    with contextlib.ExitStack() as stack:
+        if storage_path.suffix.lower() == '.mcap' and storage_path.is_file():
+            # A recorder that was killed leaves an mcap without its summary and footer
+            # (and no metadata.yaml): read the chunks it finished.
+            repaired = _finish_unfinished_mcap(bag, storage_path, stack)
+            if repaired is not None:
+                storage_path, note = repaired
+                notes.append(note)
+        raw = _read_bag_topics(bag, storage_path, selections, options)
     units = {role: 'message' if np.all(raw[role][2] == 1) else 'sample' for role in raw}
     (t_in, x_in), (t_out, s_out) = (
         _clean_topic(bag, selection, *raw[role], options=options, notes=notes)
@@ -331,6 +339,98 @@ def _corrupt(bag: Path, err: BaseException) -> DataError:
     return DataError(msg)
 
 
+#: The magic that starts and ends an mcap file.
+_MCAP_MAGIC = b'\x89MCAP0\r\n'
+
+
+def _finish_unfinished_mcap(bag: Path, path: Path,
+                            stack: contextlib.ExitStack) -> tuple[Path, str] | None:
+    """
+    Return a finished copy of an mcap a killed recorder left, and a note; None if finished.
+
+    The copy ends after the last complete record (the chunks the recorder finished) with a
+    data-end record and a footer without a summary, which the reader scans; each chunk's
+    CRC is still checked as it is read.
+    """
+    import struct
+    import tempfile
+    try:
+        data = path.read_bytes()
+    except OSError as err:
+        raise _corrupt(bag, err) from err
+    if not data.startswith(_MCAP_MAGIC) or data.endswith(_MCAP_MAGIC):
+        return None
+    end = position = len(_MCAP_MAGIC)
+    chunks = 0
+    while position + 9 <= len(data):
+        op, length = data[position], struct.unpack_from('<Q', data, position + 1)[0]
+        if op == 0 or op > 0x10 or position + 9 + length > len(data):
+            break                                   # zeros or a record cut short
+        if op == 0x0F:                              # data end: the summary follows
+            break
+        position += 9 + length
+        end = position
+        chunks += op == 0x06
+    footer = (b'\x0f' + struct.pack('<QI', 4, 0) + b'\x02' + struct.pack('<QQQI', 20, 0, 0, 0)
+              + _MCAP_MAGIC)
+    folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix='mpi_ros_mcap_')))
+    copy = folder / path.name
+    copy.write_bytes(data[:end] + footer)
+    note = (f'{path.name} was not finished (the recorder was killed or is still running): '
+            f'read its {chunks} complete chunk(s), {len(data) - end} byte(s) after them '
+            'dropped')
+    return copy, note
+
+
+def _check_sqlite_file(bag: Path, path: Path) -> None:
+    """
+    Refuse a sqlite3 storage file that is cut short or fails SQLite's ``quick_check``.
+
+    SQLite reads the missing end of a truncated file as zeros, so a bag cut by one byte
+    reads without an error and with a changed sample; its size is then no longer a whole
+    number of pages, or smaller than the page count its header records.
+    """
+    import sqlite3
+    try:
+        size = path.stat().st_size
+        with path.open('rb') as f:
+            header = f.read(100)
+    except OSError as err:
+        raise _corrupt(bag, err) from err
+    if len(header) < 100 or not header.startswith(b'SQLite format 3\x00'):
+        raise _corrupt(bag, ValueError(f'{path.name} is not an SQLite database'))
+    page_size = int.from_bytes(header[16:18], 'big')
+    page_size = 65536 if page_size == 1 else page_size
+    pages = int.from_bytes(header[28:32], 'big')
+    header_valid = header[24:28] == header[92:96]       # the page count is kept up to date
+    if page_size < 512 or size % page_size or (header_valid and pages * page_size > size):
+        problem = (f'{path.name} holds {size} bytes, not the whole {page_size}-byte pages its '
+                   f'header records ({pages} pages)')
+        raise _corrupt(bag, ValueError(problem))
+    try:
+        connection = sqlite3.connect(f'{path.resolve().as_uri()}?mode=ro', uri=True)
+        try:
+            rows = connection.execute('PRAGMA quick_check').fetchmany(3)
+        finally:
+            connection.close()
+    except sqlite3.Error as err:
+        raise _corrupt(bag, err) from err
+    if rows != [('ok',)]:
+        found = '; '.join(str(row[0]) for row in rows)
+        raise _corrupt(bag, ValueError(f'{path.name} fails the SQLite quick_check: {found}'))
+
+
+def _check_counts(bag: Path, connections: list[Any], counts: dict[str, int]) -> None:
+    """Refuse a bag with fewer messages on a topic than its metadata.yaml records."""
+    for topic, count in counts.items():
+        recorded = sum(int(getattr(conn, 'msgcount', 0) or 0) for conn in connections
+                       if conn.topic == topic)
+        if count < recorded:
+            problem = (f'topic {topic} has {count} messages, its metadata.yaml records '
+                       f'{recorded}')
+            raise _corrupt(bag, ValueError(problem))
+
+
 def _sort_dedupe(
     stamps: npt.NDArray[np.int64], values: FloatArray,
 ) -> tuple[npt.NDArray[np.int64], FloatArray, int, int]:
@@ -390,6 +490,10 @@ def _read_bag_topics(
     except Exception as err:
         raise _corrupt(bag, err) from err
     try:
+        files = [storage_path] if storage_path.is_file() else sorted(storage_path.iterdir())
+        for path in files:
+            if path.suffix.lower() == '.db3':
+                _check_sqlite_file(bag, path)
         connections = list(reader.connections)
         present = {conn.topic: conn.msgtype for conn in connections}
         readers = {}
@@ -444,6 +548,7 @@ def _read_bag_topics(
             raise
         except Exception as err:
             raise _corrupt(bag, err) from err
+        _check_counts(bag, wanted, counts)
     finally:
         with contextlib.suppress(Exception):
             reader.close()

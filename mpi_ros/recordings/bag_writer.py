@@ -10,9 +10,12 @@ when closed; :func:`write_bag_signals` writes whole arrays so that
 from __future__ import annotations
 
 import contextlib
+import math
+import os
 from pathlib import Path
 import shutil
 import threading
+import time
 from typing import Any
 
 import numpy as np
@@ -20,7 +23,8 @@ import numpy.typing as npt
 from rosbags.rosbag2 import StoragePlugin, Writer
 
 from .bag_reader import Float64Reader, typestore
-from .files import _check_target, _equal_length_arrays, _install, _make_tmpdir
+from .files import _check_target, _equal_length_arrays, _install, _make_tmpdir, \
+    write_target
 from .options import show_value
 from .recording import FloatArray, PathLike
 from ..errors import DataError
@@ -56,14 +60,28 @@ class BagRecorder:
     overwrite : bool, optional
         Replace an existing bag at `path` on :meth:`close`; by default an
         existing `path` is an error.
+    flush_period : float, optional
+        Longest time [s] between two commits of what was written (sqlite3: a
+        transaction commit; mcap: the pending chunk is finished, flushed and
+        synced), checked at each write. A recorder killed mid-recording (``kill
+        -9``, a power cut after the sync) loses at most the last `flush_period`
+        seconds; 0 commits at every write (slow).
 
     Raises
     ------
     DataError
-        If `storage` is unknown or the topics are empty or equal.
+        If `storage` is unknown, the topics are empty or equal, or
+        `flush_period` is negative or not finite.
 
     Notes
     -----
+    A recorder that dies before :meth:`close` leaves the temporary bag,
+    ``.<name>.<random>.tmp/<name>/`` beside `path`, without its
+    ``metadata.yaml`` (written by :meth:`close`): ``mpi-ros identify`` and
+    :func:`~mpi_ros.recordings.read_bag_signals` read that folder directly
+    (an unfinished mcap up to its last finished chunk, with a note); move it
+    where it belongs, or run ``ros2 bag reindex`` on it.
+
     Times are given in seconds and stored as integer nanoseconds, rounded. A
     float64 time since the Unix epoch resolves about 0.24 µs, which is far
     below the sample period of any actuator loop.
@@ -88,8 +106,9 @@ class BagRecorder:
         output_topic: str = '/displacement',
         storage: str = 'sqlite3',
         overwrite: bool = False,
+        flush_period: float = 1.0,
     ) -> None:
-        self._path = Path(path)
+        self._path = write_target(Path(path))
         self._plugin = _storage_plugin(storage)
         _check_topics(input_topic, output_topic)
         self._topics = (input_topic, output_topic)
@@ -100,6 +119,15 @@ class BagRecorder:
         self._connections: dict[str, Any] = {}
         self._counts = {input_topic: 0, output_topic: 0}
         self._finished = False
+        try:
+            self._flush_period = float(flush_period)
+        except (TypeError, ValueError):
+            self._flush_period = math.nan
+        if not (math.isfinite(self._flush_period) and self._flush_period >= 0.0):
+            msg = (f'flush_period must be a finite time >= 0 s; found '
+                   f'{show_value(flush_period)}')
+            raise DataError(msg)
+        self._flushed = time.monotonic()
 
     @property
     def path(self) -> Path:
@@ -259,6 +287,10 @@ class BagRecorder:
                 raise DataError(msg)
             self._writer.write(self._connections[topic], stamp, data)
             self._counts[topic] += 1
+            now = time.monotonic()
+            if now - self._flushed >= self._flush_period:
+                self._flushed = now
+                _commit(self._writer)
 
 
 def write_bag_signals(
@@ -323,6 +355,22 @@ def write_bag_signals(
                                arrays['displacement'].tolist()):
             recorder._write(input_topic, stamp, x)
             recorder._write(output_topic, stamp + 1, s)
+
+
+def _commit(writer: Writer) -> None:
+    """Make what `writer` holds durable: commit sqlite3, finish and sync mcap's chunk."""
+    storage = getattr(writer, 'storage', None)
+    connection = getattr(storage, 'conn', None)
+    if connection is not None:                       # rosbags' Sqlite3Writer
+        connection.commit()
+        return
+    chunk, bio = getattr(storage, 'chunk', None), getattr(storage, 'bio', None)
+    if storage is None or chunk is None or bio is None:   # pragma: no cover - other rosbags
+        return
+    if getattr(chunk, 'msgs', None):                 # rosbags' McapWriter: finish the chunk
+        storage.close_chunk()
+    bio.flush()
+    os.fsync(bio.fileno())
 
 
 def _storage_plugin(storage: str) -> StoragePlugin:

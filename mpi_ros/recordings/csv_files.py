@@ -329,10 +329,18 @@ def _read_csv_rows(source: Path, *, comment: str | None) -> _Table:
     if source.is_dir():
         msg = f'{source} is a directory, not a CSV file; pass a CSV file'
         raise DataError(msg)
+    if source.is_char_device() or source.is_block_device():
+        msg = (f'{source} is a device, not a CSV file (it may never end); pass a CSV file, '
+               'or a pipe')
+        raise DataError(msg)
     try:
         raw = source.read_bytes()
     except OSError as err:
         msg = f'cannot read CSV file {source}: {err}'
+        raise DataError(msg) from err
+    except MemoryError as err:
+        msg = (f'CSV file {source} does not fit in memory; cut it into shorter records (or '
+               'record a bag) and pass those')
         raise DataError(msg) from err
     try:
         text = raw.decode('utf-8-sig')
