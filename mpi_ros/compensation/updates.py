@@ -670,8 +670,9 @@ def usable(model: Any, inverse: MPIModel, limits: tuple[float, float]) -> None:
     Gamma and Gamma^-1 run over the current range ``limits``
     (:func:`mpi_ros.operators.usability.check_usable`), then a trial
     :class:`~mpi_ros.compensation.Compensator` of the model (the one the node would
-    install) commands a sweep of its displacement range: every command must be finite
-    and inside the limits.  Any exception on the way is a refusal.
+    install) commands a sweep of its displacement range from the model's initial states:
+    every inverse must be finite (none held) and every command inside the limits.  Any
+    exception on the way is a refusal.
 
     Parameters
     ----------
@@ -704,6 +705,13 @@ def usable(model: Any, inverse: MPIModel, limits: tuple[float, float]) -> None:
         msg = (f'model.* (the whole model): a compensator of it with output limits {low:g} to '
                f'{high:g} A failed ({type(err).__name__}: {err}); re-run identify')
         raise ModelError(msg) from err
+    held = trial.counters['nonfinite_command']
+    if held:
+        msg = (f'model.* (the whole model): its inverse is not finite for {held} of '
+               f'{commands.size} desired displacements over its range (the compensator would '
+               'hold its last command); check model.hysteresis.initial_states and the '
+               'offsets, or re-run identify')
+        raise ModelError(msg)
     bad = np.flatnonzero(~((commands >= low) & (commands <= high)))
     if bad.size:
         msg = (f'model.* (the whole model): a compensator of it commands {commands[bad[0]]!r} A '

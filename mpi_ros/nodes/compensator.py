@@ -311,10 +311,12 @@ class CompensatorNode(CompensatorNodeBase):
 
     def _status_values(self) -> Dict[str, Any]:
         compensator = self._compensator
+        malformed = {'last_malformed': self._inputs.last_malformed}
         if compensator is None:
-            return {}
-        return single_axis_values(
-            self._model_kind, compensator.slow_state if compensator.has_effect else None)
+            return malformed
+        return {**single_axis_values(
+            self._model_kind, compensator.slow_state if compensator.has_effect else None),
+            **malformed}
 
 
 def main(args: Optional[List[str]] = None) -> int:

@@ -9,7 +9,8 @@ an offset of 1e308 turns every command into NaN.  :func:`check_usable` proves th
 works where it will be used, in a sandbox (any exception becomes a refusal):
 
 1. **Scale** (relative to the thresholds and the current range; each refusal names the
-   key): no subnormal entry in any array or offset; the input offset ``x0`` resolves the
+   key): no subnormal weight or offset; H's and S's output at the initial states are
+   finite; the input offset ``x0`` resolves the
    current range (its rounding step at most :data:`RESOLUTION` of the span), the output
    offset ``y0`` resolves the displacement span S gives over it; H's output over the
    range spans at least :data:`RESOLUTION` of the extent of S's thresholds (else the
@@ -17,9 +18,10 @@ works where it will be used, in a sandbox (any exception becomes a refusal):
 2. **Inverse**: H^-1 by (12)-(14) and S^-1 by (22)-(25) are built, with finite
    coefficients.
 3. **Round trip**: Gamma runs over a sweep of the range (a major loop and nested minor
-   loops) from the model's initial states; every displacement is finite, and Gamma^-1
-   on them gives the currents back within :data:`ROUND_TRIP` of the span (so inside the
-   range).
+   loops) from the virgin state (the initial states only decide where the first command
+   starts: a compensator derives its inverse state from the forward one at every step,
+   (14)); every displacement is finite, and Gamma^-1 on them gives the currents back
+   within :data:`ROUND_TRIP` of the span (so inside the range).
 
 The range is the one the model will be used on (a node's ``output.min`` to ``output.max``);
 without one, :func:`model_range` derives it from the model.
@@ -160,10 +162,8 @@ def check_usable(hysteresis: PIHysteresisOperator, superposition: PISuperpositio
         for any exception the operators raise on it (the sandbox).
 
     """
-    arrays = {_R_H: hysteresis.thresholds, _W_H: hysteresis.weights,
-              _Z_H0: hysteresis.initial_states, _R_S: superposition.thresholds,
-              _W_S: superposition.weights}
-    _no_subnormal(arrays, {_X0: input_offset, _Y0: output_offset})
+    _no_subnormal({_W_H: hysteresis.weights, _W_S: superposition.weights},
+                  {_X0: input_offset, _Y0: output_offset})
     if current_range is None:
         low, high = model_range(hysteresis, superposition, input_offset)
     else:
@@ -174,9 +174,17 @@ def check_usable(hysteresis: PIHysteresisOperator, superposition: PISuperpositio
         msg = f'the current range {low!r} to {high!r} A must be finite and ascending'
         raise ModelError(msg)
     _resolves(_X0, input_offset, span, f'the current range {low:g} to {high:g} A', 'A')
+    with np.errstate(all='ignore'):
+        start = np.array([np.dot(hysteresis.weights, hysteresis.initial_states)])
+        _finite(start, _Z_H0, "H's output at the initial states")
+        _finite(superposition.apply(start), _Z_H0, "S of H's output at the initial states")
+    # The round trip starts from the virgin state (every play at 0, which (14) maps to
+    # 0): the initial states only decide where the first command starts, and a
+    # compensator derives its inverse state from the forward one at every step (14).
+    virgin = PIHysteresisOperator(hysteresis.thresholds, hysteresis.weights)
     x = usability_sweep(low, high)
     with np.errstate(all='ignore'):
-        v = _sandboxed(lambda: hysteresis.apply(x - input_offset)[0], _W_H,
+        v = _sandboxed(lambda: virgin.apply(x - input_offset)[0], _W_H,
                        'H (5) over the range')
         _finite(v, _W_H, f'H[x - x0] for currents {low:g} to {high:g} A')
         s = _sandboxed(lambda: superposition.apply(v), _W_S, 'S (18) over the range')
@@ -196,14 +204,15 @@ def check_usable(hysteresis: PIHysteresisOperator, superposition: PISuperpositio
                            'S^-1 by the laws (22)-(25)')
         _finite(np.concatenate([s_inv.thresholds, s_inv.weights]), _W_S,
                 'S^-1 by (22)-(25)')
+        virgin_inv = PIHysteresisOperator(h_inv.thresholds, h_inv.weights)
         back = _sandboxed(
-            lambda: input_offset + h_inv.apply(
+            lambda: input_offset + virgin_inv.apply(
                 s_inv.apply(output_sign * (y - output_offset)))[0], _W_H,
             'Gamma^-1 (27) over the range')
     error = np.abs(back - x)
     worst = int(np.argmax(np.where(np.isfinite(error), error, np.inf)))
     if not error[worst] <= ROUND_TRIP * span:
-        key = _culprit(x - input_offset, v, s, h_inv, s_inv)
+        key = _culprit(x - input_offset, v, s, virgin_inv, s_inv)
         msg = (f'{key}: Gamma^-1[Gamma[x]] misses x by {float(error[worst])!r} A at '
                f'x = {float(x[worst]):g} A (more than {ROUND_TRIP:g} of the range {low:g} '
                f'to {high:g} A): the model is too ill-conditioned to invert in floating '

@@ -41,7 +41,7 @@ def test_no_push_ends_the_node_or_makes_a_bad_command(ros_context):
 
     @seed(SEED)
     @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
-    @given(pushes(SPECS), st.booleans())
+    @given(pushes(SPECS, base=MODEL_A_OP), st.booleans())
     def push(request, atomic):
         parameters = [Parameter(name, value=value) for name, value in request.items()]
         before = _snapshot(node)
