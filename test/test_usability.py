@@ -149,7 +149,8 @@ TALLY = {'refused': 0, 'accepted': 0, 'commands': 0}
 
 
 @seed(SEED)
-@settings(max_examples=400, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=400, deadline=None, suppress_health_check=list(HealthCheck),
+          database=None)
 @given(pushes(SPECS, base=_params()), st.integers(0, 2**32 - 1))
 def test_no_push_escapes_or_makes_a_bad_command(request, draw_seed):
     params = _params()

@@ -697,8 +697,7 @@ def usable(model: Any, inverse: MPIModel, limits: tuple[float, float]) -> None:
     try:
         with np.errstate(all='ignore'):
             trial = Compensator(model, output_min=low, output_max=high, inverse=inverse)
-            commands = np.array([trial.command(float(value)) for value in
-                                 usability_sweep(*trial.displacement_range)])
+            commands = trial.command_batch(usability_sweep(*trial.displacement_range))
     except MPIError:
         raise
     except Exception as err:  # noqa: B902 - the sandbox: any failure is a refusal

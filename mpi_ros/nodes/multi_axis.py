@@ -26,7 +26,8 @@ ros2_control (``joints``, ``output_layout``, ``input_message``, read-only)
     subscribes ``desired_joint_states`` (``sensor_msgs/JointState``): each joint's
     ``position`` [m] mapped by name to the ``joints`` order; joints not in ``joints`` are
     ignored; a message missing one is refused (``missing_joints``, WARN), one whose
-    positions do not match its names is ``malformed``.
+    positions do not match its names, or that cannot be deserialised (it is taken raw), is
+    ``malformed``.
 
 Node parameters
     ``axes`` (read-only); per axis k = 0..N-1 every model key of the single-axis node under

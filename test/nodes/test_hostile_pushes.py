@@ -40,7 +40,8 @@ def test_no_push_ends_the_node_or_makes_a_bad_command(ros_context):
     rng = np.random.default_rng(SEED)
 
     @seed(SEED)
-    @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
+    @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck),
+              database=None)
     @given(pushes(SPECS, base=MODEL_A_OP), st.booleans())
     def push(request, atomic):
         parameters = [Parameter(name, value=value) for name, value in request.items()]
