@@ -293,6 +293,10 @@ class PlantSimulatorNode(Node):
             check_parameters(self._specs, parameters, allow_unset=True)
         except ParameterRejected as err:
             return SetParametersResult(successful=False, reason=str(err))
+        except Exception as err:  # noqa: B902 - no exception may end the node: a refusal
+            return SetParametersResult(
+                successful=False,
+                reason=f'the request could not be checked ({type(err).__name__}: {err})')
         return SetParametersResult(successful=True)
 
 
