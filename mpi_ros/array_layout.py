@@ -33,9 +33,12 @@ from typing import List, Optional, Tuple
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['ArrayLayoutError', 'ChunkLayout', 'block_of', 'chunk_layout', 'consecutive_layout',
-           'decode_float64_multiarray', 'encode_flat_float64_multiarray',
-           'encode_float64_multiarray']
+__all__ = ['ArrayLayoutError', 'ChunkLayout', 'FLOAT64_SIZE', 'block_of', 'chunk_layout',
+           'consecutive_layout', 'decode_float64_multiarray', 'encode_flat_float64_multiarray',
+           'encode_float64_multiarray', 'float64_of', 'malformed_float64']
+
+#: Bytes of a CDR ``std_msgs/Float64``: the 4-byte header and the double (more are ignored).
+FLOAT64_SIZE = 12
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -308,6 +311,64 @@ def encode_flat_float64_multiarray(values: npt.NDArray[np.float64]) -> bytes:
     """
     flat = np.ascontiguousarray(values, dtype='<f8').reshape(-1)
     return _FLAT(_CDR_LE, 0, 0, flat.size) + flat.tobytes()
+
+
+def malformed_float64(data: bytes) -> str:
+    """
+    Say why bytes are not the CDR of a ``std_msgs/Float64`` (the reason a node reports).
+
+    Parameters
+    ----------
+    data : bytes
+        The serialized message (raw subscription).
+
+    Returns
+    -------
+    str
+        What is wrong: too short, or not a CDR encapsulation.
+
+    Examples
+    --------
+    >>> malformed_float64(bytes(1))
+    '1 bytes, not a CDR Float64 (12 bytes: a 4-byte header, then the double)'
+    >>> malformed_float64(bytes([0, 7]) + bytes(10))
+    'encapsulation 0x0007 is not CDR (0x0000 or 0x0001)'
+
+    """
+    if len(data) < FLOAT64_SIZE:
+        return (f'{len(data)} bytes, not a CDR Float64 (12 bytes: a 4-byte header, then the '
+                'double)')
+    return f'encapsulation 0x{data[0]:02x}{data[1]:02x} is not CDR (0x0000 or 0x0001)'
+
+
+def float64_of(data: bytes) -> float:
+    """
+    Decode the CDR bytes of a ``std_msgs/Float64`` after checking them.
+
+    Parameters
+    ----------
+    data : bytes
+        The serialized message.
+
+    Returns
+    -------
+    float
+        Its ``data`` (any double, NaN and Inf included).
+
+    Raises
+    ------
+    ArrayLayoutError
+        When the bytes are not a CDR Float64 (:func:`malformed_float64` says why).
+
+    Examples
+    --------
+    >>> float64_of(bytes([0, 1, 0, 0]) + struct.pack('<d', 2.5))
+    2.5
+
+    """
+    if len(data) < FLOAT64_SIZE or data[0] != 0 or data[1] > 1:
+        raise ArrayLayoutError(malformed_float64(data))
+    return float(struct.unpack_from('<d' if data[1] == 1 else '>d', data, 4)[0])
 
 
 def _fast_block(data: bytes, axes: int) -> Optional[npt.NDArray[np.float64]]:

@@ -32,7 +32,8 @@ Kernel = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, Float
                FloatArray, FloatArray, FloatArray]
 
 #: The counters a compiled loop counts, in the order of its ``counts`` array.
-COMPILED_COUNTERS = ('messages', 'nonfinite_input', 'out_of_range', 'clamped')
+COMPILED_COUNTERS = ('messages', 'nonfinite_input', 'out_of_range', 'clamped',
+                     'nonfinite_command')
 
 
 class InverseStep(Protocol):
@@ -142,7 +143,9 @@ class Compensator:
     ----------
     counters : dict[str, int]
         ``messages``, ``nonfinite_input``, ``out_of_range`` (desired outside the model's
-        operating range), ``clamped``, ``bad_time`` (time stamps that did not increase).
+        operating range), ``clamped``, ``nonfinite_command`` (a non-finite Gamma^-1,
+        replaced by the last command: never published), ``bad_time`` (time stamps that did
+        not increase).
     version : int
         Incremented by every accepted model.
 
@@ -159,7 +162,7 @@ class Compensator:
         self._enabled = bool(enabled)
         self.sample_period = float(sample_period)
         self.counters = {'messages': 0, 'nonfinite_input': 0, 'out_of_range': 0,
-                         'clamped': 0, 'bad_time': 0}
+                         'clamped': 0, 'nonfinite_command': 0, 'bad_time': 0}
         self.version = 0
         self.memory = TurningPointMemory() if memory is None else memory
         self.before_change: Callable[[], None] | None = None
@@ -305,10 +308,12 @@ class Compensator:
         if step is None:
             if self.enabled:
                 current, raw = _compensate_step(s_c, self.output_min, self.output_max, r_h,
-                                                w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point)
+                                                w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point,
+                                                self.last_command)
             else:
                 raw = self.linear_map(s_c)
-                current = min(max(raw, self.output_min), self.output_max)
+                current = min(max(raw if math.isfinite(raw) else self.last_command,
+                                  self.output_min), self.output_max)
                 _hysteresis_step(current - point[0], r_h, w_h, z_h)
             material = current
         else:
@@ -325,15 +330,16 @@ class Compensator:
                 raw = step.invert(v, previous, started, inverse)
             else:
                 raw = self.linear_map(s_c)
-            if not math.isfinite(raw):
-                raw = previous
-            current = min(max(raw, self.output_min), self.output_max)
+            current = min(max(raw if math.isfinite(raw) else previous, self.output_min),
+                          self.output_max)
             material = step.advance(current, previous, started)
             h_out = _hysteresis_step(material - x0, r_h, w_h, z_h)
             if self._observe is not None:
                 self._observe(h_out)
             self._started = True
-        if current != raw:
+        if not math.isfinite(raw):
+            c['nonfinite_command'] += 1
+        elif current != raw:
             c['clamped'] += 1
         self.memory.push(material)
         self.last_command = current

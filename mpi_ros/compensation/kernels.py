@@ -25,17 +25,23 @@ FloatArray = npt.NDArray[np.float64]
 def _compensate_step(s_c: float, lo: float, hi: float, r_h: FloatArray, w_h: FloatArray,
                      z_h: FloatArray, r_h_inv: FloatArray, w_h_inv: FloatArray,
                      z_inv: FloatArray, r_s_inv: FloatArray, w_s_inv: FloatArray,
-                     point: FloatArray) -> tuple[float, float]:  # pragma: no cover
+                     point: FloatArray, hold: float) -> tuple[float, float]:  # pragma: no cover
     # point = (x0, y0, sign), the operating point: x = x0 + H'[S'[sign (s_c - y0)]].
+    # A non-finite raw command (a model that overflows) is never passed on: the last
+    # command ``hold`` is, inside [lo, hi]; the caller counts raw != current.
     x0 = point[0]
     hysteresis_inverse_states(w_h, z_h, z_inv)              # (14): from the forward state
     raw = x0 + _hysteresis_step(_superposition_value(point[2] * (s_c - point[1]), r_s_inv,
                                                      w_s_inv), r_h_inv, w_h_inv, z_inv)  # (27)
     current = raw
+    if not np.isfinite(current):
+        current = hold
     if current < lo:
         current = lo
     elif current > hi:
         current = hi
+    elif not current >= lo:                                 # NaN hold (never: hold is safe)
+        current = lo
     _hysteresis_step(current - x0, r_h, w_h, z_h)           # forward plays, applied current
     return current, raw
 
@@ -86,8 +92,10 @@ def _compensate_axes(desired: FloatArray, out: FloatArray, coefficients: FloatAr
                 margin = SATURATION_RANGES * (hi - lo)
                 s_c = min(max(s_c, lo - margin), hi + margin)
             current, raw = _compensate_step(s_c, row[5], row[6], r_h, w_h, z_h, r_h_inv,
-                                            w_h_inv, z_inv, r_s_inv, w_s_inv, point)
-            if current != raw:
+                                            w_h_inv, z_inv, r_s_inv, w_s_inv, point, row[7])
+            if not np.isfinite(raw):
+                count[4] += 1
+            elif current != raw:
                 count[3] += 1
             memory_push(points, held, current)
             out[k, a] = current
@@ -129,6 +137,6 @@ def _warm_up(kernel: tuple[FloatArray, ...], s_c: float, output_min: float,
     """
     r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point = kernel
     _compensate_step(s_c, output_min, output_max, r_h, w_h, z_h.copy(), r_hi, w_hi,
-                     z_i.copy(), r_si, w_si, point)
+                     z_i.copy(), r_si, w_si, point, output_min)
     _hysteresis_step(output_min - point[0], r_h, w_h, z_h.copy())
     _inverse_value(_superposition_value(0.0, r_si, w_si), r_h, w_h, 0.0, z_h)

@@ -25,9 +25,9 @@ FloatArray = npt.NDArray[np.float64]
 #: block loop (:func:`~mpi_ros.compensation.kernels._compensate_axes`) uses it too.
 SATURATION_RANGES = 10.0
 #: Counters of bad inputs (a node's diagnostics period with any of them is WARN).
-FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped')
+FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped', 'nonfinite_command')
 _FAULT_WORDS = {'nonfinite_input': 'non-finite', 'out_of_range': 'out-of-range',
-                'clamped': 'clamped'}
+                'clamped': 'clamped', 'nonfinite_command': 'held (non-finite inverse)'}
 #: At most one warning about bad inputs per this period [s] (:class:`FaultLog`).
 FAULT_LOG_PERIOD_S = 5.0
 
@@ -185,7 +185,7 @@ def describe_faults(faults: Mapping[str, int]) -> str:
     '3 non-finite, 2 clamped inputs'
 
     """
-    parts = [f'{faults[key]} {_FAULT_WORDS[key]}' for key in FAULT_KEYS if faults[key]]
+    parts = [f'{faults[key]} {_FAULT_WORDS[key]}' for key in FAULT_KEYS if faults.get(key)]
     return f'{", ".join(parts) or "no bad"} inputs'
 
 

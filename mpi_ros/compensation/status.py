@@ -144,12 +144,14 @@ def loss_problems(counters: Mapping[str, int], before: Mapping[str, int], depth:
 
 
 def single_axis_status(losses: Sequence[str], counters: Mapping[str, int],
-                       before: Mapping[str, int], *, has_model: bool, enabled: bool) -> Status:
+                       before: Mapping[str, int], *, has_model: bool, enabled: bool,
+                       last_malformed: str = '') -> Status:
     """
     Return the level and message of a single-axis compensator's period.
 
-    WARN after a period with losses (:func:`loss_problems`), while unconfigured (``no
-    model``) and after a period with non-finite, out-of-range or clamped inputs; else OK.
+    WARN after a period with losses (:func:`loss_problems`) or malformed messages, while
+    unconfigured (``no model``) and after a period with non-finite, out-of-range or clamped
+    inputs; else OK.
 
     Parameters
     ----------
@@ -161,6 +163,8 @@ def single_axis_status(losses: Sequence[str], counters: Mapping[str, int],
         Whether a model is installed.
     enabled : bool
         The ``enabled`` parameter.
+    last_malformed : str
+        Why the last malformed message was dropped (``''``: none yet).
 
     Returns
     -------
@@ -173,6 +177,10 @@ def single_axis_status(losses: Sequence[str], counters: Mapping[str, int],
     faults = new_faults(counters, before)
     if losses:
         return WARN, '; '.join(losses)
+    malformed = counters.get('malformed', 0) - before.get('malformed', 0)
+    if malformed:
+        return WARN, (f'{malformed} malformed messages dropped in the last period (last: '
+                      f'{last_malformed})')
     if not has_model:
         return WARN, ('no model: unconfigured, no commands published; give all five model.* '
                       'keys of Gamma in one request (ros2 param load, '

@@ -37,15 +37,18 @@ import math
 import re
 from typing import Any
 
+import numpy as np
+
 from .compensator import Compensator, gamma_of, inverse_step_of
-from ..errors import MPIError, ParameterRejected
+from ..errors import ModelError, MPIError, ParameterRejected
 from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
 from ..operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS
+from ..operators.usability import check_usable, usability_sweep
 
 __all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'Prepared', 'UpdateRule', 'apply', 'axis_key',
            'complete', 'is_off', 'limits_of', 'load', 'load_axes', 'model_keys', 'model_params',
-           'ordered_limits', 'prepare', 'refusal', 'touches', 'uncompensated']
+           'ordered_limits', 'prepare', 'refusal', 'touches', 'uncompensated', 'usable']
 
 #: The two output limits [A]; node-wide without a prefix, one axis's under ``axis<k>.``.
 LIMIT_KEYS = ('output.min', 'output.max')
@@ -643,16 +646,77 @@ def _whole_model(values: Mapping[str, Any], prefix: str, given: list[str], *,
                f'missing: {", ".join(missing)}')
         raise ParameterRejected(msg)
     params = model_params(values, prefix) or {}
+    limits = limits_of(values, prefix)
     if axis is None:
         model = extended_model_from_params(params)
-        return model, None if loading else gamma_of(model).inverse()   # (12)-(14), (22)-(25)
+        inverse = gamma_of(model).inverse()                    # (12)-(14), (22)-(25)
+        usable(model, inverse, limits)
+        return model, None if loading else inverse
     try:
         model = extended_model_from_params(params)
-        return model, gamma_of(model).inverse()    # (12)-(14), (22)-(25), once
+        inverse = gamma_of(model).inverse()        # (12)-(14), (22)-(25), once
+        usable(model, inverse, limits)
+        return model, inverse
     except MPIError as err:
         named = _MODEL_KEY.sub(prefix, str(err))
         msg = f'axis {axis.group(1)} ({prefix}model.*): {named}'
         raise ParameterRejected(msg) from err
+
+
+def usable(model: Any, inverse: MPIModel, limits: tuple[float, float]) -> None:
+    """
+    Prove that a model runs in a compensator with these output limits (sandboxed).
+
+    Gamma and Gamma^-1 run over the current range ``limits``
+    (:func:`mpi_ros.operators.usability.check_usable`), then a trial
+    :class:`~mpi_ros.compensation.Compensator` of the model (the one the node would
+    install) commands a sweep of its displacement range from the model's initial states:
+    every inverse must be finite (none held) and every command inside the limits.  Any
+    exception on the way is a refusal.
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        The validated forward model.
+    inverse : MPIModel
+        Its Gamma^-1.
+    limits : tuple of float
+        ``(output.min, output.max)`` [A].
+
+    Raises
+    ------
+    ModelError
+        Naming the key (``model.*``) and what went wrong.
+
+    """
+    gamma = gamma_of(model)
+    check_usable(gamma.hysteresis, gamma.superposition, input_offset=gamma.input_offset,
+                 output_offset=gamma.output_offset, output_sign=gamma.output_sign,
+                 current_range=limits)
+    low, high = limits
+    try:
+        with np.errstate(all='ignore'):
+            trial = Compensator(model, output_min=low, output_max=high, inverse=inverse)
+            commands = trial.command_batch(usability_sweep(*trial.displacement_range))
+    except MPIError:
+        raise
+    except Exception as err:  # noqa: B902 - the sandbox: any failure is a refusal
+        msg = (f'model.* (the whole model): a compensator of it with output limits {low:g} to '
+               f'{high:g} A failed ({type(err).__name__}: {err}); re-run identify')
+        raise ModelError(msg) from err
+    held = trial.counters['nonfinite_command']
+    if held:
+        msg = (f'model.* (the whole model): its inverse is not finite for {held} of '
+               f'{commands.size} desired displacements over its range (the compensator would '
+               'hold its last command); check model.hysteresis.initial_states and the '
+               'offsets, or re-run identify')
+        raise ModelError(msg)
+    bad = np.flatnonzero(~((commands >= low) & (commands <= high)))
+    if bad.size:
+        msg = (f'model.* (the whole model): a compensator of it commands {commands[bad[0]]!r} A '
+               f'({bad.size} of {commands.size} commands over its displacement range), '
+               f'not inside the output limits {low:g} to {high:g} A; re-run identify')
+        raise ModelError(msg)
 
 
 def limits_of(values: Mapping[str, Any], prefix: str = '') -> tuple[float, float]:

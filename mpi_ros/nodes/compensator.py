@@ -11,6 +11,9 @@ are shared with the multi-axis node in :mod:`mpi_ros.nodes.compensator_base`.
 Topics (relative names, std_msgs/msg/Float64, SI units)
     ``desired_displacement`` (subscribed) [m] and ``current_command`` (published) [A];
     ``/diagnostics`` (diagnostic_msgs/msg/DiagnosticArray) every ``diagnostics_period``.
+    A message that is not a CDR Float64 (fewer than 12 bytes, an unknown encapsulation)
+    is dropped and counted (``malformed``, ``last_malformed``: diagnostics WARN); a
+    non-finite value holds the last command (``nonfinite_input``).
 
 Managed node (lifecycle)
     A :class:`rclpy.lifecycle.LifecycleNode` (the states and transitions are in
@@ -104,8 +107,10 @@ from .multi_axis import MultiAxisCompensatorNode
 from .parameters import declare_parameters, parameter_values
 from .qos import loop_qos
 from .spinning import run_node_main
+from ..array_layout import FLOAT64_SIZE, malformed_float64
 from ..compensation import Compensator
 from ..compensation.adaptation import Adaptation, AdaptationSettings, AdaptationWorker
+from ..compensation.multi_axis import InputCounts
 from ..compensation.parameters import compensator_parameters, specs_by_name, wants_multi_axis
 from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
@@ -169,6 +174,7 @@ class CompensatorNode(CompensatorNodeBase):
         self._readings: Any = None
         self._record: Optional[Any] = None    # Adaptation.record_command while adapting
         self._own_update = False
+        self._inputs = InputCounts()
         declare_parameters(self, specs)
         self._declared()
         self._adapt = bool(self.get_parameter('adaptation.enabled').value)
@@ -236,11 +242,17 @@ class CompensatorNode(CompensatorNodeBase):
         # answered with 12 bytes packed by another, published raw: no Float64 object is
         # built either way.  Every queued message is served in this callback (_drain), one
         # by one, in order, each with its own command and, for an extended model, its own
-        # arrival time.
+        # arrival time.  The bytes are checked before they are decoded (any process on
+        # the domain may publish anything): a message that is not a CDR Float64 is
+        # counted as malformed (/diagnostics) and dropped.
         publish = self._publisher.handle.publish_raw
         record = self._record
+        inputs = self._inputs
 
         def serve(data: bytes) -> None:
+            if len(data) < FLOAT64_SIZE or data[0] != 0 or data[1] > 1:
+                inputs.refuse('malformed', malformed_float64(data))
+                return
             value = (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0]
             compensator = self._live
             if compensator is None:
@@ -322,10 +334,13 @@ class CompensatorNode(CompensatorNodeBase):
         super()._close_loop()
 
     def _on_displacement(self, data: bytes) -> None:
+        if len(data) < FLOAT64_SIZE or data[0] != 0 or data[1] > 1:
+            self._inputs.refuse('malformed', malformed_float64(data))
+            return
         adaptation = self._adaptation
-        if adaptation is None or len(data) < 12:
-            return                      # no model to adapt, or not a Float64's CDR
-        adaptation.record_measurement((_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0])
+        if adaptation is not None:
+            adaptation.record_measurement(
+                (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0])
 
     def _start_adaptation(self, model: Any) -> None:
         # A model that arrives from outside (configure, a push) starts the adaptation
@@ -390,7 +405,7 @@ class CompensatorNode(CompensatorNodeBase):
         return dict(self._compensator.counters) if self._compensator else {}
 
     def _node_counters(self) -> Dict[str, int]:
-        return {'model_version': self._model_version}
+        return {'model_version': self._model_version, 'malformed': self._inputs.malformed}
 
     def _status_name(self) -> str:
         return f'{self.get_name()}: feedforward'
@@ -399,14 +414,17 @@ class CompensatorNode(CompensatorNodeBase):
                 before: Dict[str, int]) -> Tuple[int, str]:
         return single_axis_status(losses, counters, before,
                                   has_model=self._compensator is not None,
-                                  enabled=self.get_parameter('enabled').value)
+                                  enabled=self.get_parameter('enabled').value,
+                                  last_malformed=self._inputs.last_malformed)
 
     def _status_values(self) -> Dict[str, Any]:
         compensator = self._compensator
+        malformed = {'last_malformed': self._inputs.last_malformed}
         if compensator is None:
-            return {}
-        values = single_axis_values(
-            self._model_kind, compensator.slow_state if compensator.has_effect else None)
+            return malformed
+        values = {**single_axis_values(
+            self._model_kind, compensator.slow_state if compensator.has_effect else None),
+            **malformed}
         if self._adaptation is not None:
             values.update(self._adaptation.status())
         return values

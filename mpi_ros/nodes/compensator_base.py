@@ -442,9 +442,12 @@ class CompensatorNodeBase(LifecycleNode):
         given = [normalized(specs[p.name], p) if p.name in specs else p for p in parameters]
         if self._declaring:
             return given
-        request = {p.name: None if p.name in specs and is_null(specs[p.name], p)
-                   else plain_value(p.value) for p in given}
-        completed = self._rule.complete(self._current, request)
+        try:
+            request = {p.name: None if p.name in specs and is_null(specs[p.name], p)
+                       else plain_value(p.value) for p in given}
+            completed = self._rule.complete(self._current, request)
+        except Exception:  # noqa: B902 - never end the node: the validator refuses it
+            return given
         original = {p.name: p for p in given}
         return [original[name] if name in request and value is request[name]
                 else Parameter(name, Parameter.Type[specs[name].type_.upper()], value)
@@ -465,18 +468,33 @@ class CompensatorNodeBase(LifecycleNode):
             request = {p.name: plain_value(p.value) for p in parameters}
             self._rule.prepare(self._current, request, self._running)
         except (ParameterRejected, MPIError) as err:
-            reason = self._rejection([p.name for p in parameters], err)
-            self._rule.refuse(reason)
-            self.get_logger().warning(f'rejected parameter update: {reason}')
-            return SetParametersResult(successful=False, reason=reason)
+            return self._refuse(parameters, err)
+        except Exception as err:  # noqa: B902 - no exception may end the node: a refusal
+            return self._refuse(parameters, ParameterRejected(
+                f'the request could not be checked ({type(err).__name__}: {err})'))
         return SetParametersResult(successful=True)
+
+    def _refuse(self, parameters: List[Parameter], err: Exception) -> SetParametersResult:
+        """Count and log a refused request; return the answer naming the reason."""
+        reason = self._rejection([p.name for p in parameters], err)
+        self._rule.refuse(reason)
+        self.get_logger().warning(f'rejected parameter update: {reason}')
+        return SetParametersResult(successful=False, reason=reason)
 
     def _apply_parameters(self, parameters: List[Parameter]) -> None:
         """Swap in what the validator prepared (post-set: the values are stored)."""
         prepared = self._rule.take()
         if self._declaring or not any(prepared):
             return
-        self._install_prepared(prepared)
+        try:
+            self._install_prepared(prepared)
+        except Exception as err:  # noqa: B902 - validated whole before; never end the node
+            # The validator built the same compensator in its sandbox, so this is not
+            # expected; the running core keeps its last consistent model.
+            self.get_logger().error(
+                f'installing the validated update raised {type(err).__name__}: {err}; '
+                f'the core keeps its model\n{traceback.format_exc()}')
+            return
         period = prepared[0].switches.get('diagnostics_period')
         if period is not None:
             self.destroy_timer(self._timer)

@@ -101,6 +101,10 @@ class IdentifierNode(Node):
                 check_identifier_value(parameter.name, parameter.value)
         except (ParameterRejected, MPIError) as err:
             return SetParametersResult(successful=False, reason=str(err))
+        except Exception as err:  # noqa: B902 - no exception may end the node: a refusal
+            return SetParametersResult(
+                successful=False,
+                reason=f'the request could not be checked ({type(err).__name__}: {err})')
         return SetParametersResult(successful=True)
 
     def run(self) -> 'BagFit | List[BagFit]':

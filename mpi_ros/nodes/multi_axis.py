@@ -26,7 +26,8 @@ ros2_control (``joints``, ``output_layout``, ``input_message``, read-only)
     subscribes ``desired_joint_states`` (``sensor_msgs/JointState``): each joint's
     ``position`` [m] mapped by name to the ``joints`` order; joints not in ``joints`` are
     ignored; a message missing one is refused (``missing_joints``, WARN), one whose
-    positions do not match its names is ``malformed``.
+    positions do not match its names, or that cannot be deserialised (it is taken raw), is
+    ``malformed``.
 
 Node parameters
     ``axes`` (read-only); per axis k = 0..N-1 every model key of the single-axis node under
@@ -95,6 +96,7 @@ import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
+from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -171,7 +173,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         if joint_state:
             self._open_topics(Float64MultiArray, 'desired_joint_states', 'current_commands',
                               self._on_joint_states, 'desired joint states',
-                              input_type=JointState, raw=False)
+                              input_type=JointState)
         else:
             self._open_topics(Float64MultiArray, 'desired_displacements', 'current_commands',
                               self._on_desired_displacements, 'desired displacement arrays')
@@ -224,14 +226,20 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
 
         self._drain(data, Float64MultiArray, serve, raw=True, limit=_DRAIN_LIMIT)
 
-    def _on_joint_states(self, msg: Any) -> None:
-        # input_message joint_state: JointState objects (rclpy deserialises them), each
+    def _on_joint_states(self, data: bytes) -> None:
+        # input_message joint_state: raw JointStates, deserialised here so that one that
+        # cannot be is counted as malformed (rclpy would drop it without a word), each
         # one sample of every axis; queued ones taken here as in the array loop.
-        self._drain(msg, JointState, self._serve_joint_state, raw=False,
+        self._drain(data, JointState, self._serve_joint_state, raw=True,
                     limit=_DRAIN_LIMIT)
 
-    def _serve_joint_state(self, msg: Any) -> None:
+    def _serve_joint_state(self, data: bytes) -> None:
         # The 1 x N block of a JointState in axis order, or None (refused, counted).
+        try:
+            msg = deserialize_message(data, JointState)
+        except Exception as err:  # noqa: B902 - any undecodable message is malformed
+            self._inputs.refuse('malformed', f'not a JointState ({len(data)} bytes): {err}')
+            return
         block, fault, reason = self._joint_order.block(msg.name, msg.position)
         if block is None:
             self._inputs.refuse(fault, reason)

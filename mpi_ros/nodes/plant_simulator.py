@@ -11,7 +11,10 @@ Timing
     arrival, so the dynamic effects (creep, eddy-current lag, Joule heating, dead
     time) see the real command rate, and a test gets exactly one displacement per
     command. A non-finite command is not applied (a current source cannot output
-    it); it is counted and logged, and no displacement is published for it.
+    it); it is counted and logged, and no displacement is published for it.  The
+    subscriptions are raw: a message that is not of the topic's type (too short, an
+    unknown encapsulation, a bad array layout) is counted in ``counters['malformed']``,
+    logged at most once a second, and dropped.
 
 Truth (``truth``, read-only)
     ``builtin``: :class:`mpi_ros.plant.actuator.MagnetostrictiveActuator`, a Preisach-type
@@ -68,7 +71,7 @@ from .parameters import (
 )
 from .qos import loop_qos
 from .spinning import run_node_main
-from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray
+from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray, float64_of
 from ..compensation.parameters import specs_by_name
 from ..errors import ParameterRejected
 from ..plant.simulator import (
@@ -212,24 +215,33 @@ class PlantSimulatorNode(Node):
                 raw=True)
             return
         self._subscription = self.create_subscription(
-            Float64, 'current_command', self._on_current_command, self._qos)
+            Float64, 'current_command', self._on_current_command, self._qos, raw=True)
+
+    def _malformed(self, topic: str, err: Exception) -> None:
+        """Count and log (at most once a second) a message that is not of the topic's type."""
+        self.counters['malformed'] = self.counters.get('malformed', 0) + 1
+        self.get_logger().warning(f'ignoring {topic} message: {err}',
+                                  throttle_duration_sec=1.0)
 
     def _on_current_commands(self, data: bytes) -> None:
         self.counters['commands'] += 1
         try:
             block = block_of(data, self.axes)
         except ArrayLayoutError as err:
-            self.counters['malformed'] = self.counters.get('malformed', 0) + 1
-            self.get_logger().warning(f'ignoring current_commands message: {err}',
-                                      throttle_duration_sec=1.0)
+            self._malformed('current_commands', err)
             return
         displacements = self.measure_block(time.monotonic() - self._t0, block)
         self._publisher.handle.publish_raw(encode_float64_multiarray(displacements))
         self.counters['published'] += 1
 
-    def _on_current_command(self, msg: Float64) -> None:
-        current = msg.data
+    def _on_current_command(self, data: bytes) -> None:
+        # Raw: the bytes are checked before they are decoded (a peer may send anything).
         self.counters['commands'] += 1
+        try:
+            current = float64_of(data)
+        except ArrayLayoutError as err:
+            self._malformed('current_command', err)
+            return
         if not math.isfinite(current):
             self.counters['nonfinite_commands'] += 1
             self.get_logger().warning(
@@ -281,6 +293,10 @@ class PlantSimulatorNode(Node):
             check_parameters(self._specs, parameters, allow_unset=True)
         except ParameterRejected as err:
             return SetParametersResult(successful=False, reason=str(err))
+        except Exception as err:  # noqa: B902 - no exception may end the node: a refusal
+            return SetParametersResult(
+                successful=False,
+                reason=f'the request could not be checked ({type(err).__name__}: {err})')
         return SetParametersResult(successful=True)
 
 

@@ -28,10 +28,20 @@ Signals (SIGINT, SIGTERM)
     to stop (it ends within :data:`SPIN_PERIOD_S`); the node is destroyed and the context
     shut down in order on the main thread, and every later signal is ignored, so the
     process exits 0.
+
+Start-up arguments
+    rcl parses the ``--ros-args`` inside ``rclpy.init`` and fails with an ``RCLError``
+    traceback (after its own log line) on a ``--params-file`` it cannot read or parse.
+    :func:`run_node_main` therefore checks every ``--params-file`` first
+    (:func:`params_file_problem`: the file exists and is readable, is YAML without aliases
+    nested at most :data:`PARAMS_DEPTH` deep, and maps node names to
+    ``ros__parameters`` mappings) and turns any remaining ``RCLError`` of ``rclpy.init``
+    into one ``error:`` line and exit status 1.
 """
 
+import os
 import sys
-from typing import Any, Callable, List, Optional
+from typing import Any, Callable, Iterator, List, Optional, Sequence
 
 import rclpy
 from rclpy.context import Context
@@ -44,10 +54,15 @@ from rclpy.task import Future
 
 from ..stop_signals import StopSignals
 
-__all__ = ['events_executor', 'run_node_main', 'shutdown', 'spin']
+__all__ = ['PARAMS_DEPTH', 'events_executor', 'params_file_problem', 'params_files',
+           'run_node_main', 'shutdown', 'spin']
 
 #: Longest time one spin_once waits for work [s]; bounds the reaction to shutdown.
 SPIN_PERIOD_S = 0.1
+#: Deepest nesting of mappings and sequences a node's ``--params-file`` may have.
+PARAMS_DEPTH = 64
+#: Largest ``--params-file`` a node reads [bytes].
+PARAMS_SIZE = 64 * 1024 * 1024
 
 
 def events_executor(context: Optional[Context] = None) -> Executor:
@@ -109,6 +124,124 @@ def shutdown(context: Optional[Context] = None) -> None:
         rclpy.try_shutdown(context=context)
 
 
+def params_files(args: Sequence[str]) -> Iterator[str]:
+    """
+    Yield the paths given to ``--params-file`` inside the ``--ros-args`` sections.
+
+    Parameters
+    ----------
+    args : sequence of str
+        A node's command line (program name first).
+
+    Yields
+    ------
+    str
+        Each path, in order.
+
+    Examples
+    --------
+    >>> list(params_files(['n', '--ros-args', '--params-file', 'a.yaml', '--', 'x']))
+    ['a.yaml']
+
+    """
+    inside = False
+    items = list(args)
+    for i, arg in enumerate(items):
+        if arg == '--ros-args':
+            inside = True
+        elif arg == '--':
+            inside = False
+        elif inside and arg == '--params-file' and i + 1 < len(items):
+            yield items[i + 1]
+
+
+def params_file_problem(path: str) -> Optional[str]:
+    """
+    Say what makes a ``--params-file`` unusable for a node, before rcl reads it.
+
+    Parameters
+    ----------
+    path : str
+        The file.
+
+    Returns
+    -------
+    str or None
+        One line naming the file and the problem (missing, unreadable, too large, not
+        YAML, aliases, nested deeper than :data:`PARAMS_DEPTH`, not a mapping of node
+        names to ``ros__parameters`` mappings); None when rcl may read it.
+
+    """
+    import yaml
+    try:
+        size = os.path.getsize(path)
+        if size > PARAMS_SIZE:
+            return f'{path}: {size} bytes; a params file is at most {PARAMS_SIZE} bytes'
+        with open(path, 'rb') as stream:
+            text = stream.read()
+    except OSError as err:
+        return f'{path}: cannot read it: {err.strerror or err}'
+    try:
+        depth = 0
+        for event in yaml.parse(text, Loader=yaml.SafeLoader):
+            if isinstance(event, yaml.AliasEvent):
+                return f'{path}: YAML aliases (*name) are not allowed in a params file'
+            if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                depth += 1
+                if depth > PARAMS_DEPTH:
+                    return f'{path}: nested deeper than {PARAMS_DEPTH} levels'
+            elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                depth -= 1
+        content = yaml.safe_load(text)
+    except (yaml.YAMLError, ValueError) as err:
+        where = getattr(err, 'problem_mark', None)
+        line = f' (line {where.line + 1})' if where is not None else ''
+        problem = getattr(err, 'problem', None) or str(err).splitlines()[0]
+        return f'{path}: not valid YAML{line}: {problem}'
+    return _params_structure(path, content)
+
+
+def _params_structure(path: str, content: Any) -> Optional[str]:
+    """Check ``{node: {ros__parameters: {...}}}`` (namespaces may nest node names)."""
+    expected = 'a mapping of node names to {ros__parameters: {name: value}}'
+    if not isinstance(content, dict) or not content:
+        return f'{path}: expected {expected}; found {type(content).__name__}'
+    pending = [(str(key), value) for key, value in content.items()]
+    found = False
+    while pending:
+        name, value = pending.pop()
+        if not isinstance(value, dict):
+            return (f'{path}: {name} must be a mapping ({expected}); found '
+                    f'{type(value).__name__}')
+        for key, inner in value.items():
+            if key == 'ros__parameters':
+                if not isinstance(inner, dict):
+                    return (f'{path}: {name}.ros__parameters must be a mapping of parameter '
+                            f'names to values; found {type(inner).__name__}')
+                problem = _mixed_sequence(inner)
+                if problem is not None:
+                    return f'{path}: {name}.ros__parameters.{problem}'
+                found = True
+            else:
+                pending.append((f'{name}.{key}', inner))
+    return None if found else f'{path}: no ros__parameters section ({expected})'
+
+
+def _mixed_sequence(parameters: dict) -> Optional[str]:  # type: ignore[type-arg]
+    """Name a list value whose items are not all of one scalar type (rcl refuses it)."""
+    pending = list(parameters.items())
+    while pending:
+        name, value = pending.pop()
+        if isinstance(value, dict):
+            pending.extend((f'{name}.{key}', inner) for key, inner in value.items())
+        elif isinstance(value, list):
+            kinds = {type(item).__name__ for item in value}
+            if len(kinds) > 1 or kinds - {'bool', 'int', 'float', 'str'}:
+                return (f'{name}: a list must hold items of one type (bool, integer, double '
+                        f'or string); found {", ".join(sorted(kinds))}')
+    return None
+
+
 def run_node_main(make_node: Callable[[], Any], label: str, args: Optional[List[str]], *,
                   until: Optional[Callable[[Any], Optional[Future]]] = None) -> int:
     """
@@ -129,13 +262,25 @@ def run_node_main(make_node: Callable[[], Any], label: str, args: Optional[List[
     -------
     int
         0 on shutdown (SIGINT or SIGTERM, however many, external shutdown, ``until``
-        done); 1 when the node cannot be configured (invalid parameters), with one
-        ``error:`` line on stderr.
+        done); 1 when a ``--params-file`` or another ROS argument is unusable, or the
+        node cannot be configured (invalid parameters), with one ``error:`` line on
+        stderr.
 
     """
     from ..errors import MPIError, ParameterRejected
+    for path in params_files(sys.argv if args is None else args):
+        problem = params_file_problem(path)
+        if problem is not None:
+            print(f'error: {label}: --params-file {problem}', file=sys.stderr, flush=True)
+            return 1
     with StopSignals() as stop:
-        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        try:
+            rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        except _rclpy.RCLError as err:
+            first = str(err).splitlines()[0] if str(err) else type(err).__name__
+            print(f'error: {label}: the ROS arguments were refused: {first}',
+                  file=sys.stderr, flush=True)
+            return 1
         node = None
         try:
             node = make_node()

@@ -47,6 +47,7 @@ from .hysteresis import PIHysteresisOperator
 from .inverse import invert_hysteresis, invert_superposition
 from .play import play_clamp
 from .superposition import PISuperpositionOperator
+from .usability import check_usable
 from ..errors import ModelError
 
 __all__ = ['ActuatorModel', 'HYSTERESIS_INITIAL_STATES', 'HYSTERESIS_THRESHOLDS',
@@ -407,17 +408,23 @@ class MPIModel:
         Raises
         ------
         ModelError
-            Naming the offending key (lengths, ordering, finiteness, (8), (19)).
+            Naming the offending key (lengths, ordering, finiteness, (8), (19)), or the
+            key that makes the model unusable in floating point
+            (:func:`mpi_ros.operators.usability.check_usable`: subnormal or overflowing
+            weights and offsets; Gamma and Gamma^-1 are run over the range the model
+            covers and must give the currents back).
 
         """
         p = check_model_parameters(mapping)
         x0, y0, sign = check_operating_point(mapping)
-        return cls(PIHysteresisOperator(p[HYSTERESIS_THRESHOLDS],
-                                        p[HYSTERESIS_WEIGHTS],
-                                        p[HYSTERESIS_INITIAL_STATES]),
-                   PISuperpositionOperator(p[SUPERPOSITION_THRESHOLDS],
-                                           p[SUPERPOSITION_WEIGHTS]),
-                   input_offset=x0, output_offset=y0, output_sign=sign)
+        hysteresis = PIHysteresisOperator(p[HYSTERESIS_THRESHOLDS], p[HYSTERESIS_WEIGHTS],
+                                          p[HYSTERESIS_INITIAL_STATES])
+        superposition = PISuperpositionOperator(p[SUPERPOSITION_THRESHOLDS],
+                                                p[SUPERPOSITION_WEIGHTS])
+        check_usable(hysteresis, superposition, input_offset=x0, output_offset=y0,
+                     output_sign=sign)
+        return cls(hysteresis, superposition, input_offset=x0, output_offset=y0,
+                   output_sign=sign)
 
     def to_params(self) -> dict[str, Any]:
         """
