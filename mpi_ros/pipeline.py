@@ -27,6 +27,8 @@ import os
 import signal
 from typing import Any, Dict, List, Tuple
 
+import numpy as np
+
 from .compensation.parameters import AXES, ParameterSpec
 from .compensation.updates import axis_key
 from .errors import DataError, IdentificationError, MPIError, ParameterRejected
@@ -39,7 +41,13 @@ from .recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, rea
 
 __all__ = ['BagFit', 'DATA_NAMES', 'DATA_PARAMETERS', 'PARAMETERS', 'RecordingFit',
            'STOP_SIGNALS', 'check_identifier_value', 'fit_bag', 'fit_bag_axes',
-           'fit_recording', 'identify_bag', 'parse_order']
+           'LIMITS_COMMENT', 'fit_recording', 'identified_parameters', 'identify_bag',
+           'parse_order']
+
+#: The comment a parameter file gets above the output limits :func:`identified_parameters` sets.
+LIMITS_COMMENT = ('output.min / output.max: the input range the actuator was driven over '
+                  'during identification\n(the model extrapolates outside it); narrow them to '
+                  'the safe range of your actuator')
 
 #: The signals that stop a run (a node, or the workers of :func:`fit_bag_axes`).
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -74,13 +82,19 @@ class BagFit:
         The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
         ``.samples``, solver status.
     parameters : dict of str to list of float, float or int
-        ``result.model.to_params()``: the five ``model.*`` arrays of Gamma and the three
-        operating point keys.
+        ``result.full_model.to_params()``: the five ``model.*`` arrays of Gamma, the three
+        operating point keys and the keys of the dynamics the fit found (dead time, lag,
+        output mode), exactly the model ``mpi-ros identify`` writes.
+    written : dict of str to value
+        Everything ``mpi-ros identify`` writes for this record
+        (:func:`identified_parameters`): `parameters` and the output limits; what the
+        identifier pushes.
 
     """
 
     result: IdentificationResult
     parameters: dict[str, Any]
+    written: dict[str, Any]
 
     def summary(self) -> str:
         """
@@ -93,9 +107,11 @@ class BagFit:
 
         """
         n, l_s = self.result.order
+        cause = getattr(self.result.full_model, 'cause', None)
+        carried = f'; the model carries {cause}' if cause else ''
         return (f'fitted order n={n}, l={l_s} on {self.result.samples} samples: '
                 f'nonlinearity error {100.0 * self.result.nonlinearity_error:.3f} %, '
-                f'relative RMS error {100.0 * self.result.rms_error:.3f} %')
+                f'relative RMS error {100.0 * self.result.rms_error:.3f} %{carried}')
 
 
 def fit_recording(source: 'str | os.PathLike[str] | Recording',
@@ -181,12 +197,47 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
                               spelling='parameter')
     fit = fit_recording(path, options, order=order)          # the one pipeline (CLI too)
     result = fit.result
-    parameters = result.model.to_params()
-    expected = MODEL_KEYS + OPERATING_POINT_KEYS
-    if set(parameters) != set(expected):
-        msg = f'identify returned parameters {sorted(parameters)}; expected {list(expected)}'
+    written = identified_parameters(result, fit.recording)
+    parameters = result.full_model.to_params()
+    missing = [key for key in MODEL_KEYS + OPERATING_POINT_KEYS if key not in parameters]
+    if missing:
+        msg = f'identify returned parameters {sorted(parameters)}; missing {missing}'
         raise IdentificationError(msg)
-    return BagFit(result=result, parameters=parameters)
+    return BagFit(result=result, parameters=parameters, written=written)
+
+
+def identified_parameters(result: IdentificationResult,
+                          recording: Recording | None = None) -> dict[str, Any]:
+    """
+    Return every key ``mpi-ros identify`` writes and the identifier node pushes.
+
+    One function for both, so that a key the identification learns to write (a new
+    effect, a start-state policy) reaches the running compensator without a second edit.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        The fit.
+    recording : Recording, optional
+        The record it was fitted on; gives the output limits.
+
+    Returns
+    -------
+    dict
+        ``result.full_model.to_params()`` (Gamma, the operating point and the keys of the
+        dynamics found: ``model.dead_time``, ``model.rate_dependence.*``,
+        ``model.resonance.*``), and with a recording ``output.min`` / ``output.max``: the
+        input range the actuator was driven over during identification [A or V], the
+        range the model knows (a command outside it extrapolates the model).
+
+    """
+    parameters = dict(result.full_model.to_params())
+    if recording is not None and len(recording):
+        current = np.asarray(recording.current, dtype=np.float64)
+        low, high = float(np.min(current)), float(np.max(current))
+        if low < high:
+            parameters['output.min'], parameters['output.max'] = low, high
+    return parameters
 
 
 def fit_bag_axes(path: str, axes: int, *, options: DataOptions | None = None,
@@ -430,13 +481,13 @@ def identify_bag(values: Mapping[str, Any], *, info: Callable[[str], Any],
         parameters: Dict[str, Any] = {}
         for axis, fit in enumerate(fitted):
             info(f'axis {axis}: {fit.summary()}')
-            parameters.update({axis_key(axis, key): v for key, v in fit.parameters.items()})
+            parameters.update({axis_key(axis, key): v for key, v in fit.written.items()})
         written = dict(parameters, axes=axes)
-        header = f'mpi_ros identifier: {axes} axes\nbag: {bag}'
+        header = f'mpi_ros identifier: {axes} axes\nbag: {bag}\n{LIMITS_COMMENT}'
     else:
         info(fitted.summary())
-        parameters = written = fitted.parameters
-        header = f'mpi_ros identifier: {fitted.summary()}\nbag: {bag}'
+        parameters = written = fitted.written
+        header = f'mpi_ros identifier: {fitted.summary()}\nbag: {bag}\n{LIMITS_COMMENT}'
     params_file = values['params_file']
     if params_file:
         write_params_yaml(params_file, written, node_name='compensator', header=header)

@@ -67,7 +67,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from .cli_options import data_options, order_option
     from ..order import format_order
     from ..params import write_params_yaml
-    from ..pipeline import fit_recording
+    from ..pipeline import fit_recording, identified_parameters, LIMITS_COMMENT
     from ..progress import Progress
     from .ranges import range_header
     from ..recordings import atomic_write, read_recording
@@ -110,11 +110,12 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     # file and renamed; a YAML this run created is removed again if the JSON fails.
     created = not Path(args.output).exists()
     try:
-        write_params_yaml(args.output, result.full_model.to_params(), node_name=args.node_name,
+        write_params_yaml(args.output, identified_parameters(result, recording),
+                          node_name=args.node_name,
                           header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
                                   f'order n={n}, l={l}; nonlinearity error (37) '
                                   f'{100 * result.nonlinearity_error:.2f} %\n'
-                                  f'{record_range}'))
+                                  f'{record_range}\n{LIMITS_COMMENT}'))
     except OSError as err:
         msg = f'cannot write --output {args.output}: {err}'
         raise MPIError(msg) from err

@@ -12,10 +12,13 @@ One run: read the bag (sqlite3 or mcap; a ``.csv`` file works too) with
 options of ``mpi-ros identify`` (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit with
 :func:`mpi_ros.identify` (``order``
 ``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
-fit errors (37); optionally write the parameter YAML (``params_file``); then send all
-eight ``model.*`` keys (Gamma's five arrays and the operating point
-``model.input_offset``, ``model.output_offset``, ``model.output_sign``) in **one**
-``set_parameters_atomically`` request to ``target_node``. The target either applies the
+fit errors (37); optionally write the parameter YAML (``params_file``); then send every
+key ``mpi-ros identify`` writes (:func:`mpi_ros.pipeline.identified_parameters`: Gamma's
+five arrays, the operating point ``model.input_offset``, ``model.output_offset``,
+``model.output_sign``, the dynamics the fit found, ``model.dead_time``,
+``model.rate_dependence.*`` or ``model.resonance.*``, and ``output.min`` / ``output.max``,
+the input range of the identification) in **one** ``set_parameters_atomically`` request
+to ``target_node``. The target either applies the
 whole model or rejects it, so nothing is ever half-applied (a plain model switches the
 target's extension off); the wait for the service and for its answer is bounded by
 ``service_timeout``.
