@@ -296,6 +296,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     # time or an output mode: Gamma only, as the node does, and a note).
     import numpy as np
     from ..compensation import operating_range
+    from ..compensation.limits import limits_shortfall
     from ..compensation.updates import uncompensated
     from .ranges import outside
     plain = not model.timed
@@ -309,6 +310,10 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                   ' clamping; pass --output-min and --output-max to clamp')
     else:
         lo, hi, source = limits
+        # The node's rule (compensation.limits): limits that cut the identified range.
+        shortfall = limits_shortfall(model, lo, hi)
+        if shortfall is not None:
+            _progress(f'warning: {shortfall.describe(names=source)}')
         reach = operating_range(model.gamma, lo, hi)
         out = outside(values, *reach)
         if out.count:

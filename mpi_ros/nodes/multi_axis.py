@@ -283,9 +283,17 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         # Lifecycle state unconfigured: the parameters hold them; configure loads them.
         if self._configured:
             self._install(models, installed=compensator is not None)
+            self._check_axes_limits()
+
+    def _check_axes_limits(self) -> None:
+        """Warn about each axis whose limits cut its model's identified range."""
+        if self._compensator is not None:
+            for axis, core in enumerate(self._compensator.axes):
+                self._check_limits_fit(f'axis {axis}: ', core)
 
     def _load(self) -> None:
         self._install(load_axes(parameter_values(self, list(self._specs)), self._keys.prefixes))
+        self._check_axes_limits()
         if self._compensator is None:
             self.get_logger().info(
                 f'{self.axes} axes, {len(self._axis_models.missing)} without a model: publishing '

@@ -48,7 +48,7 @@ def lagged_bag(tmp_path_factory):
 
 @pytest.fixture
 def compensators(ros_context):
-    """Spin two compensators (/full, /static), stamping samples 1 ms apart."""
+    """Spin two compensator nodes, /full and /static, stamping samples 1 ms apart."""
     nodes = {name: CompensatorNode(context=ros_context, namespace=name, parameter_overrides=[
         Parameter('message_time', value='nominal'), Parameter('sample_period', value=1e-3)])
         for name in ('full', 'static')}
@@ -93,7 +93,7 @@ def _drive(driver, desired):
 
 
 def test_the_pushed_model_carries_the_lag_and_tracks_better(ros_context, compensators,
-                                                             lagged_bag):
+                                                            lagged_bag):
     node = IdentifierNode(context=ros_context, parameter_overrides=[
         Parameter('bag', value=str(lagged_bag)), Parameter('order', value='6,3'),
         Parameter('target_node', value='/full/compensator'),
