@@ -38,6 +38,7 @@ from .order import format_order, Order, parse_order as parse_order_text
 from .params import write_params_yaml
 from .recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording, \
     Recording
+from .units import INPUT_QUANTITY_KEY
 
 __all__ = ['BagFit', 'DATA_NAMES', 'DATA_PARAMETERS', 'PARAMETERS', 'RecordingFit',
            'STOP_SIGNALS', 'check_identifier_value', 'fit_bag', 'fit_bag_axes',
@@ -89,12 +90,15 @@ class BagFit:
         Everything ``mpi-ros identify`` writes for this record
         (:func:`identified_parameters`): `parameters` and the output limits; what the
         identifier pushes.
+    warnings : tuple of str
+        Scales of the record that look wrong (:func:`mpi_ros.units.scale_warnings`).
 
     """
 
     result: IdentificationResult
     parameters: dict[str, Any]
     written: dict[str, Any]
+    warnings: tuple[str, ...] = ()
 
     def summary(self) -> str:
         """
@@ -203,7 +207,8 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
     if missing:
         msg = f'identify returned parameters {sorted(parameters)}; missing {missing}'
         raise IdentificationError(msg)
-    return BagFit(result=result, parameters=parameters, written=written)
+    return BagFit(result=result, parameters=parameters, written=written,
+                  warnings=fit.recording.warnings)
 
 
 def identified_parameters(result: IdentificationResult,
@@ -226,12 +231,16 @@ def identified_parameters(result: IdentificationResult,
     dict
         ``result.full_model.to_params()`` (Gamma, the operating point and the keys of the
         dynamics found: ``model.dead_time``, ``model.rate_dependence.*``,
-        ``model.resonance.*``), and with a recording ``output.min`` / ``output.max``: the
-        input range the actuator was driven over during identification [A or V], the
-        range the model knows (a command outside it extrapolates the model).
+        ``model.resonance.*``), and with a recording ``model.input_quantity`` (``current``
+        or ``voltage``, from the input's unit, :mod:`mpi_ros.units`) and ``output.min`` /
+        ``output.max``: the input range the actuator was driven over during
+        identification [A or V], the range the model knows (a command outside it
+        extrapolates the model).
 
     """
     parameters = dict(result.full_model.to_params())
+    if recording is not None:
+        parameters[INPUT_QUANTITY_KEY] = recording.units.input_quantity
     if recording is not None and len(recording):
         current = np.asarray(recording.current, dtype=np.float64)
         low, high = float(np.min(current)), float(np.max(current))
@@ -431,7 +440,8 @@ def check_identifier_value(name: str, value: Any) -> None:
 
 
 def identify_bag(values: Mapping[str, Any], *, info: Callable[[str], Any],
-                 error: Callable[[str], Any]) -> Tuple['BagFit | List[BagFit]', Dict[str, Any]]:
+                 error: Callable[[str], Any], warn: Callable[[str], Any] | None = None
+                 ) -> Tuple['BagFit | List[BagFit]', Dict[str, Any]]:
     """
     Fit, report, and write the YAML if asked: one identifier run up to the push.
 
@@ -441,6 +451,8 @@ def identify_bag(values: Mapping[str, Any], *, info: Callable[[str], Any],
         The identifier's parameter values (:data:`PARAMETERS`).
     info, error : callable
         Log a line (the node's logger).
+    warn : callable, optional
+        Log a warning (scales that look wrong); default: `info`.
 
     Returns
     -------
@@ -477,6 +489,9 @@ def identify_bag(values: Mapping[str, Any], *, info: Callable[[str], Any],
         error(f'identification refused the data of {bag}: {err}; no model was '
               'written or pushed')
         raise
+    for fit in fitted if isinstance(fitted, list) else [fitted]:
+        for warning in fit.warnings:
+            (warn or info)(warning)
     if isinstance(fitted, list):
         parameters: Dict[str, Any] = {}
         for axis, fit in enumerate(fitted):

@@ -47,14 +47,15 @@ import numpy as np
 import numpy.typing as npt
 
 from ..compensation.limits import identified_range, IdentifiedRange
+from ..units import input_unit_of
 
 __all__ = ['IdentifiedRange', 'Outside', 'identified_range', 'outside', 'range_header',
            'recorded_range']
 
 #: The header line :func:`range_header` writes and :func:`recorded_range` reads.
 _NUMBER = r'([-+0-9.eE]+|nan|inf)'
-_HEADER = re.compile(rf'^#\s*identified on current {_NUMBER} to {_NUMBER} A, displacement '
-                     rf'{_NUMBER} to {_NUMBER} m\s*$')
+_HEADER = re.compile(rf'^#\s*identified on (?:current|voltage) {_NUMBER} to {_NUMBER} [AV], '
+                     rf'displacement {_NUMBER} to {_NUMBER} m\s*$')
 
 
 @dataclass(frozen=True)
@@ -117,7 +118,8 @@ class Outside:
                 f'{", ".join(sides)}')
 
 
-def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike) -> str:
+def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike,
+                 quantity: str = 'current') -> str:
     """
     Return the header line (without ``#``) that records a record's ranges in a YAML.
 
@@ -127,19 +129,22 @@ def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike) -> str:
         The record's current [A].
     displacement : array_like of float, shape (N,)
         The record's displacement [m].
+    quantity : {'current', 'voltage'}
+        The input quantity (:mod:`mpi_ros.units`): the input is in A or V.
 
     Returns
     -------
     str
-        ``identified on current LO to HI A, displacement LO to HI m`` (the shortest digits
-        that read back as the same floats).
+        ``identified on current LO to HI A, displacement LO to HI m`` (``voltage ... V``
+        for a voltage; the shortest digits that read back as the same floats).
 
     """
     x = np.asarray(current, dtype=np.float64)
     y = np.asarray(displacement, dtype=np.float64)
     ends = [float(np.min(x)), float(np.max(x)), float(np.min(y)), float(np.max(y))]
-    return (f'identified on current {ends[0]!r} to {ends[1]!r} A, displacement {ends[2]!r} to '
-            f'{ends[3]!r} m')
+    unit = input_unit_of(quantity)
+    return (f'identified on {quantity} {ends[0]!r} to {ends[1]!r} {unit}, displacement '
+            f'{ends[2]!r} to {ends[3]!r} m')
 
 
 def recorded_range(path: 'str | os.PathLike[str]') -> IdentifiedRange | None:

@@ -75,6 +75,7 @@ from ..compensation.screening import FaultLog
 from ..compensation.status import lifecycle_status, RateWindow, state_after, status_values
 from ..compensation.updates import Prepared, uncompensated, UpdateRule
 from ..errors import MPIError, ParameterRejected
+from ..units import INPUT_QUANTITY_KEY, input_unit_of
 
 __all__ = ['CompensatorNodeBase', 'DRAIN_LIMIT']
 
@@ -491,24 +492,25 @@ class CompensatorNodeBase(LifecycleNode):
         if warning is not None:
             self.get_logger().warning(where + warning)
 
-    def _check_limits_fit(self, label: str, compensator: Any) -> None:
+    def _check_limits_fit(self, prefix: str, compensator: Any) -> None:
         """
         Warn when the limits leave part of a model's identified range unreachable.
 
-        ``label`` names the model in the log (``''`` or ``'axis 1: '``); ``compensator`` is
-        the core serving it (its model and its ``output_min`` / ``output_max``).  The
-        sentence stays on /diagnostics (value ``limits``) until the limits or the model
-        fit again.
+        ``prefix`` is the model's (``''`` or ``'axis1.'``); ``compensator`` is the core
+        serving it (its model and its ``output_min`` / ``output_max``).  The sentence
+        stays on /diagnostics (value ``limits``) until the limits or the model fit again.
         """
         shortfall = limits_shortfall(compensator.model, compensator.output_min,
                                      compensator.output_max)
+        label = f'axis {prefix[4:-1]}: ' if prefix else ''
         if shortfall is None:
             self._limits_notes.pop(label, None)
             return
         names = 'output.min / output.max'
-        if label:
-            names = f'{label.rstrip(": ").replace(" ", "")}.{names} (or output.min / output.max)'
-        note = shortfall.describe(names=names)
+        if prefix:
+            names = f'{prefix}output.min / {prefix}output.max (or {names})'
+        unit = input_unit_of(self.get_parameter(prefix + INPUT_QUANTITY_KEY).value)
+        note = shortfall.describe(unit=unit, names=names)
         self._limits_notes[label] = note
         self.get_logger().warning(f'{label}{note}')
 

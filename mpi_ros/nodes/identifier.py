@@ -123,7 +123,8 @@ class IdentifierNode(Node):
         """
         values = {name: self.get_parameter(name).value for name in _SPECS}
         logger = self.get_logger()
-        fitted, parameters = identify_bag(values, info=logger.info, error=logger.error)
+        fitted, parameters = identify_bag(values, info=logger.info, error=logger.error,
+                                          warn=logger.warning)
         if values['push']:
             target = values['target_node']
             push_model_parameters(self, target, parameters, timeout=values['service_timeout'])

@@ -17,12 +17,22 @@ from mpi_ros.pipeline import fit_recording, identified_parameters
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import Recording
+from mpi_ros.units import resolve_units
 import numpy as np
 import pytest
 
-from .test_compensator_extensions import typed
+from .test_compensator_extensions import typed as typed_numbers
 
-VOLTS_PER_AMPERE = 112.5              # 0.2..1.8 A of the built-in actuator -> -90..90 V
+VOLTS_PER_AMPERE = 112.5             # 0.2..1.8 A of the built-in actuator -> -90..90 V
+
+
+def typed(mapping):
+    """Return rclpy Parameters: strings as strings, the rest as typed_numbers does."""
+    from rclpy.parameter import Parameter
+    text = {name: value for name, value in mapping.items() if isinstance(value, str)}
+    numbers = {name: value for name, value in mapping.items() if name not in text}
+    strings = [Parameter(name, Parameter.Type.STRING, value) for name, value in text.items()]
+    return typed_numbers(numbers) + strings
 
 
 @pytest.fixture(scope='module')
@@ -31,7 +41,8 @@ def piezo():
     t, current = identification_excitation(8.0, sample_rate=500.0, seed=3)
     displacement = MagnetostrictiveActuator().simulate(t, current)
     volts = VOLTS_PER_AMPERE * (current - 1.0)
-    fit = fit_recording(Recording(t, volts, displacement), order=(6, 3), dynamics='off')
+    recording = Recording(t, volts, displacement, units=resolve_units(input_unit='V'))
+    fit = fit_recording(recording, order=(6, 3), dynamics='off')
     return fit.result.model, identified_parameters(fit.result, fit.recording), fit.recording
 
 
@@ -61,6 +72,7 @@ def test_a_model_outside_the_default_limits_is_pushed_with_a_warning(ros_context
         assert shortfall is not None and 0.4 < shortfall.unreachable < 1.0
         assert f'{100 * shortfall.unreachable:.3g} % of its displacement range' in err
         assert 'WARN' in err and 'is unreachable' in err
+        assert 'V, not inside output.min / output.max 0 to 2 V' in err     # a voltage model
         values = _diagnostics(node)
         assert 'is unreachable' in values['limits']
         commands = [node.command(float(d)) for d in _desired(recording)]
