@@ -39,6 +39,11 @@ Several actuators (``axes`` > 1)
     with the keys ``axis<k>.model.*``: every axis changes, or none.  If any axis is
     refused, nothing is written or pushed.
 
+With ``diagnose:=true`` the node also runs :func:`mpi_ros.diagnosis.diagnose` on the
+record (the first 60 % trains, the rest validates) and, when the diagnosis names an effect
+with a clear gain (not weak, not tied), delivers that extended model instead
+(:func:`mpi_ros.pipeline.diagnosed_parameters`); it logs what the diagnosis found either way.
+
 When :func:`mpi_ros.identify` refuses the data (``IdentificationError``: output not
 monotone in the input, a fit no better than a straight line, too little excitation),
 the node logs the reason, writes no file and pushes nothing.

@@ -137,3 +137,32 @@ def test_the_pushed_model_carries_the_lag_and_tracks_better(ros_context, compens
     print('tracking errors', errors, 'lag', read[LAG_KEY])
     # Measured on this trajectory: about 0.6 % (lag modelled) against 5.4 % (static).
     assert errors['full'] < 0.5 * errors['static'], errors
+
+
+def test_diagnose_delivers_the_extension_it_names_clearly(ros_context, compensators,
+                                                          tmp_path):
+    """``diagnose: true``: the extension the diagnosis names with a clear gain is pushed."""
+    t, current = identification_excitation(10.0, sample_rate=RATE, seed=1)
+    config = ActuatorConfig(noise_std_m=2e-8, thermal_gain_m_per_a2=1.2e-6)
+    displacement = MagnetostrictiveActuator(config, seed=1).simulate(t, current)
+    bag = tmp_path / 'drift'
+    write_bag_signals(bag, t, current, displacement)
+    node = IdentifierNode(context=ros_context, parameter_overrides=[
+        Parameter('bag', value=str(bag)), Parameter('order', value='6,3'),
+        Parameter('diagnose', value=True), Parameter('target_node', value='/full/compensator'),
+        Parameter('service_timeout', value=120.0)])     # the first creep model compiles
+    try:
+        fit = node.run()
+    finally:
+        node.destroy_node()
+    assert ', clear (validation gain' in fit.diagnosis, fit.diagnosis
+    cause = fit.diagnosis.split()[1].rstrip(',')
+    from mpi_ros.extensions import EFFECTS
+    keys = EFFECTS[cause].keys
+    assert all(key in fit.written for key in keys)
+    applied = compensators['full'].compensator.model
+    assert applied.to_params() == fit.parameters
+    assert compensators['full'].compensator.kind == cause
+    for key in keys:
+        assert compensators['full'].get_parameter(key).value == pytest.approx(
+            fit.written[key], rel=1e-12)
