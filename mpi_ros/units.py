@@ -58,6 +58,9 @@ INPUT_QUANTITY_KEY = 'model.input_quantity'
 DISPLACEMENT_LIMIT = 1e-3
 #: Smallest sample interval [s] that suggests a time column in ms read as s.
 INTERVAL_LIMIT = 0.1
+#: Largest input [A] plausible for a coil current when the name says no unit (a piezo's
+#: voltage read as a current reaches tens to hundreds).
+CURRENT_LIMIT = 20.0
 
 # Words in a name that name a unit (case-insensitive), and the unit.
 _WORDS = {'volt': 'V', 'volts': 'V', 'voltage': 'V', 'millivolt': 'mV', 'millivolts': 'mV',
@@ -92,6 +95,8 @@ class SignalUnits:
         Factors to s, to A or V, and to m.
     found : str
         How they were found (one phrase per signal).
+    input_known : bool
+        Whether the input's unit was named or stated (False: A by default).
 
     Examples
     --------
@@ -108,6 +113,7 @@ class SignalUnits:
     input_factor: float = 1.0
     output_factor: float = 1.0
     found: str = ''
+    input_known: bool = False
 
     @property
     def si_input(self) -> str:
@@ -217,10 +223,11 @@ def resolve_units(time_name: str = '', input_name: str = '', output_name: str = 
             base = _BASE[role]
             units[role] = (base, 1.0)
             found.append(f'{role} {name!r} times {scale:g}: {base} (the scale converts it)')
+    known = input_unit is not None or named_unit(input_name, 'input') is not None
     return SignalUnits(time=units['time'][0], input=units['input'][0],
                        output=units['output'][0], time_factor=units['time'][1],
                        input_factor=units['input'][1], output_factor=units['output'][1],
-                       found='; '.join(found))
+                       found='; '.join(found), input_known=known)
 
 
 def input_unit_of(quantity: str | None) -> str:
@@ -247,7 +254,8 @@ def input_unit_of(quantity: str | None) -> str:
 
 
 def scale_warnings(time: npt.ArrayLike, displacement: npt.ArrayLike, *, timed: bool,
-                   units: SignalUnits, option: dict[str, str]) -> list[str]:
+                   units: SignalUnits, option: dict[str, str],
+                   current: npt.ArrayLike | None = None) -> list[str]:
     """
     Return warnings about scales that look wrong, each naming the option to pass.
 
@@ -262,7 +270,11 @@ def scale_warnings(time: npt.ArrayLike, displacement: npt.ArrayLike, *, timed: b
     units : SignalUnits
         The units the values were read in.
     option : dict
-        How the user writes ``output_unit`` and ``time_unit`` (``--output-unit``).
+        How the user writes ``output_unit``, ``time_unit`` and ``input_unit``
+        (``--output-unit``).
+    current : array_like of float, shape (N,), optional
+        The input, after the conversion: a current of more than 20 A whose unit nothing
+        names is warned about (a voltage read as a current).
 
     Returns
     -------
@@ -286,6 +298,16 @@ def scale_warnings(time: npt.ArrayLike, displacement: npt.ArrayLike, *, timed: b
             f'for a smart-material actuator (read in {units.output}); if the output is in '
             f'nm or um, pass {option["output_unit"]} nm (or um), or end the column name '
             'with _nm / _um')
+    if current is not None and not units.input_known:
+        x = np.asarray(current, dtype=np.float64)
+        x = x[np.isfinite(x)]
+        largest = float(np.max(np.abs(x))) if x.size else 0.0
+        if largest > CURRENT_LIMIT:
+            flag = option.get('input_unit', '--input-unit')
+            warnings.append(
+                f'the input reaches {largest:.3g} A, large for a coil current, and its name '
+                f'says no unit; if it is a voltage, pass {flag} V (or end the column name '
+                'with _V): the model then records a voltage input')
     t = np.asarray(time, dtype=np.float64)
     if timed and t.size > 1:
         steps = np.diff(t)

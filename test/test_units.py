@@ -128,3 +128,17 @@ def test_compensate_names_volts_and_the_unreachable_share(piezo_csv, capsys):
     assert 'of its displacement range' in err and 'is unreachable' in err
     assert 'clamped to 0 to 2 V' in err
     assert header_limits['output.min'] < 0.0
+
+
+def test_a_voltage_read_as_a_current_is_warned_about(piezo_csv, tmp_path):
+    _, t, volts, displacement = piezo_csv
+    write_csv_columns(tmp_path / 'input.csv', {'time': t, 'input': volts,
+                                               'output': displacement})
+    [warning] = read_recording(tmp_path / 'input.csv', DataOptions(spelling='cli')).warnings
+    assert warning.startswith('the input reaches 112 A') and '--input-unit V' in warning
+    stated = read_recording(tmp_path / 'input.csv',
+                            DataOptions(spelling='cli', input_unit='V'))
+    assert stated.warnings == () and stated.units.input_quantity == 'voltage'
+    # A named current is the user's statement: no warning, whatever its size.
+    write_csv_columns(tmp_path / 'amps.csv', {'time': t, 'I_A': volts, 'y': displacement})
+    assert read_recording(tmp_path / 'amps.csv').warnings == ()

@@ -249,9 +249,11 @@ def in_si(recording: Recording, options: DataOptions, *, time_name: str = '',
                           input_unit=options.input_unit, output_unit=options.output_unit)
     time = recording.time * units.time_factor if recording.timed else recording.time
     displacement = recording.displacement * units.output_factor
+    current = recording.current * units.input_factor
     warnings = scale_warnings(time, displacement, timed=recording.timed, units=units,
                               option={name: options.name(name)
-                                      for name in ('output_unit', 'time_unit')})
-    return Recording(time, recording.current * units.input_factor, displacement,
+                                      for name in ('output_unit', 'time_unit', 'input_unit')},
+                              current=current)
+    return Recording(time, current, displacement,
                      source=recording.source, notes=recording.notes, timed=recording.timed,
                      units=units, warnings=tuple(warnings))
