@@ -65,54 +65,6 @@ class IdentifiedRange:
     displacement: tuple[float, float] | None = None
 
 
-def identified_range(model: Any) -> IdentifiedRange:
-    """
-    Return the current and displacement ranges a model's thresholds say it was fitted on.
-
-    Parameters
-    ----------
-    model : MPIModel or extended model
-        A forward model (an extended model's Gamma is used).
-
-    Returns
-    -------
-    IdentifiedRange
-        Both ranges, or None for both when the thresholds of S' are not spaced as
-        (29)-(31) space them (a model written by hand, or ``l = 0``), or give no proper
-        range (see the module docstring).
-
-    """
-    gamma = gamma_of(model)
-    s_inv = gamma.inverse().superposition
-    r = np.asarray(s_inv.thresholds, dtype=np.float64)
-    positive, negative = r[r > 0.0], -r[r < 0.0][::-1]
-    if not (positive.size or negative.size) or not all(
-            _spaced_as_identified(branch) for branch in (positive, negative)):
-        return IdentifiedRange()
-    # (30)-(31): the k thresholds of a branch end at (k - 1/2)/k of its extent.
-    v_hi = float(positive[-1]) * positive.size / (positive.size - 0.5) if positive.size else 0.0
-    v_lo = -float(negative[-1]) * negative.size / (negative.size - 0.5) if negative.size else 0.0
-    h = gamma.hysteresis
-    w = np.asarray(h.weights, dtype=np.float64)
-    total, spread = float(np.sum(w)), float(np.sum(w * np.asarray(h.thresholds)))
-    h_lo, h_hi = (float(v) for v in s_inv.apply(np.array([v_lo, v_hi])))
-    a = gamma.input_offset + (h_lo - spread) / total
-    b = gamma.input_offset + (h_hi + spread) / total
-    ends = sorted(gamma.output_offset + gamma.output_sign * v for v in (v_lo, v_hi))
-    if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
-        return IdentifiedRange()
-    return IdentifiedRange((float(a), float(b)), (float(ends[0]), float(ends[1])))
-
-
-def _spaced_as_identified(branch: npt.NDArray[np.float64]) -> bool:
-    # (30)-(31): the k thresholds of a branch, ascending, are (i - 1/2)/k of its extent,
-    # i.e. 1, 3, 5, ... times the first (an empty branch: the output never went there).
-    if not branch.size:
-        return True
-    odd = 2.0 * np.arange(branch.size) + 1.0
-    return bool(np.allclose(branch, odd * branch[0], rtol=1e-6, atol=0.0))
-
-
 @dataclass(frozen=True)
 class LimitsShortfall:
     """
@@ -164,6 +116,45 @@ class LimitsShortfall:
                 f'its displacement range {d_lo:.4g} to {d_hi:.4g} m is unreachable (the '
                 f'limits reach {r_lo:.4g} to {r_hi:.4g} m); set {names} to the safe range '
                 'of the actuator (mpi-ros identify writes the identified range)')
+
+
+def identified_range(model: Any) -> IdentifiedRange:
+    """
+    Return the current and displacement ranges a model's thresholds say it was fitted on.
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        A forward model (an extended model's Gamma is used).
+
+    Returns
+    -------
+    IdentifiedRange
+        Both ranges, or None for both when the thresholds of S' are not spaced as
+        (29)-(31) space them (a model written by hand, or ``l = 0``), or give no proper
+        range (see the module docstring).
+
+    """
+    gamma = gamma_of(model)
+    s_inv = gamma.inverse().superposition
+    r = np.asarray(s_inv.thresholds, dtype=np.float64)
+    positive, negative = r[r > 0.0], -r[r < 0.0][::-1]
+    if not (positive.size or negative.size) or not all(
+            _spaced_as_identified(branch) for branch in (positive, negative)):
+        return IdentifiedRange()
+    # (30)-(31): the k thresholds of a branch end at (k - 1/2)/k of its extent.
+    v_hi = float(positive[-1]) * positive.size / (positive.size - 0.5) if positive.size else 0.0
+    v_lo = -float(negative[-1]) * negative.size / (negative.size - 0.5) if negative.size else 0.0
+    h = gamma.hysteresis
+    w = np.asarray(h.weights, dtype=np.float64)
+    total, spread = float(np.sum(w)), float(np.sum(w * np.asarray(h.thresholds)))
+    h_lo, h_hi = (float(v) for v in s_inv.apply(np.array([v_lo, v_hi])))
+    a = gamma.input_offset + (h_lo - spread) / total
+    b = gamma.input_offset + (h_hi + spread) / total
+    ends = sorted(gamma.output_offset + gamma.output_sign * v for v in (v_lo, v_hi))
+    if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
+        return IdentifiedRange()
+    return IdentifiedRange((float(a), float(b)), (float(ends[0]), float(ends[1])))
 
 
 def limits_shortfall(model: Any, output_min: float,
@@ -223,3 +214,12 @@ def limits_shortfall(model: Any, output_min: float,
         return None
     return LimitsShortfall((a, b), (float(output_min), float(output_max)), (d_lo, d_hi),
                            (r_lo, r_hi), unreachable)
+
+
+def _spaced_as_identified(branch: npt.NDArray[np.float64]) -> bool:
+    # (30)-(31): the k thresholds of a branch, ascending, are (i - 1/2)/k of its extent,
+    # i.e. 1, 3, 5, ... times the first (an empty branch: the output never went there).
+    if not branch.size:
+        return True
+    odd = 2.0 * np.arange(branch.size) + 1.0
+    return bool(np.allclose(branch, odd * branch[0], rtol=1e-6, atol=0.0))
