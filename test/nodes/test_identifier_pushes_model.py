@@ -134,7 +134,6 @@ def test_the_pushed_model_carries_the_lag_and_tracks_better(ros_context, compens
         settled = slice(200, None)
         errors[name] = float(np.sqrt(np.mean((reached[settled] - desired[settled]) ** 2))
                              / (high - low))
-    print('tracking errors', errors, 'lag', read[LAG_KEY])
     # Measured on this trajectory: about 0.6 % (lag modelled) against 5.4 % (static).
     assert errors['full'] < 0.5 * errors['static'], errors
 
