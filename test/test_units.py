@@ -142,3 +142,27 @@ def test_a_voltage_read_as_a_current_is_warned_about(piezo_csv, tmp_path):
     # A named current is the user's statement: no warning, whatever its size.
     write_csv_columns(tmp_path / 'amps.csv', {'time': t, 'I_A': volts, 'y': displacement})
     assert read_recording(tmp_path / 'amps.csv').warnings == ()
+
+
+def test_simulate_refuses_volts_for_a_current_model(tmp_path, capsys):
+    t, current = identification_excitation(8.0, sample_rate=500.0, seed=1)
+    displacement = MagnetostrictiveActuator().simulate(t, current)
+    write_csv_columns(tmp_path / 'rec.csv', {'time': t, 'current_A': current,
+                                             'displacement': displacement})
+    assert main(['identify', str(tmp_path / 'rec.csv'), '--order', '4,2', '--dynamics', 'off',
+                 '-o', str(tmp_path / 'p.yaml')]) == 0
+    write_csv_columns(tmp_path / 'v.csv', {'u_V': current})
+    capsys.readouterr()
+    assert main(['simulate', str(tmp_path / 'p.yaml'), '--input', str(tmp_path / 'v.csv'),
+                 '--output', str(tmp_path / 's.csv')]) == 1
+    assert ("column 'u_V' is in V, but" in capsys.readouterr().err)
+    write_csv_columns(tmp_path / 'ma.csv', {'i_mA': 1e3 * current})
+    assert main(['simulate', str(tmp_path / 'p.yaml'), '--input', str(tmp_path / 'ma.csv'),
+                 '--output', str(tmp_path / 'm.csv')]) == 0
+    write_csv_columns(tmp_path / 'a.csv', {'current': current})
+    assert main(['simulate', str(tmp_path / 'p.yaml'), '--input', str(tmp_path / 'a.csv'),
+                 '--output', str(tmp_path / 'a_out.csv')]) == 0
+    from mpi_ros.recordings import read_csv_table
+    milli = read_csv_table(tmp_path / 'm.csv')[1][:, 1]
+    plain = read_csv_table(tmp_path / 'a_out.csv')[1][:, 1]
+    np.testing.assert_allclose(milli, plain, rtol=1e-12)        # mA converted to A

@@ -113,3 +113,19 @@ def test_the_multi_axis_node_warns_per_axis(ros_context, piezo, capfd):
         assert values['limits'].startswith('axis 0: ')
     finally:
         node.destroy_node()
+
+
+def test_a_model_outside_the_limits_is_warned_about_at_configure(ros_context, piezo, capfd):
+    _, parameters, _ = piezo
+    gamma_only = {key: value for key, value in parameters.items()
+                  if not key.startswith('output.')}
+    capfd.readouterr()
+    node = CompensatorNode(context=ros_context, parameter_overrides=typed(gamma_only))
+    try:
+        assert node.lifecycle_state == 'active'                    # autostart: configured
+        err = capfd.readouterr().err
+        assert 'is unreachable' in err and 'configure done' in err
+        assert err.index('is unreachable') < err.index('configure done')
+        assert 'is unreachable' in _diagnostics(node)['limits']
+    finally:
+        node.destroy_node()
