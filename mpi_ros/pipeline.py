@@ -27,8 +27,10 @@ import os
 import signal
 from typing import Any, Dict, List, Tuple
 
+import numpy as np
+
 from .compensation.parameters import AXES, ParameterSpec
-from .compensation.updates import axis_key
+from .compensation.updates import axis_key, LIMIT_KEYS
 from .errors import DataError, IdentificationError, MPIError, ParameterRejected
 from .identification import IdentificationResult, identify
 from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS
@@ -36,10 +38,18 @@ from .order import format_order, Order, parse_order as parse_order_text
 from .params import write_params_yaml
 from .recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording, \
     Recording
+from .units import INPUT_QUANTITY_KEY
 
 __all__ = ['BagFit', 'DATA_NAMES', 'DATA_PARAMETERS', 'PARAMETERS', 'RecordingFit',
-           'STOP_SIGNALS', 'check_identifier_value', 'fit_bag', 'fit_bag_axes',
-           'fit_recording', 'identify_bag', 'parse_order']
+           'STOP_SIGNALS', 'check_identifier_value', 'diagnosed_parameters', 'fit_bag',
+           'fit_bag_axes',
+           'LIMITS_COMMENT', 'fit_recording', 'identified_parameters', 'identify_bag',
+           'parse_order']
+
+#: The comment a parameter file gets above the output limits :func:`identified_parameters` sets.
+LIMITS_COMMENT = ('output.min / output.max: the input range the actuator was driven over '
+                  'during identification\n(the model extrapolates outside it); narrow them to '
+                  'the safe range of your actuator')
 
 #: The signals that stop a run (a node, or the workers of :func:`fit_bag_axes`).
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -74,13 +84,25 @@ class BagFit:
         The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
         ``.samples``, solver status.
     parameters : dict of str to list of float, float or int
-        ``result.model.to_params()``: the five ``model.*`` arrays of Gamma and the three
-        operating point keys.
+        ``result.full_model.to_params()``: the five ``model.*`` arrays of Gamma, the three
+        operating point keys and the keys of the dynamics the fit found (dead time, lag,
+        output mode), exactly the model ``mpi-ros identify`` writes.
+    written : dict of str to value
+        Everything ``mpi-ros identify`` writes for this record
+        (:func:`identified_parameters`): `parameters` and the output limits; what the
+        identifier pushes.
+    warnings : tuple of str
+        Scales of the record that look wrong (:func:`mpi_ros.units.scale_warnings`).
+    diagnosis : str
+        With ``diagnose``: what the diagnosis found and which model is delivered.
 
     """
 
     result: IdentificationResult
     parameters: dict[str, Any]
+    written: dict[str, Any]
+    warnings: tuple[str, ...] = ()
+    diagnosis: str = ''
 
     def summary(self) -> str:
         """
@@ -93,9 +115,11 @@ class BagFit:
 
         """
         n, l_s = self.result.order
+        cause = getattr(self.result.full_model, 'cause', None)
+        carried = f'; the model carries {cause}' if cause else ''
         return (f'fitted order n={n}, l={l_s} on {self.result.samples} samples: '
                 f'nonlinearity error {100.0 * self.result.nonlinearity_error:.3f} %, '
-                f'relative RMS error {100.0 * self.result.rms_error:.3f} %')
+                f'relative RMS error {100.0 * self.result.rms_error:.3f} %{carried}')
 
 
 def fit_recording(source: 'str | os.PathLike[str] | Recording',
@@ -146,7 +170,7 @@ def fit_recording(source: 'str | os.PathLike[str] | Recording',
 
 def fit_bag(path: str, *, input_topic: str = '/current_command',
             output_topic: str = '/displacement', order: Order = 'auto',
-            options: DataOptions | None = None) -> BagFit:
+            options: DataOptions | None = None, diagnosed: bool = False) -> BagFit:
     """
     Read a bag, fit an MPI model and compute its errors on the same data.
 
@@ -162,6 +186,11 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
     options : mpi_ros.recordings.DataOptions, optional
         Every data option (topics, joints, fields, indices, scales); default:
         the two topics with the other options at their defaults.
+    diagnosed : bool
+        Also run :func:`mpi_ros.diagnosis.diagnose` on the record (blocked validation:
+        the first 60 % trains, the rest validates) and, when it names an effect with a
+        clear gain (not weak, not tied), deliver its extended model instead of the
+        identified one (:func:`diagnosed_parameters`).
 
     Returns
     -------
@@ -181,16 +210,103 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
                               spelling='parameter')
     fit = fit_recording(path, options, order=order)          # the one pipeline (CLI too)
     result = fit.result
-    parameters = result.model.to_params()
-    expected = MODEL_KEYS + OPERATING_POINT_KEYS
-    if set(parameters) != set(expected):
-        msg = f'identify returned parameters {sorted(parameters)}; expected {list(expected)}'
+    written = identified_parameters(result, fit.recording)
+    diagnosis = ''
+    if diagnosed:
+        written, diagnosis = diagnosed_parameters(fit.recording, written, order=order)
+    parameters = {key: value for key, value in written.items()
+                  if key not in LIMIT_KEYS and key != INPUT_QUANTITY_KEY}
+    missing = [key for key in MODEL_KEYS + OPERATING_POINT_KEYS if key not in parameters]
+    if missing:
+        msg = f'identify returned parameters {sorted(parameters)}; missing {missing}'
         raise IdentificationError(msg)
-    return BagFit(result=result, parameters=parameters)
+    return BagFit(result=result, parameters=parameters, written=written,
+                  warnings=fit.recording.warnings, diagnosis=diagnosis)
+
+
+def diagnosed_parameters(recording: Recording, written: Mapping[str, Any], *,
+                         order: Order = 'auto') -> Tuple[Dict[str, Any], str]:
+    """
+    Replace an identified model by the extended model a diagnosis names with a clear gain.
+
+    Parameters
+    ----------
+    recording : Recording
+        The record the model was identified on.
+    written : mapping
+        :func:`identified_parameters` of it.
+    order : 'auto' or (int, int)
+        The model orders.
+
+    Returns
+    -------
+    parameters : dict
+        `written` when the diagnosis names no effect, a weak one, a tie or data outside the
+        invertible class; else the diagnosed model's keys (Gamma refitted on the training
+        part with the extension, validated on the rest) with the limits and the input
+        quantity of `written`.
+    sentence : str
+        What the diagnosis found and what is delivered.
+
+    """
+    from .diagnosis import diagnose
+    report = diagnose(recording, order=order)
+    decision = report.decision
+    clear = (report.model is not None and report.cause not in ('none', 'outside_invertible_class')
+             and decision.get('strength') == 'clear' and not decision.get('ambiguous'))
+    if not clear:
+        why = ('tied with ' + ', '.join(decision.get('tied_with', []))
+               if decision.get('ambiguous') else str(decision.get('strength', 'none')))
+        return dict(written), (f'diagnosis: {report.cause} ({why}, validation gain '
+                               f'{report.gain:.3f}): the identified model is delivered')
+    parameters = dict(report.parameters())
+    parameters.update({key: value for key, value in written.items()
+                       if key in LIMIT_KEYS or key == INPUT_QUANTITY_KEY})
+    return parameters, (f'diagnosis: {report.cause}, clear (validation gain '
+                        f'{report.gain:.3f}): its extended model is delivered')
+
+
+def identified_parameters(result: IdentificationResult,
+                          recording: Recording | None = None) -> dict[str, Any]:
+    """
+    Return every key ``mpi-ros identify`` writes and the identifier node pushes.
+
+    One function for both, so that a key the identification learns to write (a new
+    effect, a start-state policy) reaches the running compensator without a second edit.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        The fit.
+    recording : Recording, optional
+        The record it was fitted on; gives the output limits.
+
+    Returns
+    -------
+    dict
+        ``result.full_model.to_params()`` (Gamma, the operating point and the keys of the
+        dynamics found: ``model.dead_time``, ``model.rate_dependence.*``,
+        ``model.resonance.*``), and with a recording ``model.input_quantity`` (``current``
+        or ``voltage``, from the input's unit, :mod:`mpi_ros.units`) and ``output.min`` /
+        ``output.max``: the input range the actuator was driven over during
+        identification [A or V], the range the model knows (a command outside it
+        extrapolates the model).
+
+    """
+    parameters = dict(result.full_model.to_params())
+    if recording is not None:
+        parameters[INPUT_QUANTITY_KEY] = recording.units.input_quantity
+    if recording is not None and len(recording):
+        current = np.asarray(recording.current, dtype=np.float64)
+        low, high = float(np.min(current)), float(np.max(current))
+        if low < high:
+            parameters['output.min'], parameters['output.max'] = low, high
+    return parameters
 
 
 def fit_bag_axes(path: str, axes: int, *, options: DataOptions | None = None,
-                 order: Order = 'auto', workers: int = 0) -> list[BagFit]:
+                 order: Order = 'auto', workers: int = 0,
+                 diagnosed: bool = False) -> list[BagFit]:
     """
     Fit one model per axis of a multi-axis bag (Float64MultiArray topics).
 
@@ -217,6 +333,8 @@ def fit_bag_axes(path: str, axes: int, *, options: DataOptions | None = None,
     workers : int
         Processes fitting axes in parallel: 0 = one per CPU (at most one per axis), 1 =
         in this process.
+    diagnosed : bool
+        Diagnose each axis too (see :func:`fit_bag`).
 
     Returns
     -------
@@ -244,7 +362,8 @@ def fit_bag_axes(path: str, axes: int, *, options: DataOptions | None = None,
                 for axis in range(axes)]
     count = min(axes, os.cpu_count() or 1) if workers == 0 else min(workers, axes)
     if count <= 1:
-        return [_fit_axis(path, axis, opts, order) for axis, opts in enumerate(per_axis)]
+        return [_fit_axis(path, axis, opts, order, diagnosed)
+                for axis, opts in enumerate(per_axis)]
     # spawn, not fork: this process runs DDS threads (a forked child could inherit a
     # lock held by one of them).  The workers ignore SIGINT/SIGTERM (Ctrl-C reaches the
     # whole process group): this process stops, cancels what has not started and waits
@@ -252,7 +371,7 @@ def fit_bag_axes(path: str, axes: int, *, options: DataOptions | None = None,
     pool = ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context(
         'spawn'), initializer=_ignore_stop_signals)
     try:
-        futures = [pool.submit(_fit_axis, path, axis, opts, order)
+        futures = [pool.submit(_fit_axis, path, axis, opts, order, diagnosed)
                    for axis, opts in enumerate(per_axis)]
         return [future.result() for future in futures]
     finally:
@@ -290,9 +409,10 @@ def _ignore_stop_signals() -> None:
         signal.signal(signum, signal.SIG_IGN)
 
 
-def _fit_axis(path: str, axis: int, options: DataOptions, order: Order) -> BagFit:
+def _fit_axis(path: str, axis: int, options: DataOptions, order: Order,
+              diagnosed: bool = False) -> BagFit:
     try:
-        return fit_bag(path, options=options, order=order)
+        return fit_bag(path, options=options, order=order, diagnosed=diagnosed)
     except MPIError as err:
         msg = (f'axis {axis} (element or column {axis} of {options.input_topic}, '
                f'{options.output_topic}):')
@@ -347,6 +467,10 @@ PARAMETERS = (
         'Float64MultiArray topics with one element per axis (one sample or a chunk of '
         'samples x axes per message), every axis fitted and all models pushed to a '
         'multi-axis compensator in one request'), read_only=False),
+    ParameterSpec('diagnose', 'bool', False,
+                  'Also diagnose the bag (mpi-ros diagnose: the first 60 % trains, the rest '
+                  'validates) and deliver the extended model when it names an effect with a '
+                  'clear gain (not weak, not tied); else the identified model'),
     ParameterSpec('workers', 'integer', 0,
                   'axes > 1: processes fitting axes in parallel (0: one per CPU, at most '
                   'one per axis; 1: in this process)', value_range=(0, 1024)),
@@ -380,7 +504,8 @@ def check_identifier_value(name: str, value: Any) -> None:
 
 
 def identify_bag(values: Mapping[str, Any], *, info: Callable[[str], Any],
-                 error: Callable[[str], Any]) -> Tuple['BagFit | List[BagFit]', Dict[str, Any]]:
+                 error: Callable[[str], Any], warn: Callable[[str], Any] | None = None
+                 ) -> Tuple['BagFit | List[BagFit]', Dict[str, Any]]:
     """
     Fit, report, and write the YAML if asked: one identifier run up to the push.
 
@@ -390,6 +515,8 @@ def identify_bag(values: Mapping[str, Any], *, info: Callable[[str], Any],
         The identifier's parameter values (:data:`PARAMETERS`).
     info, error : callable
         Log a line (the node's logger).
+    warn : callable, optional
+        Log a warning (scales that look wrong); default: `info`.
 
     Returns
     -------
@@ -420,23 +547,30 @@ def identify_bag(values: Mapping[str, Any], *, info: Callable[[str], Any],
              f'{options.output_topic}, order {format_order(order)})')
     try:
         fitted: 'BagFit | List[BagFit]' = (
-            fit_bag_axes(bag, axes, options=options, order=order, workers=values['workers'])
-            if axes > 1 else fit_bag(bag, options=options, order=order))
+            fit_bag_axes(bag, axes, options=options, order=order, workers=values['workers'],
+                         diagnosed=values['diagnose'])
+            if axes > 1 else fit_bag(bag, options=options, order=order,
+                                     diagnosed=values['diagnose']))
     except IdentificationError as err:
         error(f'identification refused the data of {bag}: {err}; no model was '
               'written or pushed')
         raise
+    for fit in fitted if isinstance(fitted, list) else [fitted]:
+        for warning in fit.warnings:
+            (warn or info)(warning)
+        if fit.diagnosis:
+            info(fit.diagnosis)
     if isinstance(fitted, list):
         parameters: Dict[str, Any] = {}
         for axis, fit in enumerate(fitted):
             info(f'axis {axis}: {fit.summary()}')
-            parameters.update({axis_key(axis, key): v for key, v in fit.parameters.items()})
+            parameters.update({axis_key(axis, key): v for key, v in fit.written.items()})
         written = dict(parameters, axes=axes)
-        header = f'mpi_ros identifier: {axes} axes\nbag: {bag}'
+        header = f'mpi_ros identifier: {axes} axes\nbag: {bag}\n{LIMITS_COMMENT}'
     else:
         info(fitted.summary())
-        parameters = written = fitted.parameters
-        header = f'mpi_ros identifier: {fitted.summary()}\nbag: {bag}'
+        parameters = written = fitted.written
+        header = f'mpi_ros identifier: {fitted.summary()}\nbag: {bag}\n{LIMITS_COMMENT}'
     params_file = values['params_file']
     if params_file:
         write_params_yaml(params_file, written, node_name='compensator', header=header)

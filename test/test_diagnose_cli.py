@@ -155,12 +155,16 @@ def test_validation_shorter_than_the_lag_window_is_diagnosed(tmp_path, capsys):
 
 
 def test_time_in_ms_read_as_s_is_warned_about(tmp_path, capsys):
-    """A 19 ms dead time in a time column in ms: '19 s' gets a warning, --time-scale fixes it."""
+    """
+    A 19 ms dead time in a time column in ms: '19 s' gets a warning, --time-scale fixes it.
+
+    The column's name says no unit (a name ending in _ms is read in ms, issue 27).
+    """
     cfg = ActuatorConfig(noise_std_m=2e-8, dead_time_s=0.0206)
     t, x = identification_excitation(10.0, sample_rate=1000.0, seed=1)
     y = MagnetostrictiveActuator(cfg, seed=1).simulate(t, x)
-    write_csv_columns(tmp_path / 'ms.csv', {'time_ms': 1e3 * t, 'current': x, 'displacement': y})
-    argv = ['diagnose', str(tmp_path / 'ms.csv'), '--time-column', 'time_ms', '--order', '6',
+    write_csv_columns(tmp_path / 'ms.csv', {'t': 1e3 * t, 'current': x, 'displacement': y})
+    argv = ['diagnose', str(tmp_path / 'ms.csv'), '--time-column', 't', '--order', '6',
             '3', '--json', str(tmp_path / 'r.json'), '--report', str(tmp_path / 'report')]
     assert main(argv) == 0
     err = capsys.readouterr().err
@@ -174,6 +178,9 @@ def test_time_in_ms_read_as_s_is_warned_about(tmp_path, capsys):
     assert 'the record has a sample period of 1 s and lasts 1e+04 s (10001 samples)' in warning
     assert 'pass --time-scale 1e-3' in warning
     assert warning in (tmp_path / 'report' / 'summary.md').read_text()
+    # The reading's own check (mpi_ros.units) names the unit option.
+    assert any(line.startswith('warning: the samples are 1 s apart') and
+               '--time-unit ms' in line for line in err.splitlines())
 
     assert main([*argv, '--time-scale', '1e-3']) == 0
     assert 'warning:' not in capsys.readouterr().err

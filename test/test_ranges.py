@@ -51,6 +51,10 @@ def _warnings(err):
     return [line for line in err.splitlines() if line.startswith('warning: ')]
 
 
+def _file_limits(path):
+    return f'output.min of {path} and output.max of {path}'
+
+
 def _count(line):
     return int(re.match(r'warning: (\d+) of (\d+) ', line).group(1))
 
@@ -157,9 +161,12 @@ def test_compensate_warns_and_clamps_as_the_node(identified, capsys):
     expected = outside(desired, *reach)
     assert expected.count > 100
     first, second = _warnings(capsys.readouterr().err)
+    # identify wrote the record's range as output.min / output.max (issue 27).
+    params = read_params_yaml(tmp / 'p.yaml')
+    assert (params['output.min'], params['output.max']) == (lo, hi)
     assert first == 'warning: ' + expected.describe(
         'desired displacements', f', the range the model reaches with currents from {lo:.4g}'
-        f' to {hi:.4g} A (from the input range the model was identified on)', 'm')
+        f' to {hi:.4g} A (from {_file_limits(tmp / "p.yaml")})', 'm')
     _, table = read_csv_table(tmp / 'c.csv')
     commands = table[:, 2]
     assert lo <= commands.min() and commands.max() <= hi
@@ -185,7 +192,7 @@ def test_no_clamp_writes_the_inverse_and_says_how_far(identified, capsys):
     beyond = outside(commands, lo, hi)
     assert beyond.count > 0 and beyond.above > 0.0 and beyond.below > 0.0
     assert warnings[1] == 'warning: ' + beyond.describe(
-        'commands', ' (from the input range the model was identified on)', 'A') + (
+        'commands', f' (from {_file_limits(tmp / "p.yaml")})', 'A') + (
         '; not clamped (--no-clamp)')
 
 
@@ -282,7 +289,10 @@ def test_simulate_warns_about_currents_outside_the_identified_range(identified, 
 
 def test_without_the_header_the_thresholds_range_is_used(identified, tmp_path, capsys):
     tmp, rec = identified
-    write_params_yaml(tmp_path / 'bare.yaml', read_params_yaml(tmp / 'p.yaml'))
+    # A file of an older identify: no header, no output.min / output.max.
+    write_params_yaml(tmp_path / 'bare.yaml', {
+        key: value for key, value in read_params_yaml(tmp / 'p.yaml').items()
+        if not key.startswith('output.')})
     model = MPIModel.from_params(read_params_yaml(tmp_path / 'bare.yaml'))
     lo, hi = identified_range(model).current
     path, _ = _desired_file(tmp_path, rec, 1.4)

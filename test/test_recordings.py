@@ -399,8 +399,14 @@ def test_csv_named_columns_scales_quotes_and_crlf(tmp_path):
     np.testing.assert_allclose(rec.time, np.arange(12) * 1e-3, rtol=1e-15)
     np.testing.assert_allclose(rec.current, 0.2 * np.arange(12), rtol=1e-15)
     np.testing.assert_allclose(rec.displacement, np.arange(12) * 1e-6, rtol=1e-15)
+    # Issue 27: without scales the column names give the units (ms, nm) and the values are
+    # converted to SI; 'volt' names a voltage, kept in V.
     default = read_csv_signals(path, time_column='ms', input_column='volt')
-    np.testing.assert_array_equal(default.displacement, np.arange(12) * 1000.0)
+    np.testing.assert_allclose(default.displacement, np.arange(12) * 1000.0 * 1e-9,
+                               rtol=1e-15)
+    np.testing.assert_allclose(default.time, np.arange(12) * 1e-3, rtol=1e-15)
+    assert default.units.input_quantity == 'voltage'
+    assert (default.units.time, default.units.output) == ('ms', 'nm')
 
 
 def test_csv_without_time_column(tmp_path):

@@ -176,7 +176,8 @@ def test_dead_time_validation_scored_from_a_later_sample_in_volts_and_nm(tmp_pat
 
 @pytest.mark.parametrize('names, scales, expected', [
     (('Vplus_V', 'D1_nm'), (1.0, 1e-9), ('V', 'm')),
-    (('voltage', 'displacement_um'), (1.0, 1.0), ('V', 'µm')),
+    # Issue 27: the readers convert a named um column to m, so the data are in m.
+    (('voltage', 'displacement_um'), (1.0, 1.0), ('V', 'm')),
     (('volts', 'nm'), (0.1, 1e-9), ('A', 'm')),         # the scale converts volts to A
     (('input_mV', 'pos'), (1e-3, 1.0), ('V', 'm')),
     (('/current_command', '/displacement'), (1.0, 1.0), ('A', 'm')),

@@ -5,6 +5,7 @@ The ``mpi-ros`` command: offline tools and the three nodes behind one console sc
 Subcommands
 -----------
 ``identify BAG|CSV``      fit a model, write a parameter YAML (and ``--json`` statistics)
+``merge-axes A B ... -o F``  one identified file per axis -> a multi-axis parameter file
 ``simulate PARAMS``       forward model Gamma on a CSV column (warns about currents outside
                           the range the model was identified on)
 ``compensate PARAMS``     inverse model Gamma^-1 on a CSV column (offline feed-forward),
@@ -69,7 +70,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from ..order import format_order
     from .cli_options import check_outputs
     from ..params import params_yaml_text
-    from ..pipeline import fit_recording
+    from ..pipeline import fit_recording, identified_parameters, LIMITS_COMMENT
     from ..progress import Progress
     from .ranges import range_header
     from ..recordings import atomic_writes, read_recording
@@ -83,6 +84,11 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         recording = read_recording(args.data, options)
         for note in recording.notes:
             progress.say(f'note: {note}')
+        if recording.units.found:
+            progress.say(f'units: {recording.units.found} (stored in s, '
+                         f'{recording.units.si_input} and m)')
+        for warning in recording.warnings:
+            progress.say(f'warning: {warning}')
         progress.say(f'identifying from {len(recording.time)} samples of {args.data} '
                      f'(order {format_order(order)}) ...')
         result = fit_recording(recording, order=order, anchor=args.anchor,
@@ -101,7 +107,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
               f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; start state: '
               f"{result.start_state.get('description', 'n/a')}")
-    record_range = range_header(recording.current, recording.displacement)
+    record_range = range_header(recording.current, recording.displacement,
+                                recording.units.input_quantity)
     _progress(f'{record_range} (written in the YAML header: simulate and compensate warn'
               ' outside it, compensate clamps to it)')
     if result.findings:
@@ -110,11 +117,11 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         _progress(f'note: {note}')
     summary = dict(result.summary(), source=str(args.data))
     text = params_yaml_text(
-        result.full_model.to_params(), node_name=args.node_name,
+        identified_parameters(result, recording), node_name=args.node_name,
         header=(f'MPI model identified by mpi-ros identify from {args.data}\n'
                 f'order n={n}, l={l}; nonlinearity error (37) '
                 f'{100 * result.nonlinearity_error:.2f} %\n'
-                f'{record_range}'))
+                f'{record_range}\n{LIMITS_COMMENT}'))
     # The pair: both are written to temporary files, then the YAML is renamed over
     # --output and the JSON over --json last. The JSON names the YAML it describes by its
     # SHA-256, so a crash between the two renames (a new YAML beside an old JSON) shows.
@@ -241,24 +248,40 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     from ..extensions import extended_model_from_params
     from .ranges import identified_range, outside, recorded_range
     from ..recordings import read_csv_table, write_csv_columns
+    from ..units import INPUT_QUANTITY_KEY, input_unit_of, resolve_units
     described = extended_model_from_params(parameters)
+    quantity = parameters.get(INPUT_QUANTITY_KEY) or 'current'
+    unit = input_unit_of(quantity)
     header, table = read_csv_table(args.input,
                                    nonfinite_hint='remove those rows or fill in the values')
     time_column, input_column = _input_column(header, args, inverse=inverse)
-    result_column = args.column_name or ('current' if inverse else 'displacement')
+    result_column = args.column_name or (quantity if inverse else 'displacement')
     if result_column in (input_column, time_column):
         msg = (f'--column-name {result_column}: the result column would replace the '
                f'{"input" if result_column == input_column else "time"} column of the same '
                'name; pass --column-name with another name')
         raise MPIError(msg)
     column = header.index(input_column)
-    values = table[:, column]
-    time = None if time_column is None else table[:, header.index(time_column)]
+    # The units rule of every command (mpi_ros.units): names and options, values to SI.
+    units = resolve_units(time_column or '', '' if inverse else input_column,
+                          input_column if inverse else '', time_unit=args.time_unit,
+                          input_unit=None if inverse else args.input_unit,
+                          output_unit=args.output_unit if inverse else None)
+    values = table[:, column] * (units.output_factor if inverse else units.input_factor)
+    if not inverse and units.si_input != unit and units.input != 'A':
+        msg = (f'--input {args.input}: column {input_column!r} is in {units.input}, but '
+               f'{args.params} holds a {quantity} model (input in {unit}); pass the column '
+               f'in {unit} (or --input-unit)')
+        raise MPIError(msg)
+    time = None if time_column is None else (
+        table[:, header.index(time_column)] * units.time_factor)
+    if units.found:
+        _progress(f'units: {units.found} (converted to SI)')
     # The range identify wrote in the file's header, else the one the model's thresholds tell.
     ranges = recorded_range(args.params) or identified_range(described)
     if inverse:
-        limits = _limits(args, parameters, ranges.current)
-        result = _compensate(described, time, time_column, values, args, limits)
+        limits = _limits(args, parameters, ranges.current, unit)
+        result = _compensate(described, time, time_column, values, args, limits, unit)
     else:
         result = _simulate(described, time, time_column, values, args)
         if ranges.current is None:
@@ -266,7 +289,7 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
         else:
             out = outside(values, *ranges.current)
             if out.count:
-                _progress(f'warning: {out.describe("currents", ", " + _INPUT_RANGE, "A")};'
+                _progress(f'warning: {out.describe(quantity + "s", ", " + _INPUT_RANGE, unit)};'
                           ' the model extrapolates there')
     columns = {}
     if time_column is not None:
@@ -287,8 +310,9 @@ _UNKNOWN_RANGE = ('the model in {params} does not tell the range it was identifi
 
 
 def _limits(args: argparse.Namespace, parameters: dict[str, Any],
-            identified: tuple[float, float] | None) -> tuple[float, float, str] | None:
-    """Return the clamp range [A] and where it comes from, as the node would have it."""
+            identified: tuple[float, float] | None,
+            unit: str = 'A') -> tuple[float, float, str] | None:
+    """Return the clamp range [A or V] and where it comes from, as the node would have it."""
     ends: list[float] = []
     sources: list[str] = []
     for end, option, key in ((0, 'output_min', 'output.min'), (1, 'output_max', 'output.max')):
@@ -306,7 +330,8 @@ def _limits(args: argparse.Namespace, parameters: dict[str, Any],
             return None
     lo, hi = ends
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        msg = (f'the current range must be finite with its minimum below its maximum; found '
+        quantity = 'voltage' if unit == 'V' else 'current'
+        msg = (f'the {quantity} range must be finite with its minimum below its maximum; found '
                f'{lo:g} ({sources[0]}) and {hi:g} ({sources[1]}); pass --output-min and '
                "--output-max with the actuator's safe range")
         raise MPIError(msg)
@@ -315,13 +340,15 @@ def _limits(args: argparse.Namespace, parameters: dict[str, Any],
 
 
 def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
-                args: argparse.Namespace, limits: tuple[float, float, str] | None) -> Any:
+                args: argparse.Namespace, limits: tuple[float, float, str] | None,
+                unit: str = 'A') -> Any:
     # As the compensator node: the inverse of the model, its commands clamped to the safe
     # current range (the forward state follows the clamped command), unless --no-clamp.
     # With an effect (time column needed) the compensator's streaming inverse (with a dead
     # time or an output mode: Gamma only, as the node does, and a note).
     import numpy as np
     from ..compensation import operating_range
+    from ..compensation.limits import limits_shortfall
     from ..compensation.updates import uncompensated
     from .ranges import outside
     plain = not model.timed
@@ -335,11 +362,16 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                   ' clamping; pass --output-min and --output-max to clamp')
     else:
         lo, hi, source = limits
+        # The node's rule (compensation.limits): limits that cut the identified range.
+        shortfall = limits_shortfall(model, lo, hi)
+        if shortfall is not None:
+            _progress(f'warning: {shortfall.describe(unit=unit, names=source)}')
         reach = operating_range(model.gamma, lo, hi)
         out = outside(values, *reach)
         if out.count:
-            where = (f', the range the model reaches with currents from {lo:.4g} to {hi:.4g}'
-                     f' A (from {source})')
+            inputs = 'voltages' if unit == 'V' else 'currents'
+            where = (f', the range the model reaches with {inputs} from {lo:.4g} to {hi:.4g}'
+                     f' {unit} (from {source})')
             _progress(f'warning: {out.describe("desired displacements", where, "m")}')
     if limits is None or args.no_clamp:
         if plain:
@@ -351,7 +383,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
             out = outside(result, limits[0], limits[1])
             if out.count:
                 where = f' (from {limits[2]})'
-                _progress(f'warning: {out.describe("commands", where, "A")}; not clamped'
+                _progress(f'warning: {out.describe("commands", where, unit)}; not clamped'
                           ' (--no-clamp)')
         return result
     lo, hi, source = limits
@@ -360,7 +392,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     clamped = compensator.counters['clamped']
     if clamped:
         _progress(f'warning: {clamped} of {len(values)} commands clamped to {lo:.4g} to '
-                  f'{hi:.4g} A (from {source}), as the compensator node clamps; --no-clamp '
+                  f'{hi:.4g} {unit} (from {source}), as the compensator node clamps; --no-clamp '
                   'writes the unclamped inverse')
     return result
 
@@ -405,6 +437,44 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _cmd_compensate(args: argparse.Namespace) -> int:
     return _apply_model(args, inverse=True)
+
+
+def _cmd_merge_axes(args: argparse.Namespace) -> int:
+    # One identified file per axis -> one multi-axis compensator file (issue 27).
+    from ..compensation.parameters import merge_axes
+    from ..errors import ParameterRejected
+    from ..params import write_params_yaml
+    _check_output(args.output, '--output')
+    per_axis = [_model_parameters(path, args.node_name) for path in args.params]
+    try:
+        merged = merge_axes(per_axis)
+    except ParameterRejected as err:
+        msg = f'{err} (files: {", ".join(args.params)})'
+        raise MPIError(msg) from err
+    if args.joints:
+        joints = [name.strip() for name in args.joints.split(',')]
+        if len(joints) != len(per_axis) or len(set(joints)) != len(joints) or not all(joints):
+            msg = (f'--joints {args.joints}: give {len(per_axis)} different names, one per '
+                   'file, in the order of the files')
+            raise MPIError(msg)
+        merged.update(joints=joints, output_layout='flat')
+    header = [f'{len(per_axis)}-axis model merged by mpi-ros merge-axes']
+    for axis, path in enumerate(args.params):
+        header.append(f'axis {axis}: {path}')
+        with Path(path).open(encoding='utf-8') as f:
+            header += [f'  {line[1:].strip()}' for line in f
+                       if line.startswith('#') and 'identified on' in line]
+    if args.joints:
+        header.append('joints and output_layout flat: ros2_control forward_command_controller'
+                      ' layout (remap current_commands to /<controller>/commands)')
+    try:
+        write_params_yaml(args.output, merged, node_name=args.node_name or 'compensator',
+                          header='\n'.join(header))
+    except OSError as err:
+        msg = f'cannot write --output {args.output}: {err}'
+        raise MPIError(msg) from err
+    _progress(f'wrote {args.output} ({len(per_axis)} axes)')
+    return 0
 
 
 def _cmd_diagnose(argv: list[str]) -> int:
@@ -487,10 +557,26 @@ def _parser() -> argparse.ArgumentParser:
             p.add_argument('--no-clamp', action='store_true',
                            help='write the unclamped inverse (commands outside the range '
                                 'are counted and warned about, not limited)')
-        add_data_options(p, names=['time_column', 'input_column'], descriptions={
+        unit_option = 'output_unit' if name == 'compensate' else 'input_unit'
+        add_data_options(p, names=['time_column', 'input_column', 'time_unit', unit_option],
+                         descriptions={
             'input_column': f'CSV column of the {column} (needed when the file has several '
-                            'columns besides the time)'})
+                            'columns besides the time)',
+            unit_option: f'unit of the {column} column (unset: from a suffix of its name, '
+                         'e.g. _um, _V, else SI); converted to SI'})
         p.set_defaults(func=func)
+    p = sub.add_parser('merge-axes', help='merge identified files (one per axis) into one '
+                                          'multi-axis parameter file')
+    p.add_argument('params', nargs='+', help='parameter YAMLs written by mpi-ros identify, '
+                                             'one per axis, in axis order')
+    p.add_argument('-o', '--output', required=True, help='multi-axis parameter YAML to write')
+    p.add_argument('--node-name', default=None,
+                   help='node the files are keyed by and the output is keyed by (default: '
+                        "compensator, or each file's only node)")
+    p.add_argument('--joints', default=None, metavar='J0,J1,...',
+                   help='joint names in axis order: also writes joints and output_layout flat '
+                        '(the ros2_control forward_command_controller layout)')
+    p.set_defaults(func=_cmd_merge_axes)
     sub.add_parser('diagnose', help='find which effect the model misses (see diagnose -h)',
                    add_help=False)
     sub.add_parser('demo', help='closed-loop demo over DDS (see demo -h)', add_help=False)

@@ -42,36 +42,20 @@ from dataclasses import dataclass
 import os
 from pathlib import Path
 import re
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+
+from ..compensation.limits import identified_range, IdentifiedRange
+from ..units import input_unit_of
 
 __all__ = ['IdentifiedRange', 'Outside', 'identified_range', 'outside', 'range_header',
            'recorded_range']
 
 #: The header line :func:`range_header` writes and :func:`recorded_range` reads.
 _NUMBER = r'([-+0-9.eE]+|nan|inf)'
-_HEADER = re.compile(rf'^#\s*identified on current {_NUMBER} to {_NUMBER} A, displacement '
-                     rf'{_NUMBER} to {_NUMBER} m\s*$')
-
-
-@dataclass(frozen=True)
-class IdentifiedRange:
-    """
-    The current and displacement ranges a model was identified on (None: unknown).
-
-    Attributes
-    ----------
-    current : (float, float) or None
-        Lowest and highest current [A].
-    displacement : (float, float) or None
-        Lowest and highest displacement [m].
-
-    """
-
-    current: tuple[float, float] | None = None
-    displacement: tuple[float, float] | None = None
+_HEADER = re.compile(rf'^#\s*identified on (?:current|voltage) {_NUMBER} to {_NUMBER} [AV], '
+                     rf'displacement {_NUMBER} to {_NUMBER} m\s*$')
 
 
 @dataclass(frozen=True)
@@ -134,47 +118,8 @@ class Outside:
                 f'{", ".join(sides)}')
 
 
-def identified_range(model: Any) -> IdentifiedRange:
-    """
-    Return the current and displacement ranges a model's thresholds say it was fitted on.
-
-    Parameters
-    ----------
-    model : MPIModel or extended model
-        A forward model (an extended model's Gamma is used).
-
-    Returns
-    -------
-    IdentifiedRange
-        Both ranges, or None for both when the thresholds of S' are not spaced as
-        (29)-(31) space them (a model written by hand, or ``l = 0``), or give no proper
-        range (see the module docstring).
-
-    """
-    from ..compensation import gamma_of
-    gamma = gamma_of(model)
-    s_inv = gamma.inverse().superposition
-    r = np.asarray(s_inv.thresholds, dtype=np.float64)
-    positive, negative = r[r > 0.0], -r[r < 0.0][::-1]
-    if not (positive.size or negative.size) or not all(
-            _spaced_as_identified(branch) for branch in (positive, negative)):
-        return IdentifiedRange()
-    # (30)-(31): the k thresholds of a branch end at (k - 1/2)/k of its extent.
-    v_hi = float(positive[-1]) * positive.size / (positive.size - 0.5) if positive.size else 0.0
-    v_lo = -float(negative[-1]) * negative.size / (negative.size - 0.5) if negative.size else 0.0
-    h = gamma.hysteresis
-    w = np.asarray(h.weights, dtype=np.float64)
-    total, spread = float(np.sum(w)), float(np.sum(w * np.asarray(h.thresholds)))
-    h_lo, h_hi = (float(v) for v in s_inv.apply(np.array([v_lo, v_hi])))
-    a = gamma.input_offset + (h_lo - spread) / total
-    b = gamma.input_offset + (h_hi + spread) / total
-    ends = sorted(gamma.output_offset + gamma.output_sign * v for v in (v_lo, v_hi))
-    if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
-        return IdentifiedRange()
-    return IdentifiedRange((float(a), float(b)), (float(ends[0]), float(ends[1])))
-
-
-def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike) -> str:
+def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike,
+                 quantity: str = 'current') -> str:
     """
     Return the header line (without ``#``) that records a record's ranges in a YAML.
 
@@ -184,19 +129,22 @@ def range_header(current: npt.ArrayLike, displacement: npt.ArrayLike) -> str:
         The record's current [A].
     displacement : array_like of float, shape (N,)
         The record's displacement [m].
+    quantity : {'current', 'voltage'}
+        The input quantity (:mod:`mpi_ros.units`): the input is in A or V.
 
     Returns
     -------
     str
-        ``identified on current LO to HI A, displacement LO to HI m`` (the shortest digits
-        that read back as the same floats).
+        ``identified on current LO to HI A, displacement LO to HI m`` (``voltage ... V``
+        for a voltage; the shortest digits that read back as the same floats).
 
     """
     x = np.asarray(current, dtype=np.float64)
     y = np.asarray(displacement, dtype=np.float64)
     ends = [float(np.min(x)), float(np.max(x)), float(np.min(y)), float(np.max(y))]
-    return (f'identified on current {ends[0]!r} to {ends[1]!r} A, displacement {ends[2]!r} to '
-            f'{ends[3]!r} m')
+    unit = input_unit_of(quantity)
+    return (f'identified on {quantity} {ends[0]!r} to {ends[1]!r} {unit}, displacement '
+            f'{ends[2]!r} to {ends[3]!r} m')
 
 
 def recorded_range(path: 'str | os.PathLike[str]') -> IdentifiedRange | None:
@@ -256,12 +204,3 @@ def outside(values: npt.ArrayLike, low: float, high: float) -> Outside:
     return Outside(int(under.size + over.size), int(x.size),
                    float(np.max(under)) if under.size else 0.0,
                    float(np.max(over)) if over.size else 0.0, float(low), float(high))
-
-
-def _spaced_as_identified(branch: npt.NDArray[np.float64]) -> bool:
-    # (30)-(31): the k thresholds of a branch, ascending, are (i - 1/2)/k of its extent,
-    # i.e. 1, 3, 5, ... times the first (an empty branch: the output never went there).
-    if not branch.size:
-        return True
-    odd = 2.0 * np.arange(branch.size) + 1.0
-    return bool(np.allclose(branch, odd * branch[0], rtol=1e-6, atol=0.0))

@@ -25,18 +25,20 @@ import yaml
 from .updates import axis_key, LIMIT_KEYS, model_keys
 from ..errors import ParameterPushError, ParameterRejected
 from ..extensions import EFFECTS
-from ..operators.model import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN
+from ..operators.model import INPUT_OFFSET, MODEL_KEYS, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, \
+    OUTPUT_SIGN
+from ..units import INPUT_QUANTITIES, INPUT_QUANTITY_KEY
 
 __all__ = [
     'ADAPTATION_PARAMETERS', 'AUTOSTART', 'AXES', 'DIAGNOSTICS_PERIOD', 'ENABLED',
-    'INPUT_MESSAGE', 'JOINTS',
+    'INPUT_MESSAGE', 'INPUT_QUANTITY', 'JOINTS',
     'LIMIT_PARAMETERS', 'MESSAGE_TIME', 'OUTPUT_LAYOUT', 'SAMPLE_PERIOD', 'WIRING',
     'axis_limit_parameters', 'axis_parameters', 'compensator_parameters',
     'multi_axis_parameters',
     'ARRAY_KINDS', 'MODEL_PARAMETERS', 'NULL_STRINGS', 'RCLPY_PARAMETERS', 'RELIABILITIES',
     'AxisKeys', 'ParameterSpec', 'check_value', 'check_values', 'extension_parameters',
-    'is_null', 'loop_qos_parameters', 'normalized', 'plain_value', 'request_steps',
-    'specs_by_name', 'typed_value', 'wants_multi_axis',
+    'is_null', 'loop_qos_parameters', 'merge_axes', 'normalized', 'plain_value',
+    'request_steps', 'single_axis_keys', 'specs_by_name', 'typed_value', 'wants_multi_axis',
 ]
 
 _TYPE_WORDS = {
@@ -178,6 +180,16 @@ MODEL_PARAMETERS = (
         'falls',
         constraints='1 or -1; part of the model: validated with the other model.* keys'),
 )
+
+
+#: What the actuator input is (issue 27): it names the unit of the commands in messages.
+INPUT_QUANTITY = ParameterSpec(
+    INPUT_QUANTITY_KEY, 'string', 'current',
+    'The actuator input the model maps to displacement: current (commands in A, a coil) or '
+    'voltage (commands in V, a piezo stack); written by mpi-ros identify from the unit of '
+    'the input; names the unit in messages (the arithmetic is the same); a whole model '
+    'pushed without it is a current model',
+    choices=tuple(INPUT_QUANTITIES))
 
 
 def extension_parameters() -> Tuple[ParameterSpec, ...]:
@@ -370,7 +382,7 @@ def compensator_parameters() -> Tuple[ParameterSpec, ...]:
         the node's switches (also as the module attribute ``PARAMETERS``).
 
     """
-    return MODEL_PARAMETERS + extension_parameters() + LIMIT_PARAMETERS + (
+    return MODEL_PARAMETERS + extension_parameters() + (INPUT_QUANTITY,) + LIMIT_PARAMETERS + (
         ENABLED,
         SAMPLE_PERIOD,
         MESSAGE_TIME,
@@ -411,7 +423,7 @@ def axis_parameters(axes: int) -> Tuple[ParameterSpec, ...]:
         (unset, read from the registry now) once per axis, renamed.
 
     """
-    specs = MODEL_PARAMETERS + extension_parameters()
+    specs = MODEL_PARAMETERS + extension_parameters() + (INPUT_QUANTITY,)
     return tuple(replace(spec, name=axis_key(k, spec.name),
                          description=f'Axis {k}: {spec.description}')
                  for k in range(axes) for spec in specs)
@@ -533,6 +545,80 @@ def wants_multi_axis(given: Mapping[str, Any]) -> bool:
                 or (isinstance(joints, (list, tuple)) and len(joints) > 0)
                 or given.get('output_layout') == 'flat'
                 or given.get('input_message') == 'joint_state')
+
+
+def single_axis_keys(names: Iterable[str]) -> List[str]:
+    """
+    Return the single-axis model keys among parameter names (a multi-axis node's mistake).
+
+    Parameters
+    ----------
+    names : iterable of str
+        Parameter names given to a node (``-p``, ``--params-file``).
+
+    Returns
+    -------
+    list of str
+        The names that are a single-axis model's keys (``model.*`` of Gamma, the operating
+        point, an effect, ``model.input_quantity``), sorted.
+
+    Examples
+    --------
+    >>> single_axis_keys(['axes', 'model.dead_time', 'axis0.model.dead_time'])
+    ['model.dead_time']
+
+    """
+    keys = set(model_keys()) | {INPUT_QUANTITY_KEY}
+    return sorted(name for name in names if name in keys)
+
+
+def merge_axes(per_axis: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """
+    Merge single-axis parameter sets (``mpi-ros identify`` files) into one multi-axis set.
+
+    Parameters
+    ----------
+    per_axis : sequence of mapping
+        One flat parameter set per axis, in axis order: its model keys and its
+        ``output.min`` / ``output.max``.
+
+    Returns
+    -------
+    dict
+        ``axes`` and, per axis ``k``, ``axis<k>.model.*`` and ``axis<k>.output.min`` /
+        ``axis<k>.output.max``: what the multi-axis compensator reads.
+
+    Raises
+    ------
+    ParameterRejected
+        With fewer than two sets, a set without the keys of Gamma, or with keys a
+        multi-axis node would not read (already per axis, or other node parameters).
+
+    Examples
+    --------
+    >>> gamma = dict.fromkeys(MODEL_KEYS, [0.0])
+    >>> merged = merge_axes([dict(gamma, **{'output.max': 1.5}), gamma])
+    >>> merged['axes'], merged['axis0.output.max'], 'axis1.output.max' in merged
+    (2, 1.5, False)
+
+    """
+    if len(per_axis) < 2:
+        msg = f'merging axes needs at least two parameter sets; found {len(per_axis)}'
+        raise ParameterRejected(msg)
+    keys = set(model_keys()) | {INPUT_QUANTITY_KEY} | set(LIMIT_KEYS)
+    merged: dict[str, Any] = {'axes': len(per_axis)}
+    for axis, parameters in enumerate(per_axis):
+        missing = [key for key in MODEL_KEYS if key not in parameters]
+        if missing:
+            msg = f'axis {axis} has no model: missing {", ".join(missing)}'
+            raise ParameterRejected(msg)
+        foreign = sorted(set(parameters) - keys)
+        if foreign:
+            msg = (f'axis {axis}: {", ".join(foreign)} are not single-axis model keys or '
+                   'output limits; give files written by mpi-ros identify (one actuator each)')
+            raise ParameterRejected(msg)
+        merged.update({axis_key(axis, key): value for key, value in parameters.items()})
+    return merged
 
 
 def is_null(spec: ParameterSpec, kind: str, value: Any) -> bool:
@@ -725,14 +811,15 @@ def typed_value(name: str, value: Any) -> Tuple[str, Any]:
     ----------
     name : str
         The key, for the message.
-    value : int, float or sequence of float
+    value : int, float, str or sequence of float
         Its value (numpy scalars too).
 
     Returns
     -------
     kind : str
         ``'integer'`` for an integer (``model.output_sign``), ``'double'`` for another
-        scalar, ``'double_array'`` for a sequence.
+        scalar, ``'string'`` for text (``model.input_quantity``), ``'double_array'`` for a
+        sequence.
     value : int, float or list of float
         The value as that type.
 
@@ -754,6 +841,8 @@ def typed_value(name: str, value: Any) -> Tuple[str, Any]:
         return 'integer', int(value)
     if isinstance(value, (float, np.floating)):
         return 'double', float(value)
+    if isinstance(value, str):
+        return 'string', value
     return 'double_array', [float(v) for v in value]
 
 

@@ -45,6 +45,7 @@ from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
 from ..operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS
 from ..operators.usability import check_usable, usability_sweep
+from ..units import INPUT_QUANTITY_KEY
 
 __all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'Prepared', 'UpdateRule', 'apply', 'axis_key',
            'complete', 'is_off', 'limits_of', 'load', 'load_axes', 'model_keys', 'model_params',
@@ -135,10 +136,11 @@ class UpdateRule:
         Returns
         -------
         list of str
-            Its model keys and output limits and, for an axis, the node-wide limits.
+            Its model keys, its ``model.input_quantity`` and output limits and, for an axis,
+            the node-wide limits.
 
         """
-        return [prefix + key for key in model_keys() + LIMIT_KEYS] + (
+        return [prefix + key for key in model_keys() + (INPUT_QUANTITY_KEY,) + LIMIT_KEYS] + (
             list(LIMIT_KEYS) if prefix else [])
 
     def complete(self, current: Callable[[str], Mapping[str, Any]],
@@ -351,6 +353,9 @@ def complete(current: Mapping[str, Any], request: Mapping[str, Any],
         name = prefix + key
         if name not in completed and not is_off(current.get(name)):
             completed[name] = _copy(value)
+    name = prefix + INPUT_QUANTITY_KEY          # a whole model without it: a current model
+    if name not in completed and current.get(name) not in (None, 'current'):
+        completed[name] = 'current'
     return completed
 
 

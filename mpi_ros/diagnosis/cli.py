@@ -8,9 +8,10 @@
 The data options (``--input-topic``, ``--input-joint``, ``--input-index``,
 ``--input-column``, ``--output-scale``, ...) are those of ``mpi-ros identify``
 (:func:`mpi_ros.app.cli_options.add_data_options`); they apply to DATA and to
-``--validate``.  The report names the data's units from the input and output column (or
-topic and joint) names and the scales (``volts`` -> V, ``D1_nm`` with ``--output-scale
-1e-9`` -> m; nothing named: A and m); ``--input-unit`` / ``--output-unit`` state them.
+``--validate``.  The data are read in SI by the units rule of every command
+(:mod:`mpi_ros.units`: unit suffixes of the column, topic or joint names, ``--input-unit`` /
+``--output-unit`` / ``--time-unit``; ``volts`` -> V, ``D1_nm`` -> nm converted to m); the
+report names the input A or V and the output m.
 
 ``mpi-ros diagnose --excitation OUT.csv [--excitation-rate HZ --excitation-bias A
 --excitation-amplitude A --seed N]`` writes the diagnostic validation excitation (columns
@@ -25,7 +26,7 @@ import sys
 from typing import Any, Callable, Sequence
 
 from .diagnose import diagnose
-from .report import data_units, INPUT_UNITS, OUTPUT_UNITS, report_facts, summary_lines, \
+from .report import data_units, report_facts, summary_lines, \
     write_extended_params, write_json, write_report
 from .signatures import diagnostic_excitation
 from ..app.cli_options import (
@@ -69,12 +70,6 @@ def build_parser(prog: str = 'mpi-ros diagnose') -> argparse.ArgumentParser:
     p.add_argument('--excitation-amplitude', type=float, default=0.8,
                    help='half-width of --excitation [A] (default 0.8)')
     p.add_argument('--seed', type=int, default=0, help='seed of --excitation (default 0)')
-    p.add_argument('--input-unit', choices=sorted(INPUT_UNITS),
-                   help='unit of the input after --input-scale, for the report (default: from'
-                        ' the column/topic name and the scale, else A)')
-    p.add_argument('--output-unit', choices=sorted(OUTPUT_UNITS),
-                   help='unit of the output after --output-scale, for the report (default:'
-                        ' from the column/topic name and the scale, else m)')
     p.add_argument('--quiet', action='store_true',
                    help='no progress line on stderr (it is drawn only when stderr is a '
                         'terminal)')
@@ -159,6 +154,8 @@ def _read(path: str, args: argparse.Namespace, say: Callable[[str], None]) -> An
     recording = read_recording(path, data_options(args))
     for note in recording.notes:
         say(f'note: {note}')
+    for warning in recording.warnings:
+        say(f'warning: {warning}')
     return recording
 
 

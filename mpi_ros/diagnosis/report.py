@@ -21,7 +21,6 @@ import json
 import math
 import os
 from pathlib import Path
-import re
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -32,29 +31,12 @@ from ..extensions import EFFECTS
 from ..extensions._common import AxisUnits
 from ..params import write_params_yaml
 from ..recordings.files import atomic_write
+from ..units import INPUT_UNITS, OUTPUT_UNITS, resolve_units
 
 __all__ = ['report_facts', 'write_report', 'write_json', 'write_extended_params', 'summary_lines',
            'markdown', 'data_units', 'significant', 'z_wording', 'INPUT_UNITS',
            'OUTPUT_UNITS']
 
-#: Input units the report knows, with their factor to the SI unit they are a multiple of.
-INPUT_UNITS = {'A': ('A', 1.0), 'mA': ('A', 1e-3), 'uA': ('A', 1e-6), 'µA': ('A', 1e-6),
-               'V': ('V', 1.0), 'mV': ('V', 1e-3), 'kV': ('V', 1e3), 'uV': ('V', 1e-6),
-               'µV': ('V', 1e-6)}
-#: Output (length) units the report knows, with their factor to m.
-OUTPUT_UNITS = {'m': 1.0, 'mm': 1e-3, 'um': 1e-6, 'µm': 1e-6, 'nm': 1e-9, 'pm': 1e-12}
-
-# Words in a column or topic name that name a unit (case-insensitive), and the unit.
-_WORDS = {'volt': 'V', 'volts': 'V', 'voltage': 'V', 'millivolt': 'mV', 'millivolts': 'mV',
-          'amp': 'A', 'amps': 'A', 'ampere': 'A', 'amperes': 'A', 'current': 'A',
-          'milliamp': 'mA', 'milliamps': 'mA',
-          'meter': 'm', 'meters': 'm', 'metre': 'm', 'metres': 'm',
-          'micron': 'µm', 'microns': 'µm', 'micrometer': 'µm', 'micrometers': 'µm',
-          'nanometer': 'nm', 'nanometers': 'nm', 'millimeter': 'mm', 'millimeters': 'mm'}
-# Unit tokens matched with their case (``V``, ``mV``, ``nm``; ``u``/``µ``/``μ`` for micro).
-_TOKENS = {'V': 'V', 'mV': 'mV', 'kV': 'kV', 'uV': 'uV', 'µV': 'µV', 'μV': 'µV',
-           'A': 'A', 'mA': 'mA', 'uA': 'uA', 'µA': 'µA', 'μA': 'µA',
-           'm': 'm', 'mm': 'mm', 'um': 'µm', 'µm': 'µm', 'μm': 'µm', 'nm': 'nm', 'pm': 'pm'}
 _PREFIXES = ((1.0, 'm'), (1e-3, 'mm'), (1e-6, 'µm'), (1e-9, 'nm'), (1e-12, 'pm'))
 
 
@@ -110,14 +92,12 @@ def data_units(input_name: str = '', output_name: str = '', *, input_scale: floa
                output_scale: float = 1.0, input_unit: str | None = None,
                output_unit: str | None = None) -> dict[str, str]:
     """
-    Name the units of the data after the reader's scales, from the signals' names.
+    Name the units of the data as read: SI, the input in A or V (:mod:`mpi_ros.units`).
 
-    A name (a CSV column, a bag topic or joint) names a unit by a token (``Vplus_V``,
-    ``u_V``, ``D1_nm``, ``I_mA``) or a word (``voltage``, ``volts``, ``current``,
-    ``microns``).  With a scale of 1 the data are in that unit; with the scale that
-    converts the unit's prefix away (``mV`` and 1e-3, ``nm`` and 1e-9) in its SI unit; any
-    other scale is the reader's conversion to A and m (``--input-scale``:
-    "multiply the input by this to get A").  Nothing named: A and m (SI, REP 103).
+    The readers convert every recording to SI by the one rule of :mod:`mpi_ros.units` (unit
+    suffixes of the names, the scales, ``--input-unit`` / ``--output-unit``), so the data
+    the report describes are in s, A or V, and m; the input's name or stated unit tells
+    whether it is a current or a voltage.
 
     Parameters
     ----------
@@ -126,14 +106,13 @@ def data_units(input_name: str = '', output_name: str = '', *, input_scale: floa
     input_scale, output_scale : float
         The reader's factors (``--input-scale``, ``--output-scale``).
     input_unit, output_unit : str, optional
-        The user's statement of the units after the scales (overrides the names; a key of
-        :data:`INPUT_UNITS` resp. :data:`OUTPUT_UNITS`).
+        The units stated by the user (keys of :data:`INPUT_UNITS`, :data:`OUTPUT_UNITS`).
 
     Returns
     -------
     dict
-        ``time`` (``'s'``), ``input``, ``output`` (unit names) and ``from`` (how they were
-        found, one phrase).
+        ``time`` (``'s'``), ``input`` (``'A'`` or ``'V'``), ``output`` (``'m'``) and
+        ``from`` (how they were found, one phrase).
 
     Examples
     --------
@@ -141,40 +120,15 @@ def data_units(input_name: str = '', output_name: str = '', *, input_scale: floa
     >>> u['input'], u['output']
     ('V', 'm')
     >>> data_units('current', 'displacement_um')['output']
-    'µm'
+    'm'
 
     """
-    found = []
-    units = {}
-    for role, name, scale, stated, known in (
-            ('input', input_name, input_scale, input_unit, INPUT_UNITS),
-            ('output', output_name, output_scale, output_unit, OUTPUT_UNITS)):
-        if stated is not None:
-            units[role] = stated
-            found.append(f'{role} unit stated')
-            continue
-        named = _named_unit(name, role)
-        base = 'A' if role == 'input' else 'm'
-        if named is None:
-            units[role] = base
-            found.append(f'{role} {name!r} names no unit: {base}' if name
-                         else f'{role}: {base} (SI)')
-            continue
-        if role == 'input':
-            si, factor = INPUT_UNITS[named]
-        else:
-            si, factor = 'm', OUTPUT_UNITS[named]
-        if scale == 1.0:
-            unit = named
-        elif math.isclose(scale, factor, rel_tol=1e-9):
-            unit = si
-        else:
-            unit = base
-        units[role] = unit
-        detail = '' if scale == 1.0 else f' times {scale:g}'
-        found.append(f'{role} {name!r}{detail}: {unit}')
-    return {'time': 's', 'input': units['input'], 'output': units['output'],
-            'from': '; '.join(found)}
+    units = resolve_units('', input_name, output_name, input_scale=input_scale,
+                          output_scale=output_scale, input_unit=input_unit,
+                          output_unit=output_unit)
+    found = units.found or 'input: A, output: m (SI)'
+    return {'time': 's', 'input': units.si_input, 'output': 'm',
+            'from': f'{found}; read as s, {units.si_input}, m'}
 
 
 def significant(value: Any, digits: int = 3) -> str:
@@ -442,15 +396,6 @@ def _axis_units(units: Mapping[str, str], y: Any) -> AxisUnits:
     span = float(np.ptp(y)) if len(y) else 0.0
     factor, prefix = next(((f, p) for f, p in _PREFIXES if span >= f), _PREFIXES[-1])
     return AxisUnits(current=units['input'], displacement=prefix, scale=1.0 / factor)
-
-
-def _named_unit(name: str, role: str) -> str | None:
-    known = INPUT_UNITS if role == 'input' else OUTPUT_UNITS
-    for token in reversed([w for w in re.split(r'[^0-9A-Za-zµμ]+', name) if w]):
-        unit = _TOKENS.get(token) or _WORDS.get(token.lower())
-        if unit is not None and unit in known:
-            return unit
-    return None
 
 
 def _percent(fraction: Any) -> str:

@@ -281,6 +281,8 @@ class CompensatorNode(CompensatorNodeBase):
         # Lifecycle state unconfigured: the parameters hold it; configure loads it.
         if update.model is not None and self._configured:
             self._installed(model, update.inverse)
+        elif update.limits is not None and self._compensator is not None:
+            self._check_limits_fit('', self._compensator)
 
     def _load(self) -> None:
         values = parameter_values(self, list(self._specs))
@@ -288,9 +290,9 @@ class CompensatorNode(CompensatorNodeBase):
         model = load(values)
         if model is None:
             self.get_logger().info(
-                'no model given: unconfigured, publishing nothing until a model arrives '
-                '(all five model.* keys of Gamma in one request: ros2 param load, or '
-                'set_parameters_atomically)')
+                'no model given yet: publishing nothing until a model arrives (all five '
+                'model.* keys of Gamma in one request: ros2 param load, or '
+                'set_parameters_atomically, e.g. by the identifier)')
             return
         self._installed(model)
 
@@ -309,6 +311,7 @@ class CompensatorNode(CompensatorNodeBase):
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value, inverse=inverse)
         self._warn_if_not_compensated(compensator.model)
+        self._check_limits_fit('', compensator)
         self._set_live()
         self._extended = compensator.has_effect
         self._model_version += 1

@@ -69,11 +69,13 @@ from .parameters import (
     set_parameters_in_groups,
 )
 from .qos import loop_qos
+from ..compensation.limits import limits_shortfall
 from ..compensation.parameters import ParameterSpec, plain_value
 from ..compensation.screening import FaultLog
 from ..compensation.status import lifecycle_status, RateWindow, state_after, status_values
 from ..compensation.updates import Prepared, uncompensated, UpdateRule
 from ..errors import MPIError, ParameterRejected
+from ..units import INPUT_QUANTITY_KEY, input_unit_of
 
 __all__ = ['CompensatorNodeBase', 'DRAIN_LIMIT']
 
@@ -133,6 +135,8 @@ class CompensatorNodeBase(LifecycleNode):
         self._what = 'desired displacements'
         self._window = RateWindow(time.monotonic())
         self._fault_log = FaultLog()
+        # What the output limits cut of each model's identified range (issue 27), by label.
+        self._limits_notes: Dict[str, str] = {}
         # Validator first: rclpy runs it once per key while declaring (a bad
         # --params-file override is rejected there), then once per request.
         self.add_pre_set_parameters_callback(self._complete_request)
@@ -506,6 +510,28 @@ class CompensatorNodeBase(LifecycleNode):
         if warning is not None:
             self.get_logger().warning(where + warning)
 
+    def _check_limits_fit(self, prefix: str, compensator: Any) -> None:
+        """
+        Warn when the limits leave part of a model's identified range unreachable.
+
+        ``prefix`` is the model's (``''`` or ``'axis1.'``); ``compensator`` is the core
+        serving it (its model and its ``output_min`` / ``output_max``).  The sentence
+        stays on /diagnostics (value ``limits``) until the limits or the model fit again.
+        """
+        shortfall = limits_shortfall(compensator.model, compensator.output_min,
+                                     compensator.output_max)
+        label = f'axis {prefix[4:-1]}: ' if prefix else ''
+        if shortfall is None:
+            self._limits_notes.pop(label, None)
+            return
+        names = 'output.min / output.max'
+        if prefix:
+            names = f'{prefix}output.min / {prefix}output.max (or {names})'
+        unit = input_unit_of(self.get_parameter(prefix + INPUT_QUANTITY_KEY).value)
+        note = shortfall.describe(unit=unit, names=names)
+        self._limits_notes[label] = note
+        self.get_logger().warning(f'{label}{note}')
+
     # -- hooks of the nodes -------------------------------------------------------------
     def _load(self) -> None:
         """Configure: load and validate the model(s) of the parameters, build the core."""
@@ -610,6 +636,9 @@ class CompensatorNodeBase(LifecycleNode):
             enabled=self.get_parameter('enabled').value,
             output_min=self.get_parameter('output.min').value,
             output_max=self.get_parameter('output.max').value)
+        if self._limits_notes and self._compensator is not None:
+            values['limits'] = '; '.join(label + note
+                                         for label, note in sorted(self._limits_notes.items()))
         status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
         array = DiagnosticArray()
         array.header.stamp = self.get_clock().now().to_msg()

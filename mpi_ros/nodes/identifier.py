@@ -12,10 +12,13 @@ One run: read the bag (sqlite3 or mcap; a ``.csv`` file works too) with
 options of ``mpi-ros identify`` (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit with
 :func:`mpi_ros.identify` (``order``
 ``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
-fit errors (37); optionally write the parameter YAML (``params_file``); then send all
-eight ``model.*`` keys (Gamma's five arrays and the operating point
-``model.input_offset``, ``model.output_offset``, ``model.output_sign``) in **one**
-``set_parameters_atomically`` request to ``target_node``. The target either applies the
+fit errors (37); optionally write the parameter YAML (``params_file``); then send every
+key ``mpi-ros identify`` writes (:func:`mpi_ros.pipeline.identified_parameters`: Gamma's
+five arrays, the operating point ``model.input_offset``, ``model.output_offset``,
+``model.output_sign``, the dynamics the fit found, ``model.dead_time``,
+``model.rate_dependence.*`` or ``model.resonance.*``, and ``output.min`` / ``output.max``,
+the input range of the identification) in **one** ``set_parameters_atomically`` request
+to ``target_node``. The target either applies the
 whole model or rejects it, so nothing is ever half-applied (a plain model switches the
 target's extension off); the wait for the service and for its answer is bounded by
 ``service_timeout``.
@@ -35,6 +38,11 @@ Several actuators (``axes`` > 1)
     go to the multi-axis compensator in **one** ``set_parameters_atomically`` request
     with the keys ``axis<k>.model.*``: every axis changes, or none.  If any axis is
     refused, nothing is written or pushed.
+
+With ``diagnose:=true`` the node also runs :func:`mpi_ros.diagnosis.diagnose` on the
+record (the first 60 % trains, the rest validates) and, when the diagnosis names an effect
+with a clear gain (not weak, not tied), delivers that extended model instead
+(:func:`mpi_ros.pipeline.diagnosed_parameters`); it logs what the diagnosis found either way.
 
 When :func:`mpi_ros.identify` refuses the data (``IdentificationError``: output not
 monotone in the input, a fit no better than a straight line, too little excitation),
@@ -124,7 +132,8 @@ class IdentifierNode(Node):
         """
         values = {name: self.get_parameter(name).value for name in _SPECS}
         logger = self.get_logger()
-        fitted, parameters = identify_bag(values, info=logger.info, error=logger.error)
+        fitted, parameters = identify_bag(values, info=logger.info, error=logger.error,
+                                          warn=logger.warning)
         if values['push']:
             target = values['target_node']
             push_model_parameters(self, target, parameters, timeout=values['service_timeout'])

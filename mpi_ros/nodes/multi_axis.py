@@ -112,10 +112,11 @@ from ..compensation.multi_axis import (
 )
 from ..compensation.parameters import (
     AXES, axis_limit_parameters, axis_parameters, AxisKeys, INPUT_MESSAGE, JOINTS,
-    multi_axis_parameters, OUTPUT_LAYOUT, specs_by_name, WIRING,
+    multi_axis_parameters, OUTPUT_LAYOUT, single_axis_keys, specs_by_name, WIRING,
 )
 from ..compensation.status import multi_axis_status, multi_axis_values
 from ..compensation.updates import apply, axis_key, load_axes, Prepared, refusal
+from ..errors import ParameterRejected
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
@@ -147,6 +148,17 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._specs = dict(specs_by_name((AXES,) + multi_axis_parameters() + WIRING))
         declare_parameters(self, (AXES,))
         self.axes = int(self.get_parameter('axes').value)
+        # A single-axis file (mpi-ros identify's) would be ignored here: refuse it.
+        # rclpy 7.1.6 has no public accessor of the overrides (see declare_parameters).
+        stray = single_axis_keys(getattr(self, '_parameter_overrides', {}))
+        if stray:
+            shown = ', '.join(stray[:2]) + (f' and {len(stray) - 2} more' if len(stray) > 2
+                                            else '')
+            msg = (f'single-axis model keys given ({shown}) to a node serving {self.axes} '
+                   'axes, which reads axis<k>.model.* only: they would be ignored and the '
+                   'axes left without a model; merge one identified file per axis with '
+                   '`mpi-ros merge-axes a.yaml b.yaml -o axes.yaml`, or run with axes:=1')
+            raise ParameterRejected(msg)
         per_axis = axis_parameters(self.axes) + axis_limit_parameters(self.axes)
         self._specs.update(specs_by_name(per_axis))
         self._keys = AxisKeys.of(self.axes)
@@ -291,9 +303,17 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         # Lifecycle state unconfigured: the parameters hold them; configure loads them.
         if self._configured:
             self._install(models, installed=compensator is not None)
+            self._check_axes_limits()
+
+    def _check_axes_limits(self) -> None:
+        """Warn about each axis whose limits cut its model's identified range."""
+        if self._compensator is not None:
+            for prefix, core in zip(self._keys.prefixes, self._compensator.axes):
+                self._check_limits_fit(prefix, core)
 
     def _load(self) -> None:
         self._install(load_axes(parameter_values(self, list(self._specs)), self._keys.prefixes))
+        self._check_axes_limits()
         if self._compensator is None:
             self.get_logger().info(
                 f'{self.axes} axes, {len(self._axis_models.missing)} without a model: publishing '

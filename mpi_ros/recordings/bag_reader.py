@@ -63,7 +63,7 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
 
 from .options import DataOptions
-from .recording import check_magnitudes, FloatArray, MIN_SAMPLES, PathLike, Recording
+from .recording import check_magnitudes, FloatArray, in_si, MIN_SAMPLES, PathLike, Recording
 from ..array_layout import chunk_layout, consecutive_layout
 from ..errors import DataError
 
@@ -276,9 +276,12 @@ def read_bag(path: PathLike, options: DataOptions, *, time_source: str = 'receiv
         raise DataError(msg)
     t_out, s_out, x_held = t_out[paired], s_out[paired], x_in[held[paired]]
     time = (t_out - t_out[0]).astype(np.float64) * (1e-9 * options.time_scale)
-    return check_magnitudes(Recording(time, x_held * options.input_scale,
-                                      s_out * options.output_scale, source=str(bag),
-                                      notes=tuple(notes)), options)
+    read = Recording(time, x_held * options.input_scale, s_out * options.output_scale,
+                     source=str(bag), notes=tuple(notes))
+    names = [f'{topic} {joint or ""}'.strip() for topic, joint in (
+        (options.input_topic, options.input_joint), (options.output_topic, options.output_joint))]
+    return check_magnitudes(in_si(read, options, input_name=names[0], output_name=names[1]),
+                            options)
 
 
 def _selections(options: DataOptions) -> tuple[Selection, Selection]:

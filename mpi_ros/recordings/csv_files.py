@@ -20,7 +20,7 @@ import numpy.typing as npt
 
 from .files import _equal_length_arrays, atomic_write
 from .options import DataOptions
-from .recording import check_magnitudes, FloatArray, MIN_SAMPLES, PathLike, Recording
+from .recording import check_magnitudes, FloatArray, in_si, MIN_SAMPLES, PathLike, Recording
 from ..errors import DataError
 
 __all__ = ['read_csv_signals', 'read_csv', 'read_csv_table', 'write_csv_columns']
@@ -185,10 +185,11 @@ def read_csv(path: PathLike, options: DataOptions, *, comment: str | None = '#')
             line = int(np.asarray(table.line_numbers)[keep][first])
             notes.append(f'time column {time_column!r} is not strictly increasing (first at '
                          f'line {line}); samples are kept in file order')
-    return check_magnitudes(Recording(time, values['input'] * options.input_scale,
-                                      values['output'] * options.output_scale,
-                                      source=str(source), notes=tuple(notes),
-                                      timed=time_column is not None), options)
+    read = Recording(time, values['input'] * options.input_scale,
+                     values['output'] * options.output_scale, source=str(source),
+                     notes=tuple(notes), timed=time_column is not None)
+    return check_magnitudes(in_si(read, options, time_name=time_column or '',
+                                  input_name=input_column, output_name=output_column), options)
 
 
 def read_csv_table(

@@ -23,6 +23,7 @@ import numbers
 from typing import Any, Mapping
 
 from ..errors import DataError
+from ..units import INPUT_UNITS, OUTPUT_UNITS, TIME_UNITS
 
 __all__ = ['DataOptions', 'DataOption', 'DATA_OPTIONS', 'JOINT_FIELDS', 'SPELLINGS',
            'show_value']
@@ -121,6 +122,16 @@ DATA_OPTIONS = (
     DataOption('input_scale', 'float', 'multiply the input by this to get A', '', 'any', 1.0),
     DataOption('output_scale', 'float',
                'multiply the output by this to get m (1e-9 for nm)', '', 'any', 1.0),
+    DataOption('time_unit', 'optional_str',
+               'unit of the CSV time column: s, ms, us or ns (unset: from a suffix of its name, '
+               'e.g. time_ms, else s); converted to s', '', 'csv', ''),
+    DataOption('input_unit', 'optional_str',
+               'unit of the input: A, mA, uA (a current) or V, mV, kV (a voltage) (unset: '
+               'from a suffix of its name, e.g. Vplus_V, else A); converted to A or V, and '
+               'the model records the input quantity', '', 'any', ''),
+    DataOption('output_unit', 'optional_str',
+               'unit of the output: m, mm, um, nm or pm (unset: from a suffix of its name, '
+               'e.g. D1_nm, else m); converted to m', '', 'any', ''),
     DataOption('drop_nonfinite', 'bool',
                'drop NaN/Inf samples (and empty CSV fields) with a note instead of refusing '
                'the data', '', 'any',
@@ -177,6 +188,10 @@ class DataOptions:
         replay at a tenth of the speed). ``sample_period`` is in s after it.
     input_scale, output_scale : float
         Factors from the recorded values to A and m.
+    time_unit, input_unit, output_unit : str or None
+        The units of the values as recorded, after the scales (see :mod:`mpi_ros.units`);
+        None takes them from a suffix of the column, topic or joint name, else s, A, m.
+        The values are converted to SI (s, A or V, m) as they are read.
     drop_nonfinite : bool
         Drop NaN/Inf samples (and CSV rows with an empty field), with a note,
         instead of refusing the data.
@@ -217,6 +232,9 @@ class DataOptions:
     time_scale: float = 1.0
     input_scale: float = 1.0
     output_scale: float = 1.0
+    time_unit: str | None = None
+    input_unit: str | None = None
+    output_unit: str | None = None
     drop_nonfinite: bool = False
     spelling: str = 'keyword'
 
@@ -281,6 +299,13 @@ class DataOptions:
                        f's, e.g. 1e-3 for ms); found {show_value(value)}')
                 raise DataError(msg)
             object.__setattr__(self, name, float(value))
+        for name, known in (('time_unit', TIME_UNITS), ('input_unit', INPUT_UNITS),
+                            ('output_unit', OUTPUT_UNITS)):
+            value = getattr(self, name)
+            if value is not None and value not in known:
+                msg = (f'{self.name(name)} must be one of {", ".join(known)} or unset; found '
+                       f'{show_value(value)}')
+                raise DataError(msg)
         object.__setattr__(self, 'drop_nonfinite', bool(self.drop_nonfinite))
 
     def name(self, option: str) -> str:

@@ -19,9 +19,10 @@ import numpy.typing as npt
 
 from .options import DataOptions
 from ..errors import DataError
+from ..units import resolve_units, scale_warnings, SignalUnits
 
 __all__ = ['MIN_SAMPLES', 'MAGNITUDE_LIMIT', 'Recording', 'join_recordings', 'PathLike',
-           'FloatArray', 'check_magnitudes']
+           'FloatArray', 'check_magnitudes', 'in_si']
 
 PathLike = Union[str, 'os.PathLike[str]']
 FloatArray = npt.NDArray[np.float64]
@@ -61,6 +62,11 @@ class Recording:
     timed : bool
         False when the record has no time base (a CSV file without a time column: ``time``
         is then the sample index); the identification then estimates no dynamics.
+    units : SignalUnits
+        The units the signals were recorded in (the arrays are in SI: s, A or V, m); its
+        ``input_quantity`` is ``'current'`` or ``'voltage'``.
+    warnings : tuple of str
+        Scales that look wrong (:func:`mpi_ros.units.scale_warnings`), one sentence each.
 
     Raises
     ------
@@ -81,6 +87,8 @@ class Recording:
     source: str = ''
     notes: tuple[str, ...] = ()
     timed: bool = True
+    units: SignalUnits = SignalUnits()
+    warnings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         """Validate and freeze the arrays."""
@@ -105,6 +113,7 @@ class Recording:
         object.__setattr__(self, 'source', str(self.source))
         object.__setattr__(self, 'notes', tuple(str(note) for note in self.notes))
         object.__setattr__(self, 'timed', bool(self.timed))
+        object.__setattr__(self, 'warnings', tuple(str(w) for w in self.warnings))
 
     def __len__(self) -> int:
         """Return the number of samples N."""
@@ -158,7 +167,9 @@ def join_recordings(recordings: Sequence[Recording], *, gap: float = 1.0) -> Rec
                      np.concatenate([r.current for r in recordings]),
                      np.concatenate([r.displacement for r in recordings]),
                      source=' + '.join(r.source for r in recordings),
-                     notes=tuple(n for r in recordings for n in r.notes))
+                     notes=tuple(n for r in recordings for n in r.notes),
+                     units=recordings[0].units,
+                     warnings=tuple(w for r in recordings for w in r.warnings))
 
 
 def check_magnitudes(recording: Recording, options: DataOptions | None = None) -> Recording:
@@ -208,3 +219,41 @@ def check_magnitudes(recording: Recording, options: DataOptions | None = None) -
                f'{getattr(options, scale):g})')
         raise DataError(msg)
     return recording
+
+
+def in_si(recording: Recording, options: DataOptions, *, time_name: str = '',
+          input_name: str = '', output_name: str = '') -> Recording:
+    """
+    Convert a recording read with the scales to SI by the units of :mod:`mpi_ros.units`.
+
+    Parameters
+    ----------
+    recording : Recording
+        As read, the scales applied.
+    options : DataOptions
+        The scales and the stated units.
+    time_name, input_name, output_name : str
+        The signals' names (CSV columns, or topics with their joints; '' for a bag's log
+        time).
+
+    Returns
+    -------
+    Recording
+        The same samples in s, A or V, and m, with ``units`` and the ``warnings`` of scales
+        that look wrong.
+
+    """
+    units = resolve_units(time_name, input_name, output_name, time_scale=options.time_scale,
+                          input_scale=options.input_scale, output_scale=options.output_scale,
+                          time_unit=options.time_unit if time_name else None,
+                          input_unit=options.input_unit, output_unit=options.output_unit)
+    time = recording.time * units.time_factor if recording.timed else recording.time
+    displacement = recording.displacement * units.output_factor
+    current = recording.current * units.input_factor
+    warnings = scale_warnings(time, displacement, timed=recording.timed, units=units,
+                              option={name: options.name(name)
+                                      for name in ('output_unit', 'time_unit', 'input_unit')},
+                              current=current)
+    return Recording(time, current, displacement,
+                     source=recording.source, notes=recording.notes, timed=recording.timed,
+                     units=units, warnings=tuple(warnings))
