@@ -117,6 +117,7 @@ from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
 from ..operators.model import MPIModel
+from ..units import INPUT_QUANTITY_KEY
 
 __all__ = ['CompensatorNode', 'main', 'make_node']
 
@@ -386,8 +387,13 @@ class CompensatorNode(CompensatorNodeBase):
             return
         candidate = adaptation.take_candidate()
         if candidate is not None:
-            parameters = [Parameter(key, value=value)
-                          for key, value in candidate.params().items()]
+            values = candidate.params()
+            # A whole model without the input quantity would be a current model: the
+            # adaptation changes weights and offsets, never what the input is.
+            quantity = self.get_parameter(INPUT_QUANTITY_KEY).value
+            if quantity:
+                values[INPUT_QUANTITY_KEY] = quantity
+            parameters = [Parameter(key, value=value) for key, value in values.items()]
             self._own_update = True
             try:
                 results = self.set_parameters(parameters)
