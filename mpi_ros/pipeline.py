@@ -31,7 +31,7 @@ from .compensation.parameters import AXES, ParameterSpec
 from .compensation.updates import axis_key
 from .errors import DataError, IdentificationError, MPIError, ParameterRejected
 from .identification import IdentificationResult, identify
-from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS
+from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS, RECORD_START_STATES
 from .order import format_order, Order, parse_order as parse_order_text
 from .params import write_params_yaml
 from .recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording, \
@@ -74,8 +74,8 @@ class BagFit:
         The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
         ``.samples``, solver status.
     parameters : dict of str to list of float, float or int
-        ``result.model.to_params()``: the five ``model.*`` arrays of Gamma and the three
-        operating point keys.
+        ``result.model.to_params()``: the four ``model.*`` arrays of Gamma, the three
+        operating point keys and the record start ``record_start.hysteresis.initial_states``.
 
     """
 
@@ -182,7 +182,7 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
     fit = fit_recording(path, options, order=order)          # the one pipeline (CLI too)
     result = fit.result
     parameters = result.model.to_params()
-    expected = MODEL_KEYS + OPERATING_POINT_KEYS
+    expected = MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,)
     if set(parameters) != set(expected):
         msg = f'identify returned parameters {sorted(parameters)}; expected {list(expected)}'
         raise IdentificationError(msg)

@@ -9,6 +9,11 @@ Subcommands
                           the range the model was identified on)
 ``compensate PARAMS``     inverse model Gamma^-1 on a CSV column (offline feed-forward),
                           clamped as the compensator node clamps (``--no-clamp``: not)
+
+                          Both start at rest after a descent to the lowest identified input
+                          (``--start``: ``rest_low``, ``rest_high``, ``record`` to reproduce
+                          the identification record, or explicit play states; see
+                          :mod:`mpi_ros.operators.start`)
 ``diagnose DATA``         find what the model misses in measured data (see ``mpi_ros.diagnosis``)
 ``demo``                  the closed loop over DDS: record, identify, push, track, report
 ``compensator|identifier|plant-simulator [--ros-args ...]``  run a node, as ``ros2 run``
@@ -211,8 +216,10 @@ def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool)
 
 def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     from ..extensions import extended_model_from_params
+    from ..operators.start import StartState
     from .ranges import identified_range, outside, recorded_range
     from ..recordings import read_csv_table, write_csv_columns
+    start = StartState.parse(args.start, option='--start')
     parameters = _model_parameters(args.params, args.node_name)
     described = extended_model_from_params(parameters)
     header, table = read_csv_table(args.input,
@@ -231,9 +238,11 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     ranges = recorded_range(args.params) or identified_range(described)
     if inverse:
         limits = _limits(args, parameters, ranges.current)
-        result = _compensate(described, time, time_column, values, args, limits)
+        result = _compensate(described, time, time_column, values, args, limits, start,
+                             ranges.current)
     else:
-        result = _simulate(described, time, time_column, values, args)
+        result = _simulate(_started(described, start, ranges.current, None), time,
+                           time_column, values, args)
         if ranges.current is None:
             _progress(f'note: {_UNKNOWN_RANGE.format(params=args.params)}: no range check')
         else:
@@ -287,8 +296,20 @@ def _limits(args: argparse.Namespace, parameters: dict[str, Any],
     return lo, hi, source
 
 
+def _started(model: Any, start: Any, identified: tuple[float, float] | None,
+             limits: tuple[float, float, str] | None) -> Any:
+    """Return the model starting where ``start`` says (a note tells where)."""
+    from ..extensions import start_model
+    from ..operators.start import start_range
+    allowed = start_range(identified, None if limits is None else limits[:2])
+    started, _, words = start_model(model, start, allowed)
+    _progress(f'note: start: {words}')
+    return started
+
+
 def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
-                args: argparse.Namespace, limits: tuple[float, float, str] | None) -> Any:
+                args: argparse.Namespace, limits: tuple[float, float, str] | None,
+                start: Any, identified: tuple[float, float] | None) -> Any:
     # As the compensator node: the inverse of the model, its commands clamped to the safe
     # current range (the forward state follows the clamped command), unless --no-clamp.
     # With an effect (time column needed) the compensator's streaming inverse (with a dead
@@ -296,6 +317,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     import numpy as np
     from ..compensation import operating_range
     from ..compensation.updates import uncompensated
+    from ..operators.start import start_range
     from .ranges import outside
     plain = not model.timed
     if model.timed:
@@ -316,10 +338,14 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
             _progress(f'warning: {out.describe("desired displacements", where, "m")}')
     if limits is None or args.no_clamp:
         if plain:
-            result = model.gamma.inverse().simulate(values)
+            result = _started(model, start, identified, limits).gamma.inverse().simulate(values)
         else:
             wide = 1e12 * (1.0 + float(np.max(np.abs(values))))
-            result = _streaming(model, time, values, -wide, wide)
+            allowed = start_range(identified, None if limits is None else limits[:2])
+            unclamped = _streaming_compensator(model, time, -wide, wide, start=start,
+                                               current_range=allowed)
+            _progress(f'note: start: {unclamped.start_description}')
+            result = unclamped.command_batch(values, time)
         if limits is not None:
             out = outside(result, limits[0], limits[1])
             if out.count:
@@ -328,7 +354,9 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                           ' (--no-clamp)')
         return result
     lo, hi, source = limits
-    compensator = _streaming_compensator(model, time, lo, hi)
+    compensator = _streaming_compensator(model, time, lo, hi, start=start,
+                                         current_range=identified)
+    _progress(f'note: start: {compensator.start_description}')
     result = compensator.command_batch(values, None if plain else time)
     clamped = compensator.counters['clamped']
     if clamped:
@@ -338,15 +366,14 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     return result
 
 
-def _streaming_compensator(model: Any, time: Any, lo: float, hi: float) -> Any:
+def _streaming_compensator(model: Any, time: Any, lo: float, hi: float, *,
+                           start: Any,
+                           current_range: tuple[float, float] | None = None) -> Any:
     import numpy as np
     from ..compensation import Compensator
     period = 1e-3 if time is None or len(time) < 2 else float(np.median(np.diff(time)))
-    return Compensator(model, output_min=lo, output_max=hi, sample_period=period)
-
-
-def _streaming(model: Any, time: Any, values: Any, lo: float, hi: float) -> Any:
-    return _streaming_compensator(model, time, lo, hi).command_batch(values, time)
+    return Compensator(model, output_min=lo, output_max=hi, sample_period=period,
+                       start=start, current_range=current_range)
 
 
 def _check_time_column(model: Any, time: Any, time_column: str | None,
@@ -444,6 +471,13 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument('--node-name', default=None,
                        help='node whose parameters to use (default: compensator, or the '
                             "file's only node)")
+        p.add_argument('--start', default='rest_low', metavar='START',
+                       help='where the actuator is before the first sample: rest_low '
+                            '(default: at rest after a descent to the lowest identified '
+                            'input, a mode at rest), rest_high (after an ascent to the '
+                            "highest), record (the identification record's start: "
+                            'record_start.* of PARAMS, to reproduce that record), or the '
+                            'play states [A] separated by commas')
         if name == 'compensate':
             p.add_argument('--output-min', type=float, default=None, metavar='A',
                            help="lowest current command [A], as the node's output.min "

@@ -174,7 +174,7 @@ def single_axis_status(losses: Sequence[str], counters: Mapping[str, int],
     if losses:
         return WARN, '; '.join(losses)
     if not has_model:
-        return WARN, ('no model: unconfigured, no commands published; give all five model.* '
+        return WARN, ('no model: unconfigured, no commands published; give all four model.* '
                       'keys of Gamma in one request (ros2 param load, '
                       'set_parameters_atomically)')
     if any(faults.values()):

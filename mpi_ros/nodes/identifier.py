@@ -13,8 +13,9 @@ options of ``mpi-ros identify`` (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit w
 :func:`mpi_ros.identify` (``order``
 ``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
 fit errors (37); optionally write the parameter YAML (``params_file``); then send all
-eight ``model.*`` keys (Gamma's five arrays and the operating point
-``model.input_offset``, ``model.output_offset``, ``model.output_sign``) in **one**
+``model.*`` keys (Gamma's four arrays and the operating point
+``model.input_offset``, ``model.output_offset``, ``model.output_sign``) and the record's start
+``record_start.hysteresis.initial_states`` in **one**
 ``set_parameters_atomically`` request to ``target_node``. The target either applies the
 whole model or rejects it, so nothing is ever half-applied (a plain model switches the
 target's extension off); the wait for the service and for its answer is bounded by

@@ -51,7 +51,7 @@ Node parameters
 Extended models per axis
     Each axis follows the single-axis node's rules for its own keys (module docstring of
     :mod:`mpi_ros.nodes.compensator`): an extension is off while its keys are unset or 0 /
-    empty; at most one extension per axis; a request with all five Gamma keys of an axis
+    empty; at most one extension per axis; a request with all four Gamma keys of an axis
     describes that axis's whole model (its operating-point keys left out return to their
     defaults, its extension keys left out switch its extension off); extension keys alone
     change the extension of the axis's running Gamma (an axis without Gamma refuses them);
@@ -82,7 +82,7 @@ Model updates
     refused with a reason naming the axis and key, and nothing changes.  So one
     ``set_parameters_atomically`` (the identifier's push) changes several axes
     atomically; ``ros2 param load`` sends the file's ``axis*.model.*`` keys as one group
-    too.  The five Gamma keys of an axis in one request describe its whole model (see
+    too.  The four Gamma keys of an axis in one request describe its whole model (see
     Extended models per axis).  The output limits,
     node-wide and per axis, belong to the same request: a request that sets a model and its
     limits is applied whole (limits first, then the model) or refused whole, and in a
@@ -310,18 +310,28 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             self._axis_models.note(axis, model)
             if self._compensator is not None and not installed:
                 self._compensator.install(axis, model)
-        if self._compensator is None and not self._axis_models.missing:
+        built = self._compensator is None and not self._axis_models.missing
+        if built:
             lows, highs = self._effective_limits()
             self._compensator = MultiAxisCompensator(
                 self._axis_models.models, output_min=lows, output_max=highs,
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value,
-                inverses=self._axis_models.inverses)
+                inverses=self._axis_models.inverses,
+                start=self.get_parameter('start_state').value)
         self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
                        and any(axis.has_effect for axis in compensator.axes))
         self.get_logger().info(self._axis_models.applied(models, compensator is not None))
+        if built:
+            self.get_logger().info(f'start state: {self._start_words()}')
+
+    def _start_words(self) -> str:
+        if self._compensator is None:
+            return super()._start_words()
+        return '; '.join(f'axis {k}: {axis.start_description}'
+                         for k, axis in enumerate(self._compensator.axes))
 
     # -- diagnostics --------------------------------------------------------------------
     def _core_counters(self) -> Dict[str, int]:
