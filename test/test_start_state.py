@@ -303,3 +303,28 @@ def test_in_the_loop_the_start_must_be_where_the_plant_is(seed):
     mismatched = (errors['fresh', 'rest_low'], errors['swept', 'record'])
     assert max(matched) <= 0.03, errors
     assert min(mismatched) >= 2.0 * max(matched), errors
+
+
+def test_a_whole_model_push_replaces_an_old_files_record_start():
+    # A node started from an older file holds the record start under the old key; a push of
+    # a model written today (four Gamma keys and record_start.*) is the whole model, so the
+    # old key is cleared (the empty array) and the pushed record start is the one used.
+    from mpi_ros.compensation.updates import complete, model_keys, prepare
+    gamma = {'model.hysteresis.thresholds': [0.0, 0.4, 0.8],
+             'model.hysteresis.weights': [1.0, 0.3, 0.2],
+             'model.superposition.thresholds': [0.0, 0.5, 1.0],
+             'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5]}
+    current = dict.fromkeys(model_keys())
+    current.update(gamma, **{'model.hysteresis.initial_states': [0.1, 0.2, 0.3],
+                             'output.min': 0.0, 'output.max': 2.0})
+    push = dict(gamma, **{'record_start.hysteresis.initial_states': [-0.4, -0.2, 0.0]})
+    completed = complete(current, push)
+    assert completed['model.hysteresis.initial_states'] == []
+    model = prepare(current, completed).model
+    np.testing.assert_array_equal(model.hysteresis.initial_states, [-0.4, -0.2, 0.0])
+    # A null for the record start removes it (no record start: the paper's zeros).
+    cleared = complete(dict(current, **completed), {'record_start.hysteresis.initial_states':
+                                                    None})
+    assert cleared == {'record_start.hysteresis.initial_states': []}
+    model = prepare(dict(current, **completed), cleared).model
+    np.testing.assert_array_equal(model.hysteresis.initial_states, [0.0, 0.0, 0.0])

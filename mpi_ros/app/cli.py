@@ -101,7 +101,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
               f'first sample: {100 * result.whole_record_rms_error:.3f} % '
               f'({result.solve_time:.2f} s)')
     _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
-              f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; start state: '
+              f"{model.output_offset:.6g}, output sign {model.output_sign:+d}; the record's "
+              'start (record_start.*, for simulate --start record; a new input starts at '
+              'rest after a descent to the lowest identified input): '
               f"{result.start_state.get('description', 'n/a')}")
     record_range = range_header(recording.current, recording.displacement)
     _progress(f'{record_range} (written in the YAML header: simulate and compensate warn'

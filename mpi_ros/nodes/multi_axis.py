@@ -31,15 +31,18 @@ ros2_control (``joints``, ``output_layout``, ``input_message``, read-only)
 Node parameters
     ``axes`` (read-only); per axis k = 0..N-1 every model key of the single-axis node under
     ``axis<k>.``: ``axis<k>.model.hysteresis.thresholds``, ``.weights``,
-    ``.initial_states``, ``axis<k>.model.superposition.thresholds``, ``.weights``,
-    ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign`` and the extension
+    ``axis<k>.model.superposition.thresholds``, ``.weights``,
+    ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign``, the record start
+    ``axis<k>.record_start.hysteresis.initial_states`` and the extension
     keys of the effect registry (``axis<k>.model.creep.time_constants``, ``.weights``,
     ``axis<k>.model.rate_dependence.time_constant``, ``axis<k>.model.thermal_drift.*``,
     ``axis<k>.model.dead_time``: declared from :data:`mpi_ros.extensions.EFFECTS`, unset by
     default); ``output.min`` / ``output.max`` (the node-wide safe range) and, optional per
     axis, ``axis<k>.output.min`` / ``axis<k>.output.max`` (unset: the node-wide value; once
     set, a key can be changed but not unset again while the node runs); ``enabled``,
-    ``sample_period``, ``message_time``, ``diagnostics_period``, ``qos_depth``,
+    ``sample_period``, ``start_state`` (where every axis starts, as for the single-axis
+    node; explicit states apply to every axis), ``message_time``, ``diagnostics_period``,
+    ``qos_depth``,
     ``qos_reliability``.  Every axis's range (its own keys, or the node-wide ones it falls
     back to) must be finite with min < max; ``/diagnostics`` reports ``output_min`` /
     ``output_max`` as one value, or as space-separated per-axis lists when the axes'
