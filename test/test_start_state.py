@@ -15,8 +15,8 @@ from mpi_ros.app.cli import main
 from mpi_ros.app.ranges import identified_range, recorded_range
 from mpi_ros.compensation import Compensator, operating_range
 from mpi_ros.errors import ModelError
-from mpi_ros.metrics import control_error
 from mpi_ros.extensions import extended_model_from_params, start_model
+from mpi_ros.metrics import control_error
 from mpi_ros.operators.start import identified_ranges, rest_states, StartState
 from mpi_ros.params import read_params_yaml, write_params_yaml
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
@@ -328,3 +328,14 @@ def test_a_whole_model_push_replaces_an_old_files_record_start():
     assert cleared == {'record_start.hysteresis.initial_states': []}
     model = prepare(dict(current, **completed), cleared).model
     np.testing.assert_array_equal(model.hysteresis.initial_states, [0.0, 0.0, 0.0])
+
+
+def test_explicit_states_that_do_not_fit_a_compensators_model_fall_back_and_say_so():
+    # The node builds its core when a model arrives (a post-set step must not raise): the
+    # record start is used, and the start's description (logged) says why.
+    rng = np.random.default_rng(9)
+    model = random_model(rng, n=3, l=2)
+    comp = Compensator(model, output_min=-10.0, output_max=10.0, start='0.1, 0.2')
+    np.testing.assert_array_equal(comp.state, model.hysteresis.initial_states)
+    assert comp.start_description.startswith("record: the model's record start (start_state "
+                                             'gives 2 play states; the model has 4 plays')

@@ -142,7 +142,8 @@ class Compensator:
         Where the actuator is before the first command (:mod:`mpi_ros.operators.start`):
         ``rest_low`` (default: at rest after a descent to the lowest identified input,
         raised to ``output_min`` if below it; the last command starts there), ``rest_high``,
-        ``record`` (the model's record start) or explicit play states [A].
+        ``record`` (the model's record start) or explicit play states [A] (of another
+        number than the model's plays: the record start, as :attr:`start_description` says).
     current_range : (float, float), optional
         The identified current range [A] (e.g. from a parameter file's header); None: what
         the model's thresholds tell (:func:`~mpi_ros.operators.start.identified_ranges`).
@@ -205,7 +206,7 @@ class Compensator:
             found = identified_ranges(gamma, inverse)
             current_range = None if found is None else found[0]
         allowed = start_range(current_range, (self.output_min, self.output_max))
-        _, current, description = self.start.plays(gamma, allowed)
+        _, current, description = self.start.plays(gamma, allowed, strict=False)
         if current is not None:
             self._rest = (current, self.start.name == 'rest_low')
             self.last_command = current

@@ -233,8 +233,8 @@ class StartState:
             return self.name
         return ', '.join(repr(v) for v in self.states)
 
-    def plays(self, gamma: Any, current_range: tuple[float, float] | None) -> tuple[
-            FloatArray, float | None, str]:
+    def plays(self, gamma: Any, current_range: tuple[float, float] | None, *,
+              strict: bool = True) -> tuple[FloatArray, float | None, str]:
         """
         Return the play states of this start for a model, the current, and a description.
 
@@ -245,6 +245,10 @@ class StartState:
         current_range : (float, float) or None
             The identified current range ``(a, b)`` [A] (already limited to the commands
             allowed); None: unknown (a rest start then falls back to the record start).
+        strict : bool
+            True: explicit states of another number of plays are refused; False: the record
+            start is used instead, and the description says so (a running compensator's
+            model arrives after its start was chosen).
 
         Returns
         -------
@@ -258,17 +262,19 @@ class StartState:
         Raises
         ------
         ModelError
-            Explicit states whose number differs from the model's plays.
+            Explicit states whose number differs from the model's plays (``strict``).
 
         """
         record = np.array(gamma.hysteresis.initial_states, dtype=np.float64)
         if self.name == 'explicit':
-            if len(self.states) != record.size:
-                msg = (f'start_state gives {len(self.states)} play states; the model has'
-                       f' {record.size} plays (thresholds of H): give one state per play,'
-                       f' or rest_low, rest_high or record')
+            msg = (f'start_state gives {len(self.states)} play states; the model has'
+                   f' {record.size} plays (thresholds of H): give one state per play,'
+                   f' or rest_low, rest_high or record')
+            if len(self.states) == record.size:
+                return np.array(self.states), None, f'explicit play states [{self.text}] A'
+            if strict:
                 raise ModelError(msg)
-            return np.array(self.states), None, f'explicit play states [{self.text}] A'
+            return record, None, f"record: the model's record start ({msg})"
         if self.name == 'record' or current_range is None:
             why = ('' if self.name == 'record' else
                    f' ({self.name} asked, but the model tells no identified input range)')
