@@ -167,9 +167,10 @@ def offline_records(effect, seed):
 
 def offline_track(effect, seed, params, times, desired, rate):
     """Track ``desired`` with a compensator of ``params`` in front of a fresh plant."""
-    # A dead time is compensated as Gamma alone (Compensator.kind says so).
+    # A dead time is compensated as Gamma alone (Compensator.kind says so).  A fresh plant
+    # is where the identification record started: the record's start.
     comp = Compensator(extended_model_from_params(params), output_min=OUTPUT_MIN,
-                       output_max=OUTPUT_MAX, sample_period=1.0 / rate)
+                       output_max=OUTPUT_MAX, sample_period=1.0 / rate, start='record')
     plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=NOISE, **STRENGTHS[effect]),
                                      seed=seed + 2)
     measured = np.empty(desired.size)
@@ -256,7 +257,8 @@ class DDSLoop:
                         'the plant simulator to start', 60.0)
         comp = self.start('compensator', [
             '--params-file', str(params_file), '-p', f'output.min:={OUTPUT_MIN!r}',
-            '-p', f'output.max:={OUTPUT_MAX!r}', '-p', f'sample_period:={1.0 / self.rate!r}'],
+            '-p', f'output.max:={OUTPUT_MAX!r}', '-p', f'sample_period:={1.0 / self.rate!r}',
+            '-p', 'start_state:=record'],     # a fresh plant: where the record started
             'compensator.log')
         try:
             driver.wait_for(lambda: driver.desired_pub.get_subscription_count() > 0,

@@ -33,7 +33,7 @@ from .compensation.parameters import AXES, ParameterSpec
 from .compensation.updates import axis_key, LIMIT_KEYS
 from .errors import DataError, IdentificationError, MPIError, ParameterRejected
 from .identification import IdentificationResult, identify
-from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS
+from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS, RECORD_START_STATES
 from .order import format_order, Order, parse_order as parse_order_text
 from .params import write_params_yaml
 from .recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording, \
@@ -84,9 +84,10 @@ class BagFit:
         The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
         ``.samples``, solver status.
     parameters : dict of str to list of float, float or int
-        ``result.full_model.to_params()``: the five ``model.*`` arrays of Gamma, the three
-        operating point keys and the keys of the dynamics the fit found (dead time, lag,
-        output mode), exactly the model ``mpi-ros identify`` writes.
+        ``result.full_model.to_params()``: the four ``model.*`` arrays of Gamma, the three
+        operating point keys, the keys of the dynamics the fit found (dead time, lag,
+        output mode) and the record start ``record_start.*``, exactly the model ``mpi-ros
+        identify`` writes.
     written : dict of str to value
         Everything ``mpi-ros identify`` writes for this record
         (:func:`identified_parameters`): `parameters` and the output limits; what the

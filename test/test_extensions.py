@@ -109,7 +109,7 @@ def test_composite_model_chains_its_effects_and_inverts_exactly(seed):
                                creep.simulate(t, first_order_lag(t, x, 0.004)), atol=1e-15)
     again = extended_model_from_params(both.to_params())
     np.testing.assert_array_equal(again.simulate(t, x), both.simulate(t, x))
-    comp = Compensator(both, output_min=-10.0, output_max=10.0)
+    comp = Compensator(both, output_min=-10.0, output_max=10.0, start='record')
     commands = [comp.command(s, time=tk) for s, tk in zip(both.simulate(t, x), t)]
     np.testing.assert_allclose(commands, x, atol=EXACT, rtol=0.0)
     three = extended_model_from_params({**both.to_params(), **dead.to_params()})
@@ -140,7 +140,8 @@ def test_extended_compensator_inverts_its_model(seed):
     rng = np.random.default_rng(seed)
     t, x = _signal(rng)
     for model, tolerance in zip(_models(rng)[:3], (EXACT, EXACT, THERMAL)):
-        comp = Compensator(model, output_min=-10.0, output_max=10.0)
+        # From the start the simulation starts from (the model's record start).
+        comp = Compensator(model, output_min=-10.0, output_max=10.0, start='record')
         commands = [comp.command(s, time=tk) for s, tk in zip(model.simulate(t, x), t)]
         np.testing.assert_allclose(commands, x, atol=tolerance, rtol=0.0)
         assert comp.counters['clamped'] == 0
@@ -361,7 +362,8 @@ def test_extension_wins_on_a_tracking_trajectory(effect, fit, order):
     # Issue 18: the demo's protocol in-process.  A 60 s identification record at 1 kHz from
     # the plant with the effect; a 30 s tracking trajectory at 200 Hz in the middle 80 % of
     # the recorded output after a 1 s lead from rest (another mean current than the
-    # record); each compensator in front of a fresh plant.  The extended compensator must
+    # record); each compensator in front of a fresh plant, which is where the identification
+    # record started (start_state record).  The extended compensator must
     # cut the RMS tracking error to <= 0.85 x the plain one.  Measured: creep 0.53 % ->
     # 0.22 % (the creep of the current, before: 1.30 %); rate dependence, orders chosen
     # (auto): 0.91 % -> 0.23 % (the plain order (6, 3) for both: 0.78 %).
@@ -378,7 +380,7 @@ def test_extension_wins_on_a_tracking_trajectory(effect, fit, order):
     rms = []
     for model in (plain, extended):
         comp = Compensator(extended_model_from_params(model.to_params()), output_min=0.2,
-                           output_max=1.8, sample_period=0.005)
+                           output_max=1.8, sample_period=0.005, start='record')
         plant = MagnetostrictiveActuator(cfg, seed=3)
         measured = np.array([plant.step(tk, comp.command(sk, time=tk))
                              for sk, tk in zip(desired, times)])

@@ -73,7 +73,7 @@ def test_specs_are_plain_data_with_their_ros_texts():
     assert sign.type_ == 'integer' and '1 or -1' in sign.all_constraints()
     assert SPECS[INPUT_OFFSET].described().endswith('[A] (type: double)')
     assert SPECS['message_time'].all_constraints().startswith('one of: arrival, nominal.')
-    assert [spec.name for spec in MODEL_PARAMETERS][:5] == list(MODEL_KEYS)
+    assert [spec.name for spec in MODEL_PARAMETERS][:4] == list(MODEL_KEYS)
     per_axis = specs_by_name(axis_parameters(2) + axis_limit_parameters(2))
     assert 'axis1.model.hysteresis.weights' in per_axis
     assert per_axis['axis0.output.min'].default is None

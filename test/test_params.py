@@ -15,7 +15,7 @@ from .core_models import random_model, random_walk
 VALID = {
     'model.hysteresis.thresholds': [0.0, 0.4, 0.8],
     'model.hysteresis.weights': [1.0, 0.3, 0.2],
-    'model.hysteresis.initial_states': [0.0, 0.0, 0.0],
+    'record_start.hysteresis.initial_states': [0.0, 0.0, 0.0],
     'model.superposition.thresholds': [-0.5, 0.0, 0.5],
     'model.superposition.weights': [1e-5, 2e-5, -1e-5],
 }
@@ -31,7 +31,8 @@ def _with(**changes):
 def test_valid_parameters_load():
     model = MPIModel.from_params(VALID)
     assert (model.n, model.l) == (2, 1)
-    # The parameter form is the five arrays plus the operating point (defaults: origin).
+    # The parameter form: Gamma's four arrays, the operating point (defaults: origin) and
+    # the record start.
     assert model.to_params() == {**VALID, 'model.input_offset': 0.0,
                                  'model.output_offset': 0.0, 'model.output_sign': 1}
 
@@ -40,7 +41,7 @@ def test_valid_parameters_load():
     ({k: v for k, v in VALID.items() if k != 'model.hysteresis.weights'},
      r'model\.hysteresis\.weights is missing'),
     (_with(model__hysteresis__weights=[1.0, 0.3]), r'model\.hysteresis\.weights must have one'),
-    (_with(model__hysteresis__initial_states=[0.0]), r'initial_states must have one'),
+    (_with(record_start__hysteresis__initial_states=[0.0]), r'initial_states must have one'),
     (_with(model__superposition__weights=[1e-5]), r'superposition\.weights must have one'),
     (_with(model__hysteresis__thresholds=[0.1, 0.4, 0.8]), r'start at exactly 0\.0'),
     (_with(model__hysteresis__thresholds=[0.0, 0.8, 0.4]),
@@ -54,7 +55,8 @@ def test_valid_parameters_load():
     (_with(model__superposition__weights=[1e-5, 2e-5, -3e-5]), r'violates \(19\).*item 2'),
     (_with(model__superposition__weights=[-3e-5, 2e-5, 1e-5]), r'violates \(19\).*item 0'),
     (_with(model__hysteresis__weights=[1.0, math.nan, 0.2]), r'weights must be finite'),
-    (_with(model__hysteresis__initial_states=[0.0, math.inf, 0.0]), r'initial_states must be'),
+    (_with(record_start__hysteresis__initial_states=[0.0, math.inf, 0.0]),
+     r'record_start\.hysteresis\.initial_states must be'),
     (_with(model__hysteresis__weights='1.0, 0.3'), r'must be a list of floats'),
     (_with(model__hysteresis__weights=[1.0, 'a', 0.2]), r'item 1 is str'),
     (_with(model__hysteresis__weights=[True, 0.3, 0.2]), r'item 0 is bool'),

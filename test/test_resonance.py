@@ -83,7 +83,7 @@ def test_parameter_form_round_trip_and_validation():
         model.simulate(t, x), output_mode(t, gamma.simulate(x), FREQUENCY, DECAY, 2e-6))
     assert again.damping_ratio == pytest.approx(1.0 / (2 * math.pi * FREQUENCY * DECAY))
     # The deflection defaults to 0 (a hand-written file without it starts at rest).
-    del params['model.resonance.initial_deflection']
+    del params['record_start.resonance.initial_deflection']
     assert extended_model_from_params(params).initial_deflection == 0.0
     with pytest.raises(ModelError, match=r'model.resonance.decay must be above 1 / \(2 pi f\)'
                                          r' = 0.0002151 s'):
@@ -91,9 +91,9 @@ def test_parameter_form_round_trip_and_validation():
     with pytest.raises(ModelError, match=r'model.resonance.frequency must be finite and >= 0.0'
                                          r' \[Hz\]; found -1.0'):
         extended_model_from_params({**params, 'model.resonance.frequency': -1.0})
-    with pytest.raises(ModelError, match=r'model.resonance.initial_deflection must be a'
+    with pytest.raises(ModelError, match=r'record_start.resonance.initial_deflection must be a'
                                          r' number \[m\]'):
-        extended_model_from_params({**params, 'model.resonance.initial_deflection': 'x'})
+        extended_model_from_params({**params, 'record_start.resonance.initial_deflection': 'x'})
     # With an input lag: a composite, the lag before Gamma, the mode after it.
     both = extended_model_from_params(
         {**model.to_params(), 'model.rate_dependence.time_constant': 0.002})
@@ -169,8 +169,8 @@ def test_identify_models_the_ringing_and_simulate_reproduces_it(kind, tmp_path):
         pytest.approx(mode.frequency)
     assert f'rings at {mode.frequency:.4g} Hz, decay {1e3 * mode.decay:.3g} ms; modelled' in \
         result.findings
-    # `mpi-ros identify` writes it into the parameter form; `mpi-ros simulate` of the same
-    # record reproduces the whole-record error (ringing included).
+    # `mpi-ros identify` writes it into the parameter form; `mpi-ros simulate --start record`
+    # of the same record reproduces the whole-record error (ringing included).
     write_csv_columns(tmp_path / 'rec.csv', {'time': t, 'current': x, 'displacement': y})
     assert main(['identify', str(tmp_path / 'rec.csv'), '--order', '10,5', '-o',
                  str(tmp_path / 'p.yaml'), '--quiet']) == 0
@@ -178,7 +178,7 @@ def test_identify_models_the_ringing_and_simulate_reproduces_it(kind, tmp_path):
     assert params['model.resonance.frequency'] == pytest.approx(mode.frequency)
     assert main(['simulate', str(tmp_path / 'p.yaml'), '--input', str(tmp_path / 'rec.csv'),
                  '--time-column', 'time', '--input-column', 'current', '--column-name',
-                 'simulated', '--output', str(tmp_path / 'sim.csv')]) == 0
+                 'simulated', '--output', str(tmp_path / 'sim.csv'), '--start', 'record']) == 0
     header, table = read_csv_table(tmp_path / 'sim.csv')
     assert _rms(table[:, header.index('simulated')], y) == pytest.approx(
         result.whole_record_rms_error, rel=1e-9)
@@ -198,7 +198,7 @@ def test_a_record_that_starts_ringing_gets_its_initial_deflection():
     assert mode.deflection == pytest.approx(y[0] - settled, rel=0.1)
     bound = record.truth['noise'] * 0.034 / (np.ptp(y) / 1e-3) + 0.005
     assert result.whole_record_rms_error <= bound
-    assert result.full_model.to_params()['model.resonance.initial_deflection'] == \
+    assert result.full_model.to_params()['record_start.resonance.initial_deflection'] == \
         mode.deflection
 
 

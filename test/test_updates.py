@@ -58,7 +58,7 @@ def test_a_whole_model_is_accepted_with_its_inverse():
 
 def test_one_key_without_a_model_is_refused_naming_what_is_missing():
     with pytest.raises(ParameterRejected, match='the node has no model yet, and a model needs '
-                       'all five keys of Gamma; missing: model.hysteresis.thresholds'):
+                       'all four keys of Gamma; missing: model.hysteresis.thresholds'):
         prepare(values(), {'model.hysteresis.weights': [1.0]}, running=False)
     with pytest.raises(ParameterRejected, match=r'axis 1 has no model yet, so '
                        r'axis1\.model\.dead_time cannot apply: .* missing: '
@@ -97,7 +97,7 @@ def test_null_is_resolved_per_kind_of_key():
                                'model.hysteresis.weights']
 
 
-def test_all_five_gamma_keys_describe_the_whole_model():
+def test_all_four_gamma_keys_describe_the_whole_model():
     current = values(dict(GAMMA, **CREEP, **{'model.output_sign': -1}))
     completed = complete(current, dict(OTHER))
     off = effect_off_values()
@@ -105,9 +105,9 @@ def test_all_five_gamma_keys_describe_the_whole_model():
                                        'model.creep.time_constants':
                                            off['model.creep.time_constants'],
                                        'model.creep.weights': off['model.creep.weights']})
-    # Four keys of Gamma are not a whole model: nothing is added.
-    four = {key: OTHER[key] for key in MODEL_KEYS[:4]}
-    assert complete(current, four) == four
+    # Three keys of Gamma are not a whole model: nothing is added.
+    three = {key: OTHER[key] for key in MODEL_KEYS[:3]}
+    assert complete(current, three) == three
     # The completed request prepares the plain model (the creep switched off).
     assert isinstance(prepare(current, completed).model, MPIModel)
 
@@ -147,7 +147,7 @@ def test_load_reads_declared_values():
     assert load(values()) is None
     assert isinstance(load(values(GAMMA)), MPIModel)
     with pytest.raises(ParameterRejected, match='model.creep.time_constants: a model '
-                       'extension needs the five model.* keys of Gamma'):
+                       'extension needs the four model.* keys of Gamma'):
         load(dict(values(), **CREEP))
     partial = dict(values(), **{'model.hysteresis.thresholds': [0.0]})
     with pytest.raises(ParameterRejected, match='incomplete model in the parameters: missing '

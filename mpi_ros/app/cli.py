@@ -10,6 +10,11 @@ Subcommands
                           the range the model was identified on)
 ``compensate PARAMS``     inverse model Gamma^-1 on a CSV column (offline feed-forward),
                           clamped as the compensator node clamps (``--no-clamp``: not)
+
+                          Both start at rest after a descent to the lowest identified input
+                          (``--start``: ``rest_low``, ``rest_high``, ``record`` to reproduce
+                          the identification record, or explicit play states; see
+                          :mod:`mpi_ros.operators.start`)
 ``diagnose DATA``         find what the model misses in measured data (see ``mpi_ros.diagnosis``)
 ``demo``                  the closed loop over DDS: record, identify, push, track, report
 ``compensator|identifier|plant-simulator [--ros-args ...]``  run a node, as ``ros2 run``
@@ -105,7 +110,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
               f'first sample: {100 * result.whole_record_rms_error:.3f} % '
               f'({result.solve_time:.2f} s)')
     _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
-              f'{model.output_offset:.6g}, output sign {model.output_sign:+d}; start state: '
+              f"{model.output_offset:.6g}, output sign {model.output_sign:+d}; the record's "
+              'start (record_start.*, for simulate --start record; a new input starts at '
+              'rest after a descent to the lowest identified input): '
               f"{result.start_state.get('description', 'n/a')}")
     record_range = range_header(recording.current, recording.displacement,
                                 recording.units.input_quantity)
@@ -246,9 +253,11 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
                   [('--output', args.output)])
     parameters = _model_parameters(args.params, args.node_name)
     from ..extensions import extended_model_from_params
+    from ..operators.start import StartState
     from .ranges import identified_range, outside, recorded_range
     from ..recordings import read_csv_table, write_csv_columns
     from ..units import INPUT_QUANTITY_KEY, input_unit_of, resolve_units
+    start = StartState.parse(args.start, option='--start')
     described = extended_model_from_params(parameters)
     quantity = parameters.get(INPUT_QUANTITY_KEY) or 'current'
     unit = input_unit_of(quantity)
@@ -281,9 +290,11 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     ranges = recorded_range(args.params) or identified_range(described)
     if inverse:
         limits = _limits(args, parameters, ranges.current, unit)
-        result = _compensate(described, time, time_column, values, args, limits, unit)
+        result = _compensate(described, time, time_column, values, args, limits, start,
+                             ranges.current, unit)
     else:
-        result = _simulate(described, time, time_column, values, args)
+        result = _simulate(_started(described, start, ranges.current, None), time,
+                           time_column, values, args)
         if ranges.current is None:
             _progress(f'note: {_UNKNOWN_RANGE.format(params=args.params)}: no range check')
         else:
@@ -339,8 +350,20 @@ def _limits(args: argparse.Namespace, parameters: dict[str, Any],
     return lo, hi, source
 
 
+def _started(model: Any, start: Any, identified: tuple[float, float] | None,
+             limits: tuple[float, float, str] | None) -> Any:
+    """Return the model starting where ``start`` says (a note tells where)."""
+    from ..extensions import start_model
+    from ..operators.start import start_range
+    allowed = start_range(identified, None if limits is None else limits[:2])
+    started, _, words = start_model(model, start, allowed)
+    _progress(f'note: start: {words}')
+    return started
+
+
 def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                 args: argparse.Namespace, limits: tuple[float, float, str] | None,
+                start: Any, identified: tuple[float, float] | None,
                 unit: str = 'A') -> Any:
     # As the compensator node: the inverse of the model, its commands clamped to the safe
     # current range (the forward state follows the clamped command), unless --no-clamp.
@@ -350,6 +373,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     from ..compensation import operating_range
     from ..compensation.limits import limits_shortfall
     from ..compensation.updates import uncompensated
+    from ..operators.start import start_range
     from .ranges import outside
     plain = not model.timed
     if model.timed:
@@ -375,10 +399,14 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
             _progress(f'warning: {out.describe("desired displacements", where, "m")}')
     if limits is None or args.no_clamp:
         if plain:
-            result = model.gamma.inverse().simulate(values)
+            result = _started(model, start, identified, limits).gamma.inverse().simulate(values)
         else:
             wide = 1e12 * (1.0 + float(np.max(np.abs(values))))
-            result = _streaming(model, time, values, -wide, wide)
+            allowed = start_range(identified, None if limits is None else limits[:2])
+            unclamped = _streaming_compensator(model, time, -wide, wide, start=start,
+                                               current_range=allowed)
+            _progress(f'note: start: {unclamped.start_description}')
+            result = unclamped.command_batch(values, time)
         if limits is not None:
             out = outside(result, limits[0], limits[1])
             if out.count:
@@ -387,7 +415,9 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                           ' (--no-clamp)')
         return result
     lo, hi, source = limits
-    compensator = _streaming_compensator(model, time, lo, hi)
+    compensator = _streaming_compensator(model, time, lo, hi, start=start,
+                                         current_range=identified)
+    _progress(f'note: start: {compensator.start_description}')
     result = compensator.command_batch(values, None if plain else time)
     clamped = compensator.counters['clamped']
     if clamped:
@@ -397,15 +427,14 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     return result
 
 
-def _streaming_compensator(model: Any, time: Any, lo: float, hi: float) -> Any:
+def _streaming_compensator(model: Any, time: Any, lo: float, hi: float, *,
+                           start: Any,
+                           current_range: tuple[float, float] | None = None) -> Any:
     import numpy as np
     from ..compensation import Compensator
     period = 1e-3 if time is None or len(time) < 2 else float(np.median(np.diff(time)))
-    return Compensator(model, output_min=lo, output_max=hi, sample_period=period)
-
-
-def _streaming(model: Any, time: Any, values: Any, lo: float, hi: float) -> Any:
-    return _streaming_compensator(model, time, lo, hi).command_batch(values, time)
+    return Compensator(model, output_min=lo, output_max=hi, sample_period=period,
+                       start=start, current_range=current_range)
 
 
 def _check_time_column(model: Any, time: Any, time_column: str | None,
@@ -545,6 +574,13 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument('--node-name', default=None,
                        help='node whose parameters to use (default: compensator, or the '
                             "file's only node)")
+        p.add_argument('--start', default='rest_low', metavar='START',
+                       help='where the actuator is before the first sample: rest_low '
+                            '(default: at rest after a descent to the lowest identified '
+                            'input, a mode at rest), rest_high (after an ascent to the '
+                            "highest), record (the identification record's start: "
+                            'record_start.* of PARAMS, to reproduce that record), or the '
+                            'play states [A] separated by commas')
         if name == 'compensate':
             p.add_argument('--output-min', type=float, default=None, metavar='A',
                            help="lowest current command [A], as the node's output.min "

@@ -21,6 +21,7 @@ from .screening import best_linear_map, operating_range, screen_desired
 from ..errors import ModelError
 from ..operators.memory import TurningPointMemory
 from ..operators.model import _hysteresis_step, _superposition_value, MPIModel
+from ..operators.start import identified_ranges, rest_states, start_range, StartState
 
 __all__ = ['Compensator', 'InverseStep', 'Pack', 'gamma_of', 'inverse_step_of', 'kind_of',
            'loop_block', 'pack']
@@ -138,6 +139,16 @@ class Compensator:
         block); a new memory by default.
     inverse : MPIModel, optional
         Gamma^-1 of ``model`` when already built; None: built here.
+    start : StartState or str
+        Where the actuator is before the first command (:mod:`mpi_ros.operators.start`):
+        ``rest_low`` (default: at rest after a descent to the lowest identified input,
+        raised to ``output_min`` if below it; the last command starts there), ``rest_high``,
+        ``record`` (the model's record start) or explicit play states [A] (of another
+        number than the model's plays: the record start, as :attr:`start_description` says).
+    current_range : (float, float), optional
+        The identified current range [A] (e.g. from a parameter file's header); None: what
+        the model's thresholds tell (:func:`~mpi_ros.operators.start.identified_ranges`).
+        A model that tells none starts a rest start at its record start.
 
     Attributes
     ----------
@@ -148,14 +159,18 @@ class Compensator:
         not increase).
     version : int
         Incremented by every accepted model.
+    start_description : str
+        The start in words (the nodes log it).
 
     """
 
     def __init__(self, model: Any, *, output_min: float, output_max: float,
                  enabled: bool = True, sample_period: float = 1e-3,
                  memory: TurningPointMemory | None = None,
-                 inverse: MPIModel | None = None) -> None:
+                 inverse: MPIModel | None = None, start: StartState | str = 'rest_low',
+                 current_range: tuple[float, float] | None = None) -> None:
         self._check_limits(output_min, output_max)
+        self.start = StartState.parse(start)
         _check_sample_period(sample_period)
         self.output_min = float(output_min)
         self.output_max = float(output_max)
@@ -171,6 +186,10 @@ class Compensator:
         self._started = False
         self._step: InverseStep | None = None
         self._own_pack: Pack | None = None
+        self._rest: tuple[float, bool] | None = None     # a rest start: (current, descent)
+        if inverse is None:
+            inverse = gamma_of(model).inverse()            # (12)-(14), (22)-(25), once
+        self.start_description = self._settle(gamma_of(model), inverse, current_range)
         self._install(model, replay=False, inverse=inverse)
         self.version = 1
 
@@ -181,6 +200,28 @@ class Compensator:
             msg = (f'output.min must be finite and below output.max; found {output_min} and'
                    f' {output_max}')
             raise ModelError(msg)
+
+    def _settle(self, gamma: MPIModel, inverse: MPIModel,
+                current_range: tuple[float, float] | None) -> str:
+        # The start of the first model: a rest start keeps its current (a later model
+        # replays from the same history, descent or ascent to it, by wiping-out).
+        if current_range is None:
+            found = identified_ranges(gamma, inverse)
+            current_range = None if found is None else found[0]
+        allowed = start_range(current_range, (self.output_min, self.output_max))
+        _, current, description = self.start.plays(gamma, allowed, strict=False)
+        if current is not None:
+            self._rest = (current, self.start.name == 'rest_low')
+            self.last_command = current
+        return description
+
+    def _start_states(self, gamma: MPIModel) -> FloatArray:
+        if self._rest is not None:
+            return rest_states(gamma, self._rest[0], descent=self._rest[1])
+        record = np.array(gamma.hysteresis.initial_states, dtype=np.float64)
+        if self.start.name == 'explicit' and len(self.start.states) == record.size:
+            return np.array(self.start.states, dtype=np.float64)
+        return record
 
     def _changing(self) -> None:
         # An owner that keeps this compensator's state elsewhere (MultiAxisCompensator)
@@ -198,7 +239,7 @@ class Compensator:
         if step is not None and not step.carry(self._step):
             step.start(self.last_command)
         h, s_inv, h_inv = gamma.hysteresis, inverse.superposition, inverse.hysteresis
-        z_h = np.array(h.initial_states, dtype=np.float64)
+        z_h = self._start_states(gamma)
         if replay and len(self.memory):
             _, z_h = gamma.hysteresis_output(self.memory.points, z_h)
         lo, hi = operating_range(gamma, self.output_min, self.output_max)
@@ -225,7 +266,10 @@ class Compensator:
         Switch to a new model of any kind, bumplessly.
 
         The new forward play state is the replay of the applied current's turning points
-        through the new H (the inverse state follows by (14)); an effect of the same kind
+        through the new H (the inverse state follows by (14)), from the start: a rest start
+        the same descent (ascent) to the same current, the record start the new model's,
+        explicit states themselves (the new model's record start when its number of plays
+        differs); an effect of the same kind
         keeps its slow states, a new one starts them settled at the last command.  The
         counters go on.
 

@@ -32,11 +32,10 @@ What a model knows of its identification record (:func:`identified_range`):
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-import numpy.typing as npt
 
 from .compensator import gamma_of
 from .screening import operating_range
+from ..operators.start import identified_ranges
 
 __all__ = ['IdentifiedRange', 'LimitsShortfall', 'UNREACHABLE_TOLERANCE', 'identified_range',
            'limits_shortfall']
@@ -135,26 +134,8 @@ def identified_range(model: Any) -> IdentifiedRange:
         range (see the module docstring).
 
     """
-    gamma = gamma_of(model)
-    s_inv = gamma.inverse().superposition
-    r = np.asarray(s_inv.thresholds, dtype=np.float64)
-    positive, negative = r[r > 0.0], -r[r < 0.0][::-1]
-    if not (positive.size or negative.size) or not all(
-            _spaced_as_identified(branch) for branch in (positive, negative)):
-        return IdentifiedRange()
-    # (30)-(31): the k thresholds of a branch end at (k - 1/2)/k of its extent.
-    v_hi = float(positive[-1]) * positive.size / (positive.size - 0.5) if positive.size else 0.0
-    v_lo = -float(negative[-1]) * negative.size / (negative.size - 0.5) if negative.size else 0.0
-    h = gamma.hysteresis
-    w = np.asarray(h.weights, dtype=np.float64)
-    total, spread = float(np.sum(w)), float(np.sum(w * np.asarray(h.thresholds)))
-    h_lo, h_hi = (float(v) for v in s_inv.apply(np.array([v_lo, v_hi])))
-    a = gamma.input_offset + (h_lo - spread) / total
-    b = gamma.input_offset + (h_hi + spread) / total
-    ends = sorted(gamma.output_offset + gamma.output_sign * v for v in (v_lo, v_hi))
-    if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
-        return IdentifiedRange()
-    return IdentifiedRange((float(a), float(b)), (float(ends[0]), float(ends[1])))
+    found = identified_ranges(gamma_of(model))
+    return IdentifiedRange() if found is None else IdentifiedRange(*found)
 
 
 def limits_shortfall(model: Any, output_min: float,
@@ -214,12 +195,3 @@ def limits_shortfall(model: Any, output_min: float,
         return None
     return LimitsShortfall((a, b), (float(output_min), float(output_max)), (d_lo, d_hi),
                            (r_lo, r_hi), unreachable)
-
-
-def _spaced_as_identified(branch: npt.NDArray[np.float64]) -> bool:
-    # (30)-(31): the k thresholds of a branch, ascending, are (i - 1/2)/k of its extent,
-    # i.e. 1, 3, 5, ... times the first (an empty branch: the output never went there).
-    if not branch.size:
-        return True
-    odd = 2.0 * np.arange(branch.size) + 1.0
-    return bool(np.allclose(branch, odd * branch[0], rtol=1e-6, atol=0.0))

@@ -72,13 +72,16 @@ class MultiAxisCompensator:
         Turning points kept per axis (see :class:`~mpi_ros.operators.memory.TurningPointMemory`).
     inverses : sequence of MPIModel or None, optional
         Gamma^-1 of each axis's model where already built (None: built here).
+    start : StartState or str
+        Where every axis starts (see :class:`Compensator`; default ``rest_low``).
 
     """
 
     def __init__(self, models: Sequence[Any], *, output_min: float | Sequence[float],
                  output_max: float | Sequence[float], enabled: bool = True,
                  sample_period: float = 1e-3, memory_capacity: int = 4096,
-                 inverses: Sequence[MPIModel | None] | None = None) -> None:
+                 inverses: Sequence[MPIModel | None] | None = None,
+                 start: Any = 'rest_low') -> None:
         if len(models) == 0:
             msg = 'a multi-axis compensator needs at least one axis model'
             raise ModelError(msg)
@@ -90,7 +93,7 @@ class MultiAxisCompensator:
         self._memory_state = np.zeros((count, 2), dtype=np.int64)
         self._axes = [
             Compensator(model, output_min=lo, output_max=hi, enabled=enabled,
-                        sample_period=sample_period, inverse=built[k],
+                        sample_period=sample_period, inverse=built[k], start=start,
                         memory=TurningPointMemory(memory_capacity, points=self._memory[k],
                                                   state=self._memory_state[k]))
             for k, (model, lo, hi) in enumerate(zip(models, lows, highs))]

@@ -23,16 +23,18 @@ import numpy as np
 import yaml
 
 from .updates import axis_key, LIMIT_KEYS, model_keys
-from ..errors import ParameterPushError, ParameterRejected
+from ..errors import ModelError, ParameterPushError, ParameterRejected
 from ..extensions import EFFECTS
-from ..operators.model import INPUT_OFFSET, MODEL_KEYS, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, \
-    OUTPUT_SIGN
+from ..operators.model import HYSTERESIS_INITIAL_STATES, INPUT_OFFSET, MODEL_KEYS, \
+    OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN, RECORD_START_STATES
+from ..operators.start import START_CHOICES, StartState
 from ..units import INPUT_QUANTITIES, INPUT_QUANTITY_KEY
 
 __all__ = [
     'ADAPTATION_PARAMETERS', 'AUTOSTART', 'AXES', 'DIAGNOSTICS_PERIOD', 'ENABLED',
     'INPUT_MESSAGE', 'INPUT_QUANTITY', 'JOINTS',
-    'LIMIT_PARAMETERS', 'MESSAGE_TIME', 'OUTPUT_LAYOUT', 'SAMPLE_PERIOD', 'WIRING',
+    'LIMIT_PARAMETERS', 'MESSAGE_TIME', 'OUTPUT_LAYOUT', 'SAMPLE_PERIOD', 'START_STATE',
+    'WIRING',
     'axis_limit_parameters', 'axis_parameters', 'compensator_parameters',
     'multi_axis_parameters',
     'ARRAY_KINDS', 'MODEL_PARAMETERS', 'NULL_STRINGS', 'RCLPY_PARAMETERS', 'RELIABILITIES',
@@ -144,7 +146,8 @@ class ParameterSpec:
         return ('one of: ' + ', '.join(self.choices) + '. ' + self.constraints).strip()
 
 
-#: The five keys of Gamma = S o H; a model needs all of them (no defaults).
+#: The four arrays of Gamma = S o H (a model needs all of them, no defaults), the operating
+#: point, and the identification record's start (optional; used by ``start_state: record``).
 
 MODEL_PARAMETERS = (
     ParameterSpec(
@@ -154,10 +157,6 @@ MODEL_PARAMETERS = (
     ParameterSpec(
         'model.hysteresis.weights', 'double_array', None,
         'Play-operator weights w_H, one per threshold, w_H0 > 0 and the rest >= 0 (8)', ''),
-    ParameterSpec(
-        'model.hysteresis.initial_states', 'double_array', None,
-        'Initial states z_H0 of the play operators (their outputs at start), '
-        'one per threshold', 'A'),
     ParameterSpec(
         'model.superposition.thresholds', 'double_array', None,
         'One-sided dead-zone thresholds r_S of the superposition operator S (18), '
@@ -179,6 +178,15 @@ MODEL_PARAMETERS = (
         'Operating point: +1 when the sensor rises as the actuator extends, -1 when it '
         'falls',
         constraints='1 or -1; part of the model: validated with the other model.* keys'),
+    ParameterSpec(
+        RECORD_START_STATES, 'double_array', None,
+        "The identification record's start: the play operators' states z_H0 at its first "
+        'sample, one per threshold (mpi-ros identify writes it); the node starts there only '
+        'with start_state record', 'A'),
+    ParameterSpec(
+        HYSTERESIS_INITIAL_STATES, 'double_array', None,
+        f'Where files written before {RECORD_START_STATES} hold the record start (read as '
+        'it when that is unset)', 'A'),
 )
 
 
@@ -285,6 +293,15 @@ SAMPLE_PERIOD = ParameterSpec(
     'dependence, thermal drift) use it when a message has no usable time',
     's', value_range=(1.0e-6, 10.0))
 
+START_STATE = ParameterSpec(
+    'start_state', 'string', 'rest_low',
+    'Where the actuator is before the first command: rest_low (at rest after a descent to '
+    'the lowest identified input, raised to output.min; a mode at rest), rest_high (after an '
+    "ascent to the highest, lowered to output.max), record (the identification record's "
+    'start, record_start.*), or the play states z_H0 [A] separated by commas; taken when '
+    'the core is built (configure), logged at activation',
+    constraints=f'{", ".join(START_CHOICES)}, or numbers separated by commas')
+
 MESSAGE_TIME = ParameterSpec(
     'message_time', 'string', 'arrival',
     'Time of each desired displacement for the lags of extended models: arrival '
@@ -385,6 +402,7 @@ def compensator_parameters() -> Tuple[ParameterSpec, ...]:
     return MODEL_PARAMETERS + extension_parameters() + (INPUT_QUANTITY,) + LIMIT_PARAMETERS + (
         ENABLED,
         SAMPLE_PERIOD,
+        START_STATE,
         MESSAGE_TIME,
         DIAGNOSTICS_PERIOD,
         *loop_qos_parameters('desired_displacement and current_command'),
@@ -403,7 +421,8 @@ def multi_axis_parameters() -> Tuple[ParameterSpec, ...]:
         The limits, the switches, the loop QoS and ``autostart``.
 
     """
-    return LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, MESSAGE_TIME, DIAGNOSTICS_PERIOD) + (
+    return LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, START_STATE, MESSAGE_TIME,
+                               DIAGNOSTICS_PERIOD) + (
         loop_qos_parameters('desired_displacements and current_commands')) + (AUTOSTART,)
 
 
@@ -744,6 +763,11 @@ def check_value(spec: ParameterSpec, kind: str, value: Any, *,
     if spec.choices and value not in spec.choices:
         msg = (f'{spec.name} must be one of {", ".join(spec.choices)}; found {value!r}')
         raise ParameterRejected(msg)
+    if spec.name == START_STATE.name:
+        try:
+            StartState.parse(value, option=spec.name)
+        except ModelError as err:
+            raise ParameterRejected(str(err)) from err
 
 
 def check_values(specs: Mapping[str, ParameterSpec], values: Iterable[Tuple[str, str, Any]],

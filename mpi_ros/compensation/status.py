@@ -182,7 +182,7 @@ def single_axis_status(losses: Sequence[str], counters: Mapping[str, int],
         return WARN, (f'{malformed} malformed messages dropped in the last period (last: '
                       f'{last_malformed})')
     if not has_model:
-        return WARN, ('no model: unconfigured, no commands published; give all five model.* '
+        return WARN, ('no model: unconfigured, no commands published; give all four model.* '
                       'keys of Gamma in one request (ros2 param load, '
                       'set_parameters_atomically)')
     if any(faults.values()):

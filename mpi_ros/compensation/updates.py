@@ -2,8 +2,9 @@
 """
 The model-update policy of the compensator nodes, on plain dicts (no ROS).
 
-A compensator node's parameters describe its running model: Gamma's five ``model.*``
-arrays, the operating point and the keys of every registered effect (read from the
+A compensator node's parameters describe its running model: Gamma's four ``model.*``
+arrays, the operating point, the identification record's start (``record_start.*``, optional)
+and the keys of every registered effect (read from the
 registry :data:`mpi_ros.extensions.EFFECTS` when used).  A multi-axis node holds the same
 keys once per axis under the prefix ``axis<k>.``.  Here, on ``{name: value}`` dicts
 (``None``: unset, or YAML ``null`` in a request), is what a request does to them:
@@ -11,9 +12,10 @@ keys once per axis under the prefix ``axis<k>.``.  Here, on ``{name: value}`` di
 :func:`complete` (the pre-set step)
     A ``null`` for a key that is unset already is left out; for an effect key it is the
     key's "off" value, for an operating-point key its default; for a key of Gamma it stays
-    (and is refused: a running model cannot be removed).  A request with all five keys of
-    Gamma describes the *whole* model: every operating-point key it leaves out returns to
-    its default and every effect key it leaves out is switched off.
+    (and is refused: a running model cannot be removed); for a record-start key it is the
+    empty array (no record start).  A request with all four keys of Gamma describes the
+    *whole* model: every operating-point key it leaves out returns to its default, every
+    effect key it leaves out is switched off and a record start it leaves out is removed.
 :func:`prepare` (the on-set step: it only checks)
     The request is laid over the current values and the whole resulting model is
     validated and inverted ((12)-(14), (22)-(25): Gamma^-1 is built here, once per
@@ -43,16 +45,20 @@ from .compensator import Compensator, gamma_of, inverse_step_of
 from ..errors import ModelError, MPIError, ParameterRejected
 from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
-from ..operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS
+from ..operators.model import HYSTERESIS_INITIAL_STATES, MODEL_KEYS, MPIModel, \
+    OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS, RECORD_START_STATES
 from ..operators.usability import check_usable, usability_sweep
 from ..units import INPUT_QUANTITY_KEY
 
-__all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'Prepared', 'UpdateRule', 'apply', 'axis_key',
+__all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'START_KEYS', 'Prepared', 'UpdateRule', 'apply', 'axis_key',
            'complete', 'is_off', 'limits_of', 'load', 'load_axes', 'model_keys', 'model_params',
            'ordered_limits', 'prepare', 'refusal', 'touches', 'uncompensated', 'usable']
 
 #: The two output limits [A]; node-wide without a prefix, one axis's under ``axis<k>.``.
 LIMIT_KEYS = ('output.min', 'output.max')
+#: The record start of Gamma's plays (its mode's deflection is the resonance effect's key);
+#: optional, the empty array when absent.
+START_KEYS = (RECORD_START_STATES, HYSTERESIS_INITIAL_STATES)
 #: Node-wide keys whose new value is handed on as it is.
 PLAIN_KEYS = ('enabled', 'sample_period', 'diagnostics_period')
 #: A single-axis model key at the start of a word, as core error messages name it.
@@ -234,10 +240,11 @@ def model_keys() -> tuple[str, ...]:
     Returns
     -------
     tuple of str
-        Gamma's five, the operating point's three, then every registered effect's keys.
+        Gamma's four, the operating point's three, the record start's, then every
+        registered effect's keys.
 
     """
-    return MODEL_KEYS + OPERATING_POINT_KEYS + effect_keys()
+    return MODEL_KEYS + OPERATING_POINT_KEYS + START_KEYS + effect_keys()
 
 
 def is_off(value: Any) -> bool:
@@ -290,6 +297,8 @@ def model_params(values: Mapping[str, Any], prefix: str = '') -> dict[str, Any] 
     if any(values[prefix + key] is None for key in MODEL_KEYS):
         return None
     params = {key: values[prefix + key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}
+    params.update({key: values[prefix + key] for key in START_KEYS
+                   if not is_off(values.get(prefix + key))})
     keys_of = _effect_keys_by_name()
     for keys in keys_of.values():
         if not all(is_off(values.get(prefix + key)) for key in keys):
@@ -318,9 +327,9 @@ def complete(current: Mapping[str, Any], request: Mapping[str, Any],
     dict
         The request to set, in order: a ``null`` for an unset key left out, one for an
         effect key its "off" value, one for an operating-point key its default (one for a
-        key of Gamma stays None: it is refused); then, when all five keys of Gamma are in
+        key of Gamma stays None: it is refused); then, when all four keys of Gamma are in
         it, the default of every operating-point key and the "off" value of every set
-        effect key it leaves out.
+        effect or record-start key it leaves out.
 
     Examples
     --------
@@ -330,7 +339,7 @@ def complete(current: Mapping[str, Any], request: Mapping[str, Any],
     {'model.input_offset': 0.0}
 
     """
-    off = effect_off_values()
+    off = {**effect_off_values(), **{key: [] for key in START_KEYS}}
     keys = set(model_keys())
     completed: dict[str, Any] = {}
     for name, value in request.items():
@@ -387,7 +396,7 @@ def prepare(current: Mapping[str, Any], request: Mapping[str, Any], prefix: str 
     Raises
     ------
     ParameterRejected
-        A model without all five keys of Gamma, an invalid model of an axis (naming the
+        A model without all four keys of Gamma, an invalid model of an axis (naming the
         axis and key), unordered or non-finite limits.
     ModelError
         An invalid single-axis model (the message names the key).
@@ -638,16 +647,16 @@ def _whole_model(values: Mapping[str, Any], prefix: str, given: list[str], *,
     axis = _AXIS.fullmatch(prefix)
     if missing and axis is not None:
         msg = (f'axis {axis.group(1)} has no model yet, so {_listed(given)} cannot apply: '
-               f'a model needs all five keys of Gamma; missing: {", ".join(missing)}; give '
+               f'a model needs all four keys of Gamma; missing: {", ".join(missing)}; give '
                'them in the same request')
         raise ParameterRejected(msg)
     if missing and loading and len(missing) == len(MODEL_KEYS):
-        msg = (f'{given[0]}: a model extension needs the five model.* keys of Gamma; add '
+        msg = (f'{given[0]}: a model extension needs the four model.* keys of Gamma; add '
                'them to the parameters')
         raise ParameterRejected(msg)
     if missing:
         msg = (f'incomplete model in the parameters: missing {", ".join(missing)}' if loading
-               else 'the node has no model yet, and a model needs all five keys of Gamma; '
+               else 'the node has no model yet, and a model needs all four keys of Gamma; '
                f'missing: {", ".join(missing)}')
         raise ParameterRejected(msg)
     params = model_params(values, prefix) or {}

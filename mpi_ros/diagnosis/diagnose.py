@@ -472,7 +472,8 @@ class _Scorer:
         gain = 1.0 - errs['rms_error'] / base if base > 0.0 else 0.0
         z, lags = _dm_statistic(self.r0, rc, self.bandwidth)
         params = {k: v for k, v in model.to_params().items()
-                  if not k.startswith(('model.hysteresis', 'model.superposition'))
+                  if not k.startswith(('model.hysteresis', 'model.superposition',
+                                       'record_start.hysteresis'))
                   and k not in OPERATING_POINT_KEYS}
         tt, xt, yt = self.training
         keep = self.determined

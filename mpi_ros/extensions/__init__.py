@@ -25,7 +25,8 @@ Every module owns everything about its effect and describes it by one
 fit, exact per-step inverse, diagnosis signature, evidence, report plot); they are found
 through one registry, :data:`EFFECTS`, filled below (one line per effect).  Every model has
 ``simulate(time, current)``, ``to_params()``, ``from_params(mapping)`` and a ``cause``
-name; :func:`extended_model_from_params` picks the class from the keys present.
+name; :func:`extended_model_from_params` picks the class from the keys present, and
+:func:`start_model` gives a model the start of a new input (:mod:`mpi_ros.operators.start`).
 """
 
 from collections.abc import Iterator, Mapping
@@ -40,13 +41,14 @@ from .effect import Effect, EffectModel, EffectParameter, EFFECTS, effects_prese
 from .rate_dependence import fit_rate_dependence, RateDependentModel
 from .resonance import fit_resonance, ResonanceModel
 from .thermal_drift import fit_thermal_drift, ThermalDriftModel
-from ..operators.model import MPIModel
+from ..operators.model import MPIModel, RECORD_START_STATES
+from ..operators.start import StartState
 
 __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeModel',
            'ResonanceModel', 'CompositeModel', 'ExtendedModel', 'fit_composite', 'fit_creep',
            'fit_rate_dependence', 'fit_thermal_drift', 'fit_dead_time', 'fit_resonance',
            'creep_time_constants',
-           'extended_model_from_params', 'EXTENSION_KEYS', 'Effect', 'EffectModel',
+           'extended_model_from_params', 'start_model', 'EXTENSION_KEYS', 'Effect', 'EffectModel',
            'EffectParameter', 'EFFECTS', 'ExtendedModelBase', 'register_effect',
            'unregister_effect']
 
@@ -106,3 +108,46 @@ def extended_model_from_params(mapping: Mapping[str, Any]) -> MPIModel | EffectM
     if len(present) > 1:
         return CompositeModel.from_params(mapping)
     return present[0].model_class.from_params(mapping)
+
+
+def start_model(model: Any, start: StartState | str,
+                current_range: tuple[float, float] | None) -> tuple[Any, float | None, str]:
+    """
+    Return the model that starts a new input where ``start`` says, its current and the words.
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        The model as read (its Gamma's initial states and a mode's deflection are the
+        identification record's start).
+    start : StartState or str
+        ``rest_low``, ``rest_high``, ``record`` or explicit play states.
+    current_range : (float, float) or None
+        The identified current range [A] (None: unknown; a rest start then keeps the
+        record start, and says so).
+
+    Returns
+    -------
+    model : the same kind of model
+        Its plays start in the chosen states; a mode at rest unless the record's start is
+        kept (then with the record's deflection too).
+    current : float or None
+        The current a rest start rests at [A].
+    description : str
+        The start in words.
+
+    Raises
+    ------
+    ModelError
+        Explicit states that do not fit the model.
+
+    """
+    chosen = StartState.parse(start)
+    states, current, description = chosen.plays(model.gamma, current_range)
+    params = model.to_params()
+    params[RECORD_START_STATES] = [float(v) for v in states]
+    if current is not None or chosen.name == 'explicit':
+        for key in (resonance.RESONANCE_DEFLECTION, resonance.LEGACY_DEFLECTION):
+            if key in params:
+                params[key] = 0.0
+    return extended_model_from_params(params), current, description

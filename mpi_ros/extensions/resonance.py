@@ -17,10 +17,12 @@ The mode is advanced exactly for a displacement linear between samples (first-or
 any sampling, uniform or not): with the slope ``q`` of ``g`` over the interval ``h``, the
 particular solution is ``g - (2 / (omega^2 T)) q`` and the deviation from it rotates and
 decays by the closed-form 2 x 2 matrix exponential of the mode.  The model's simulation starts
-at rest at Gamma's first output, displaced by ``model.resonance.initial_deflection`` (the mode's
-position minus Gamma's output at the first sample, with zero velocity): a record that starts
-just after an unrecorded step (the TUM piezo captures) starts ringing, one that starts at rest
-has 0.
+at rest at Gamma's first output, displaced by its ``initial_deflection`` (the mode's position
+minus Gamma's output at the first sample, with zero velocity).  That deflection is the
+identification record's, part of its start (``record_start.resonance.initial_deflection``): a
+record that starts just after an unrecorded step (the TUM piezo captures) starts ringing, one
+that starts at rest has 0.  A new input starts with the mode at rest unless the record's start
+is asked for (:mod:`mpi_ros.operators.start`).
 
 A compensator cannot invert a lightly damped mode causally: its inverse is a second
 derivative of the desired displacement (a non-causal, noise-amplifying lead); it inverts Gamma
@@ -35,7 +37,8 @@ clearly (see :mod:`mpi_ros.identification.api`, "The output mode").
 
 Parameter keys (besides Gamma's ``model.*`` keys, operating point included):
 ``model.resonance.frequency`` (``f`` [Hz], 0: no mode), ``model.resonance.decay`` (``T``
-[s], above ``1 / omega``) and ``model.resonance.initial_deflection`` ([m], 0: at rest).
+[s], above ``1 / omega``) and the record's start ``record_start.resonance.initial_deflection``
+([m], 0: at rest; ``model.resonance.initial_deflection`` of an older file is read as it).
 """
 
 from collections.abc import Mapping
@@ -58,13 +61,16 @@ from ..operators.model import MPIModel
 
 __all__ = ['ResonanceModel', 'ModeFit', 'fit_mode', 'fit_resonance', 'output_mode',
            'mode_state', 'mode_stream', 'RESONANCE_FREQUENCY', 'RESONANCE_DECAY',
-           'RESONANCE_DEFLECTION', 'MAX_DAMPING_RATIO']
+           'RESONANCE_DEFLECTION', 'LEGACY_DEFLECTION', 'MAX_DAMPING_RATIO']
 
 FloatArray = npt.NDArray[np.float64]
 
 RESONANCE_FREQUENCY = 'model.resonance.frequency'
 RESONANCE_DECAY = 'model.resonance.decay'
-RESONANCE_DEFLECTION = 'model.resonance.initial_deflection'
+#: The record's start: the mode's deflection at its first sample.
+RESONANCE_DEFLECTION = 'record_start.resonance.initial_deflection'
+#: Where files written before the split hold it (read as the record start; never written).
+LEGACY_DEFLECTION = 'model.resonance.initial_deflection'
 
 #: Largest damping ratio of a fitted mode: above it the output does not ring (a mode that
 #: damped is a low-pass, which an input lag models).
@@ -87,7 +93,8 @@ class ResonanceModel(ExtendedModelBase):
         rings); ignored without a mode.
     initial_deflection : float
         The mode's position minus Gamma's output at the first sample [m] (at rest there,
-        zero velocity); 0: the simulation starts at rest.
+        zero velocity): the identification record's start; 0: the simulation starts at
+        rest.
 
     """
 
@@ -118,12 +125,14 @@ class ResonanceModel(ExtendedModelBase):
 
     @classmethod
     def from_params(cls, mapping: Mapping[str, Any]) -> 'ResonanceModel':
-        """Build from Gamma's keys plus ``model.resonance.*`` (deflection 0 when absent)."""
+        """Build from Gamma's keys, ``model.resonance.*`` and the record start (0 if absent)."""
+        key = next((k for k in (RESONANCE_DEFLECTION, LEGACY_DEFLECTION)
+                    if mapping.get(k) is not None), None)
+        deflection = (0.0 if key is None else
+                      scalar_parameter(mapping, key, minimum=-math.inf, unit='m'))
         return cls(MPIModel.from_params(mapping),
                    scalar_parameter(mapping, RESONANCE_FREQUENCY, unit='Hz'),
-                   scalar_parameter(mapping, RESONANCE_DECAY),
-                   scalar_parameter({RESONANCE_DEFLECTION: 0.0, **mapping},
-                                    RESONANCE_DEFLECTION, minimum=-math.inf, unit='m'))
+                   scalar_parameter(mapping, RESONANCE_DECAY), deflection)
 
     def to_params(self) -> dict[str, Any]:
         """Return the flat parameter form."""
@@ -463,9 +472,12 @@ EFFECT = Effect(
                         'Resonance extension: time constant T of the ringing envelope, above'
                         ' 1 / (2 pi f)', 's', (0.0, 1.0e3), plausible_max=FAST_TIME_LIMIT),
         EffectParameter(RESONANCE_DEFLECTION, 'double', 0.0,
-                        "Resonance extension: the mode's deflection from Gamma's output at"
-                        ' the first sample of a simulation (a record that starts ringing);'
-                        ' 0: at rest', 'm')),
+                        "The identification record's start: the mode's deflection from"
+                        " Gamma's output at the record's first sample (a record that starts"
+                        ' ringing; used by start_state record only); 0: at rest', 'm'),
+        EffectParameter(LEGACY_DEFLECTION, 'double', 0.0,
+                        'Where files written before record_start.* hold the record start'
+                        ' (read as record_start.resonance.initial_deflection)', 'm')),
     model_class=ResonanceModel, fit=fit_resonance,
-    parameter_count=lambda p: 2 + int(float(p.get(RESONANCE_DEFLECTION, 0.0)) != 0.0),
+    parameter_count=lambda p: 2 + int(float(p.get(RESONANCE_DEFLECTION) or 0.0) != 0.0),
     plot=_plot, stage='output', plant=PLANT)

@@ -55,13 +55,20 @@ class _DemoLoop:
 
     def start_compensated(self, params: dict[str, Any], compensator_args: list[str],
                           first: float) -> tuple[Any, Any]:
-        """Start a fresh plant and compensator, push ``params``, handshake with ``first``."""
+        """
+        Start a fresh plant and compensator, push ``params``, handshake with ``first``.
+
+        A fresh plant is where the identification record started (the demo records from a
+        fresh plant too), so the compensator starts from the record's start
+        (``start_state:=record``), not at rest after a descent.
+        """
         from .processes import NodeProcess
         from ..nodes.identifier import push_model_parameters
         plant = self.start_plant()
         comp = NodeProcess('compensator',
                            ['-p', f'output.min:={self.args.output_min!r}',
-                            '-p', f'output.max:={self.args.output_max!r}', *compensator_args],
+                            '-p', f'output.max:={self.args.output_max!r}',
+                            '-p', 'start_state:=record', *compensator_args],
                            self.out / 'compensator.log')
         self.processes.append(comp)
         driver = self.driver

@@ -537,7 +537,6 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     >>> x = np.sin(2 * np.pi * 3 * t) * np.exp(-t)
     >>> truth = MPIModel.from_params({
     ...     'model.hysteresis.thresholds': [0.0, 0.3], 'model.hysteresis.weights': [1.0, 0.4],
-    ...     'model.hysteresis.initial_states': [0.0, 0.0],
     ...     'model.superposition.thresholds': [0.0], 'model.superposition.weights': [2e-5]})
     >>> y = 3.0 - truth.simulate(x)          # a sensor with its own zero, falling
     >>> result = identify(x, y, n=4, l=2)

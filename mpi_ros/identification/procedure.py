@@ -55,7 +55,7 @@ the candidate (wiping-out property), so their Gram matrix is accumulated once.  
 histories with turning points (a grid of levels, some dozens) are then scored with the best
 simple candidate's weights by the generalised error before the plays are determined (cheap:
 no QP), and the best one is refitted.  The candidate with the smallest generalised error is
-the record's start state; it is written into ``model.hysteresis.initial_states``, so that
+the record's start state; it is written as ``record_start.hysteresis.initial_states``, so that
 the model simulated from the record's first sample reproduces the record.
 """
 

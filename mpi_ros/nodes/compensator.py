@@ -18,19 +18,21 @@ Topics (relative names, std_msgs/msg/Float64, SI units)
 Managed node (lifecycle)
     A :class:`rclpy.lifecycle.LifecycleNode` (the states and transitions are in
     :mod:`mpi_ros.nodes.compensator_base`): configure loads and validates the model of the
-    parameters and builds the core, its turning-point memory at the model's start state
-    (``model.hysteresis.initial_states``); activate publishes; deactivate publishes nothing
+    parameters and builds the core, starting where ``start_state`` says (default
+    ``rest_low``: at rest after a descent to the lowest identified input; ``record``: the
+    identification record's ``record_start.*``; see :mod:`mpi_ros.operators.start`);
+    activate publishes and logs the start; deactivate publishes nothing
     (inputs taken and dropped, the memory held, so re-activation continues bumplessly);
     cleanup and shutdown drop the core.  ``autostart`` (default true) configures and
     activates at start-up; ``/diagnostics`` reports ``lifecycle_state``.
 
 Model life cycle
     The node has no model (its log and diagnostics call it *unconfigured*, apart from the
-    lifecycle state) unless the five ``model.*`` keys of Gamma are given (e.g.
+    lifecycle state) unless the four ``model.*`` keys of Gamma are given (e.g.
     ``--params-file params.yaml`` written by ``mpi-ros identify``). Without a model it
     publishes nothing: there is no safe command, and the current source keeps its last
     value. Its diagnostics say so (WARN).
-    The model is every ``model.*`` key: Gamma's five arrays, the operating point
+    The model is every ``model.*`` key: Gamma's four arrays, the operating point
     (``model.input_offset`` [A], ``model.output_offset`` [m], ``model.output_sign``
     +1/-1, defaults 0, 0, +1: ``y = y0 + sign * S[H[x - x0]]``) and the extension keys.
 
@@ -55,7 +57,7 @@ Model updates (one rule for every path)
     - In-process ``Node.set_parameters`` follows the same rule.
 
     Nothing is ever held back between requests, so the parameters always describe
-    the running model. A request with all five keys of Gamma describes the whole
+    the running model. A request with all four keys of Gamma describes the whole
     model: the pre-set callback adds the default of every operating-point key and the
     "off" value of every extension key the request leaves out. The post-set callback
     swaps the prebuilt model in (bumpless, (14)). ``/diagnostics`` reports
@@ -78,7 +80,7 @@ Extended models (:mod:`mpi_ros.extensions`)
     each message's arrival time on the steady clock (``message_time``; queued messages
     served together get close times); a dead time cannot be inverted, so Gamma alone is
     compensated and a warning is logged. An extension is off while its keys are unset or
-    0 / empty. Pushing a plain model (all five core keys, no extension key) switches an
+    0 / empty. Pushing a plain model (all four core keys, no extension key) switches an
     extension off. Extension keys alone (no core key) change the extension of the running
     Gamma. Every new model, of any kind, is installed into the running compensator
     (:meth:`~mpi_ros.compensation.Compensator.install`): the turning points of the applied
@@ -291,7 +293,7 @@ class CompensatorNode(CompensatorNodeBase):
         model = load(values)
         if model is None:
             self.get_logger().info(
-                'no model given yet: publishing nothing until a model arrives (all five '
+                'no model given yet: publishing nothing until a model arrives (all four '
                 'model.* keys of Gamma in one request: ros2 param load, or '
                 'set_parameters_atomically, e.g. by the identifier)')
             return
@@ -305,12 +307,14 @@ class CompensatorNode(CompensatorNodeBase):
     def _installed(self, model: Any, inverse: Any = None) -> None:
         """Count a model swapped in; build the core when there was none (``model`` given)."""
         compensator = self._compensator
+        built = compensator is None
         if compensator is None:
             compensator = self._compensator = Compensator(
                 model, output_min=self.get_parameter('output.min').value,
                 output_max=self.get_parameter('output.max').value,
                 enabled=self.get_parameter('enabled').value,
-                sample_period=self.get_parameter('sample_period').value, inverse=inverse)
+                sample_period=self.get_parameter('sample_period').value, inverse=inverse,
+                start=self.get_parameter('start_state').value)
         self._warn_if_not_compensated(compensator.model)
         self._check_limits_fit('', compensator)
         self._set_live()
@@ -318,9 +322,15 @@ class CompensatorNode(CompensatorNodeBase):
         self._model_version += 1
         self._model_kind = compensator.kind
         self.get_logger().info(
-            f'model version {self._model_version} applied ({self._model_kind})')
+            f'model version {self._model_version} applied ({self._model_kind})'
+            + (f'; start state: {compensator.start_description}' if built else ''))
         if self._adapt and not self._own_update:
             self._start_adaptation(compensator.model)
+
+    def _start_words(self) -> str:
+        if self._compensator is None:
+            return super()._start_words()
+        return self._compensator.start_description
 
     # -- online adaptation ----------------------------------------------------------------
     def _open_loop(self) -> None:

@@ -324,6 +324,13 @@ class CompensatorNodeBase(LifecycleNode):
     def _switch(self, active: bool) -> None:
         self._active = active
         self._set_live()
+        if active:
+            self.get_logger().info(f'start state: {self._start_words()}')
+
+    def _start_words(self) -> str:
+        """Say where the core started (or will start, once a model arrives)."""
+        return (f"{self.get_parameter('start_state').value} (taken when the core is built, "
+                'at the first model)')
 
     def _release(self) -> None:
         self._active = False

@@ -14,9 +14,10 @@ options of ``mpi-ros identify`` (:data:`mpi_ros.recordings.DATA_OPTIONS`). Fit w
 ``auto``, ``N,L`` or ``N L``, parsed by :func:`mpi_ros.order.parse_order`); report the
 fit errors (37); optionally write the parameter YAML (``params_file``); then send every
 key ``mpi-ros identify`` writes (:func:`mpi_ros.pipeline.identified_parameters`: Gamma's
-five arrays, the operating point ``model.input_offset``, ``model.output_offset``,
+four arrays, the operating point ``model.input_offset``, ``model.output_offset``,
 ``model.output_sign``, the dynamics the fit found, ``model.dead_time``,
-``model.rate_dependence.*`` or ``model.resonance.*``, and ``output.min`` / ``output.max``,
+``model.rate_dependence.*`` or ``model.resonance.*``, the record's start
+``record_start.*``, and ``output.min`` / ``output.max``,
 the input range of the identification) in **one** ``set_parameters_atomically`` request
 to ``target_node``. The target either applies the
 whole model or rejects it, so nothing is ever half-applied (a plain model switches the

@@ -32,15 +32,18 @@ ros2_control (``joints``, ``output_layout``, ``input_message``, read-only)
 Node parameters
     ``axes`` (read-only); per axis k = 0..N-1 every model key of the single-axis node under
     ``axis<k>.``: ``axis<k>.model.hysteresis.thresholds``, ``.weights``,
-    ``.initial_states``, ``axis<k>.model.superposition.thresholds``, ``.weights``,
-    ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign`` and the extension
+    ``axis<k>.model.superposition.thresholds``, ``.weights``,
+    ``axis<k>.model.input_offset``, ``.output_offset``, ``.output_sign``, the record start
+    ``axis<k>.record_start.hysteresis.initial_states`` and the extension
     keys of the effect registry (``axis<k>.model.creep.time_constants``, ``.weights``,
     ``axis<k>.model.rate_dependence.time_constant``, ``axis<k>.model.thermal_drift.*``,
     ``axis<k>.model.dead_time``: declared from :data:`mpi_ros.extensions.EFFECTS`, unset by
     default); ``output.min`` / ``output.max`` (the node-wide safe range) and, optional per
     axis, ``axis<k>.output.min`` / ``axis<k>.output.max`` (unset: the node-wide value; once
     set, a key can be changed but not unset again while the node runs); ``enabled``,
-    ``sample_period``, ``message_time``, ``diagnostics_period``, ``qos_depth``,
+    ``sample_period``, ``start_state`` (where every axis starts, as for the single-axis
+    node; explicit states apply to every axis), ``message_time``, ``diagnostics_period``,
+    ``qos_depth``,
     ``qos_reliability``.  Every axis's range (its own keys, or the node-wide ones it falls
     back to) must be finite with min < max; ``/diagnostics`` reports ``output_min`` /
     ``output_max`` as one value, or as space-separated per-axis lists when the axes'
@@ -52,7 +55,7 @@ Node parameters
 Extended models per axis
     Each axis follows the single-axis node's rules for its own keys (module docstring of
     :mod:`mpi_ros.nodes.compensator`): an extension is off while its keys are unset or 0 /
-    empty; at most one extension per axis; a request with all five Gamma keys of an axis
+    empty; at most one extension per axis; a request with all four Gamma keys of an axis
     describes that axis's whole model (its operating-point keys left out return to their
     defaults, its extension keys left out switch its extension off); extension keys alone
     change the extension of the axis's running Gamma (an axis without Gamma refuses them);
@@ -83,7 +86,7 @@ Model updates
     refused with a reason naming the axis and key, and nothing changes.  So one
     ``set_parameters_atomically`` (the identifier's push) changes several axes
     atomically; ``ros2 param load`` sends the file's ``axis*.model.*`` keys as one group
-    too.  The five Gamma keys of an axis in one request describe its whole model (see
+    too.  The four Gamma keys of an axis in one request describe its whole model (see
     Extended models per axis).  The output limits,
     node-wide and per axis, belong to the same request: a request that sets a model and its
     limits is applied whole (limits first, then the model) or refused whole, and in a
@@ -338,18 +341,28 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             self._axis_models.note(axis, model)
             if self._compensator is not None and not installed:
                 self._compensator.install(axis, model)
-        if self._compensator is None and not self._axis_models.missing:
+        built = self._compensator is None and not self._axis_models.missing
+        if built:
             lows, highs = self._effective_limits()
             self._compensator = MultiAxisCompensator(
                 self._axis_models.models, output_min=lows, output_max=highs,
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value,
-                inverses=self._axis_models.inverses)
+                inverses=self._axis_models.inverses,
+                start=self.get_parameter('start_state').value)
         self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
                        and any(axis.has_effect for axis in compensator.axes))
         self.get_logger().info(self._axis_models.applied(models, compensator is not None))
+        if built:
+            self.get_logger().info(f'start state: {self._start_words()}')
+
+    def _start_words(self) -> str:
+        if self._compensator is None:
+            return super()._start_words()
+        return '; '.join(f'axis {k}: {axis.start_description}'
+                         for k, axis in enumerate(self._compensator.axes))
 
     # -- diagnostics --------------------------------------------------------------------
     def _core_counters(self) -> Dict[str, int]:

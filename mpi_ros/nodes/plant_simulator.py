@@ -22,7 +22,8 @@ Truth (``truth``, read-only)
     (the fields of :class:`mpi_ros.plant.actuator.ActuatorConfig`: the hysteresis core's, the
     sensor's and those of every registered effect with a plant step, read from the effect
     registry when the node is built; every effect is off at 0).
-    ``mpi``: the MPI model given by the five ``model.*`` parameters of Gamma and its
+    ``mpi``: the MPI model given by the four ``model.*`` parameters of Gamma (starting in
+    its ``record_start.hysteresis.initial_states``, 0 when unset) and its
     operating point ``model.input_offset`` [A], ``model.output_offset`` [m],
     ``model.output_sign`` (+1/-1; defaults 0, 0, +1), the same keys as the compensator's:
     ``y = y0 + sign * S[H[x - x0]]`` (forward model, streamed). ``noise_std`` adds

@@ -23,14 +23,19 @@ operator pair.  H's plays and their initial states live in the shifted input
 ``x - x0``.
 
 Parameter form (the keys the compensator node reads; ``to_params`` / ``from_params``): the
-forward model in SI units (A, m) under ``model.hysteresis.thresholds`` (r_H, ascending from
-0, A), ``model.hysteresis.weights`` (w_H, dimensionless), ``model.hysteresis.initial_states``
-(z_H0, A), ``model.superposition.thresholds`` (r_S, ascending with exactly one 0, A),
-``model.superposition.weights`` (w_S, m/A), and the optional operating point
-``model.input_offset`` (x0, A, default 0.0), ``model.output_offset`` (y0, m, default 0.0),
-``model.output_sign`` (+1 or -1, default +1).  :func:`check_model_parameters` validates such
-a mapping completely (lengths, ordering, finiteness, the constraints (8) and (19)) and names
-the offending key; :mod:`mpi_ros.params` reads and writes it as a ROS 2 parameter file.
+actuator, in SI units (A, m), under ``model.hysteresis.thresholds`` (r_H, ascending from
+0, A), ``model.hysteresis.weights`` (w_H, dimensionless), ``model.superposition.thresholds``
+(r_S, ascending with exactly one 0, A), ``model.superposition.weights`` (w_S, m/A), and the
+optional operating point ``model.input_offset`` (x0, A, default 0.0),
+``model.output_offset`` (y0, m, default 0.0), ``model.output_sign`` (+1 or -1, default +1);
+apart from it the identification record's own start,
+``record_start.hysteresis.initial_states`` (z_H0, A, optional: default 0, the paper's (32)).
+An :class:`MPIModel` keeps that start as ``hysteresis.initial_states`` (its ``simulate``
+reproduces the record); a new input starts where :mod:`mpi_ros.operators.start` says.
+``model.hysteresis.initial_states``, the key older files hold the record start under, is read
+as the record start.  :func:`check_model_parameters` validates such a mapping completely
+(lengths, ordering, finiteness, the constraints (8) and (19)) and names the offending key;
+:mod:`mpi_ros.params` reads and writes it as a ROS 2 parameter file.
 """
 
 from collections.abc import Mapping
@@ -51,6 +56,7 @@ from .usability import check_usable
 from ..errors import ModelError
 
 __all__ = ['ActuatorModel', 'HYSTERESIS_INITIAL_STATES', 'HYSTERESIS_THRESHOLDS',
+           'RECORD_START_STATES',
            'HYSTERESIS_WEIGHTS', 'INPUT_OFFSET', 'MODEL_KEYS', 'MPIModel', 'MPIStream',
            'OPERATING_POINT_DEFAULTS', 'OPERATING_POINT_KEYS', 'OUTPUT_OFFSET', 'OUTPUT_SIGN',
            'SUPERPOSITION_THRESHOLDS', 'SUPERPOSITION_WEIGHTS', 'check_model_parameters',
@@ -63,12 +69,15 @@ FloatArray = npt.NDArray[np.float64]
 
 HYSTERESIS_THRESHOLDS = 'model.hysteresis.thresholds'
 HYSTERESIS_WEIGHTS = 'model.hysteresis.weights'
-HYSTERESIS_INITIAL_STATES = 'model.hysteresis.initial_states'
 SUPERPOSITION_THRESHOLDS = 'model.superposition.thresholds'
 SUPERPOSITION_WEIGHTS = 'model.superposition.weights'
-#: Gamma's five arrays (the nodes and every tool use this one definition).
-MODEL_KEYS = (HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS, HYSTERESIS_INITIAL_STATES,
-              SUPERPOSITION_THRESHOLDS, SUPERPOSITION_WEIGHTS)
+#: Gamma's four arrays, the actuator (the nodes and every tool use this one definition).
+MODEL_KEYS = (HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS, SUPERPOSITION_THRESHOLDS,
+              SUPERPOSITION_WEIGHTS)
+#: The identification record's start: the plays' states at its first sample (optional).
+RECORD_START_STATES = 'record_start.hysteresis.initial_states'
+#: Where files written before the split hold the record start (read as it; never written).
+HYSTERESIS_INITIAL_STATES = 'model.hysteresis.initial_states'
 INPUT_OFFSET = 'model.input_offset'
 OUTPUT_OFFSET = 'model.output_offset'
 OUTPUT_SIGN = 'model.output_sign'
@@ -168,12 +177,16 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
     Parameters
     ----------
     mapping : Mapping[str, sequence of float]
-        The five ``model.*`` keys (extra keys are ignored).
+        The four ``model.*`` arrays of Gamma and, optionally, the record start
+        ``record_start.hysteresis.initial_states`` (or, in a file written before the split,
+        ``model.hysteresis.initial_states``; the former wins when both are given); extra
+        keys are ignored.
 
     Returns
     -------
     dict[str, ndarray of float]
-        The five arrays, keyed as in ``MODEL_KEYS``.
+        The four arrays keyed as in ``MODEL_KEYS``, and the record start under
+        ``RECORD_START_STATES`` (zeros, the paper's (32), when not given).
 
     Raises
     ------
@@ -183,7 +196,11 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
     """
     r_h = _vector(mapping, HYSTERESIS_THRESHOLDS)
     w_h = _vector(mapping, HYSTERESIS_WEIGHTS)
-    z_h0 = _vector(mapping, HYSTERESIS_INITIAL_STATES)
+    # An unset (None) or empty record start is no record start.
+    start = next((key for key in (RECORD_START_STATES, HYSTERESIS_INITIAL_STATES)
+                  if mapping.get(key) is not None and not (
+                      hasattr(mapping[key], '__len__') and len(mapping[key]) == 0)), None)
+    z_h0 = np.zeros_like(r_h) if start is None else _vector(mapping, start)
     r_s = _vector(mapping, SUPERPOSITION_THRESHOLDS)
     w_s = _vector(mapping, SUPERPOSITION_WEIGHTS)
     if w_h.size != r_h.size:
@@ -191,7 +208,7 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
                f' {HYSTERESIS_THRESHOLDS}: expected {r_h.size}, found {w_h.size}')
         raise ModelError(msg)
     if z_h0.size != r_h.size:
-        msg = (f'{HYSTERESIS_INITIAL_STATES} must have one state per threshold in'
+        msg = (f'{start} must have one state per threshold in'
                f' {HYSTERESIS_THRESHOLDS}: expected {r_h.size}, found {z_h0.size}')
         raise ModelError(msg)
     if w_s.size != r_s.size:
@@ -232,7 +249,7 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
                f' {float(slopes[i])!r}')
         raise ModelError(msg)
     return {HYSTERESIS_THRESHOLDS: r_h, HYSTERESIS_WEIGHTS: w_h,
-            HYSTERESIS_INITIAL_STATES: z_h0, SUPERPOSITION_THRESHOLDS: r_s,
+            RECORD_START_STATES: z_h0, SUPERPOSITION_THRESHOLDS: r_s,
             SUPERPOSITION_WEIGHTS: w_s}
 
 
@@ -356,7 +373,6 @@ class MPIModel:
     >>> model = MPIModel.from_params({
     ...     'model.hysteresis.thresholds': [0.0, 0.5],
     ...     'model.hysteresis.weights': [1.0, 0.5],
-    ...     'model.hysteresis.initial_states': [0.0, 0.0],
     ...     'model.superposition.thresholds': [-0.5, 0.0, 0.5],
     ...     'model.superposition.weights': [0.5, 2e-5, -1e-5]})
     >>> x = [0.0, 1.0, 0.2, 0.8]
@@ -395,15 +411,17 @@ class MPIModel:
         ----------
         mapping : Mapping[str, sequence of float]
             The keys ``model.hysteresis.thresholds``, ``model.hysteresis.weights``,
-            ``model.hysteresis.initial_states``, ``model.superposition.thresholds``
-            and ``model.superposition.weights`` (SI units; extra keys ignored), and
-            optionally the operating point ``model.input_offset`` [A],
-            ``model.output_offset`` [m], ``model.output_sign`` (default 0, 0, +1).
+            ``model.superposition.thresholds`` and ``model.superposition.weights`` (SI
+            units; extra keys ignored), and optionally the operating point
+            ``model.input_offset`` [A], ``model.output_offset`` [m], ``model.output_sign``
+            (default 0, 0, +1) and the record start
+            ``record_start.hysteresis.initial_states`` [A] (default 0; an older file's
+            ``model.hysteresis.initial_states`` is read as it).
 
         Returns
         -------
         MPIModel
-            The forward model Gamma.
+            The forward model Gamma, its ``hysteresis.initial_states`` the record start.
 
         Raises
         ------
@@ -418,7 +436,7 @@ class MPIModel:
         p = check_model_parameters(mapping)
         x0, y0, sign = check_operating_point(mapping)
         hysteresis = PIHysteresisOperator(p[HYSTERESIS_THRESHOLDS], p[HYSTERESIS_WEIGHTS],
-                                          p[HYSTERESIS_INITIAL_STATES])
+                                          p[RECORD_START_STATES])
         superposition = PISuperpositionOperator(p[SUPERPOSITION_THRESHOLDS],
                                                 p[SUPERPOSITION_WEIGHTS])
         check_usable(hysteresis, superposition, input_offset=x0, output_offset=y0,
@@ -436,7 +454,9 @@ class MPIModel:
         Returns
         -------
         dict[str, list of float or float or int]
-            The five ``model.*`` arrays and the three operating point keys.
+            The four ``model.*`` arrays of Gamma, the three operating point keys and the
+            record start ``record_start.hysteresis.initial_states`` (the plays' states the
+            model holds).
 
         """
         forward = self.inverse() if self.is_inverse else self
@@ -444,12 +464,12 @@ class MPIModel:
         return {
             HYSTERESIS_THRESHOLDS: [float(v) for v in h.thresholds],
             HYSTERESIS_WEIGHTS: [float(v) for v in h.weights],
-            HYSTERESIS_INITIAL_STATES: [float(v) for v in h.initial_states],
             SUPERPOSITION_THRESHOLDS: [float(v) for v in s.thresholds],
             SUPERPOSITION_WEIGHTS: [float(v) for v in s.weights],
             INPUT_OFFSET: float(self.input_offset),
             OUTPUT_OFFSET: float(self.output_offset),
             OUTPUT_SIGN: int(self.output_sign),
+            RECORD_START_STATES: [float(v) for v in h.initial_states],
         }
 
     def with_operating_point(self, *, input_offset: float | None = None,
@@ -477,6 +497,26 @@ class MPIModel:
                         self.input_offset if input_offset is None else input_offset,
                         self.output_offset if output_offset is None else output_offset,
                         self.output_sign if output_sign is None else output_sign)
+
+    def with_initial_states(self, states: npt.ArrayLike) -> 'MPIModel':
+        """
+        Return the same model whose plays start in ``states`` (e.g. another start state).
+
+        Parameters
+        ----------
+        states : array_like of float, shape (n+1,)
+            The plays' states [A] (of H, or of H' for an inverse model).
+
+        Returns
+        -------
+        MPIModel
+            A new model; ``self`` is unchanged.
+
+        """
+        h = self.hysteresis
+        return MPIModel(PIHysteresisOperator(h.thresholds, h.weights, states),
+                        self.superposition, self.is_inverse, self.input_offset,
+                        self.output_offset, self.output_sign)
 
     # -- properties ---------------------------------------------------------------------
     @property

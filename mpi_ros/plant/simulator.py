@@ -23,7 +23,8 @@ from ..compensation.parameters import AXES, loop_qos_parameters, MODEL_PARAMETER
 from ..diagnosis.signatures import diagnostic_excitation
 from ..errors import ParameterRejected
 from ..extensions.effect import plant_effects
-from ..operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS
+from ..operators.model import HYSTERESIS_INITIAL_STATES, MODEL_KEYS, MPIModel, \
+    OPERATING_POINT_KEYS, RECORD_START_STATES
 
 __all__ = ['ExcitationRun', 'NODE_OWNED_FIELDS', 'SimulatedPlants', 'actuator_parameters',
            'plant_parameters', 'build_truth', 'describe_truth', 'excitation_schedule']
@@ -172,8 +173,10 @@ def build_truth(values: Dict[str, Any], seed: Optional[int] = None) -> Any:
         if missing:
             msg = f'truth:=mpi needs the model parameters; missing: {", ".join(missing)}'
             raise ParameterRejected(msg)
+        # The plant starts where its states say (the record start of a model file).
         return MPIModel.from_params(
-            {key: values[key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}).stream()
+            {key: values.get(key) for key in MODEL_KEYS + OPERATING_POINT_KEYS + (
+                RECORD_START_STATES, HYSTERESIS_INITIAL_STATES)}).stream()
     mapping = {name: value for name, value in values.items()
                if name.startswith('actuator.')}
     for field_name in NODE_OWNED_FIELDS:

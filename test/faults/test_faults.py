@@ -11,7 +11,8 @@ command with the core :class:`~mpi_ros.compensation.Compensator` (exactly, to
 import time
 
 from mpi_ros.nodes.identifier import push_model_parameters
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS, \
+    RECORD_START_STATES
 import numpy as np
 import pytest
 from std_msgs.msg import Float64
@@ -23,8 +24,9 @@ from .helpers import (
 
 EXACT = 1e-12        # [A] the node and the core run the same float64 code
 ORDER = '6,3'
-#: The keys of a plain model: Gamma and the operating point (all pushed by the identifier).
-KEYS = MODEL_KEYS + OPERATING_POINT_KEYS
+#: The keys of a plain model: Gamma, the operating point and the record start (all pushed by
+#: the identifier).
+KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,)
 
 
 def _assert_safe(commands):

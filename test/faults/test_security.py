@@ -16,7 +16,7 @@ import math
 from pathlib import Path
 
 from mpi_ros.nodes.compensator import PARAMETERS
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, RECORD_START_STATES
 import numpy as np
 import pytest
 from rcl_interfaces.srv import ListParameters, SetParameters, SetParametersAtomically
@@ -27,7 +27,8 @@ from .helpers import (
 )
 
 CONFIG = Path(__file__).resolve().parents[2] / 'config' / 'compensator.yaml'
-R_H, W_H, Z_H0, R_S, W_S = MODEL_KEYS
+R_H, W_H, R_S, W_S = MODEL_KEYS
+Z_H0 = RECORD_START_STATES
 RCLPY_BUILTINS = {'use_sim_time', 'start_type_description_service'}
 Type = Parameter.Type
 

@@ -75,9 +75,10 @@ def _push(driver, model_or_params, timeout=30.0):
 
 
 def _start_loop(driver, start, enabled=True, plant_args=()):
+    # A fresh plant is where the identification record started: the record's start.
     start('plant-simulator', '-p', 'noise_std:=4e-08', '-p', 'seed:=4', *plant_args)
     start('compensator', '-p', f'output.min:={LIMITS[0]}', '-p', f'output.max:={LIMITS[1]}',
-          '-p', f'enabled:={str(enabled).lower()}')
+          '-p', f'enabled:={str(enabled).lower()}', '-p', 'start_state:=record')
 
 
 def _track(driver, desired):

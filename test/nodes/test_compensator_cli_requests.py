@@ -19,7 +19,8 @@ import time
 
 from mpi_ros.compensation import Compensator
 from mpi_ros.nodes.compensator import CompensatorNode
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS, \
+    RECORD_START_STATES
 from mpi_ros.params import write_params_yaml
 import numpy as np
 import pytest
@@ -35,7 +36,8 @@ from .test_compensator_node import (
     as_parameters, limits, MODEL_A, MODEL_B, model_parameters, OUTPUT_MAX, OUTPUT_MIN,
 )
 
-R_H, W_H, Z_H0, R_S, W_S = MODEL_KEYS
+R_H, W_H, R_S, W_S = MODEL_KEYS
+Z_H0 = RECORD_START_STATES
 X0, Y0, SIGN = OPERATING_POINT_KEYS
 
 #: MODEL_B at an operating point: input bias, sensor zero and a falling sensor.

@@ -25,8 +25,7 @@ from std_msgs.msg import Float64
 
 #: A valid forward model (input 0.2-1.8 A -> about 4-44 um).
 MODEL = dict(zip(MODEL_KEYS, (
-    [0.0, 0.3, 0.6], [1.0, 0.4, 0.2], [0.0, 0.0, 0.0], [-0.5, 0.0, 0.8],
-    [1.0e-5, 2.0e-5, -0.5e-5])))
+    [0.0, 0.3, 0.6], [1.0, 0.4, 0.2], [-0.5, 0.0, 0.8], [1.0e-5, 2.0e-5, -0.5e-5])))
 
 #: Inside the model's displacement range [m].
 GOOD = 2.0e-5

@@ -16,7 +16,7 @@ from mpi_ros.errors import ModelError
 from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import ParameterPushError, push_model_parameters
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, RECORD_START_STATES
 import numpy as np
 import pytest
 import rclpy
@@ -25,7 +25,8 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import ReliabilityPolicy
 
-R_H, W_H, Z_H0, R_S, W_S = MODEL_KEYS
+R_H, W_H, R_S, W_S = MODEL_KEYS
+Z_H0 = RECORD_START_STATES
 
 OUTPUT_MIN, OUTPUT_MAX = 0.2, 1.8
 
@@ -87,7 +88,7 @@ def configured(make_node):
 
 
 def model_parameters(node):
-    return {key: list(node.get_parameter(key).value) for key in MODEL_KEYS}
+    return {key: list(node.get_parameter(key).value) for key in MODEL_KEYS + (Z_H0,)}
 
 
 def test_starts_unconfigured_and_publishes_nothing(make_node):
@@ -230,7 +231,7 @@ def test_non_atomic_set_parameters_applies_the_model_keys_together(configured):
     bad = dict(MODEL_A, **{W_S: [1.0e-5, 2.0e-5, -3.0e-5]})
     old_model = configured.compensator.model
     results = configured.set_parameters(as_parameters(bad))
-    assert [r.successful for r in results] == [False] * len(MODEL_KEYS)
+    assert [r.successful for r in results] == [False] * len(bad)
     for result in results:
         assert W_S in result.reason and '(19)' in result.reason
     assert configured.compensator.model is old_model
@@ -320,7 +321,7 @@ def test_disabled_uses_the_best_linear_map(configured):
 @pytest.mark.parametrize('override, key', [
     (dict(MODEL_A, **{W_H: [1.0, -0.4, 0.2]}), W_H),
     (dict(MODEL_A, **{R_H: [0, 1, 2]}), R_H),
-    ({R_H: MODEL_A[R_H], W_H: MODEL_A[W_H]}, Z_H0),
+    ({R_H: MODEL_A[R_H], W_H: MODEL_A[W_H]}, R_S),
 ])
 def test_bad_params_file_refuses_to_start(make_node, override, key):
     with pytest.raises((InvalidParameterValueException, ModelError, ParameterRejected),

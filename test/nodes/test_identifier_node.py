@@ -9,7 +9,7 @@ from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes import identifier
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import IdentifierNode, parse_order
-from mpi_ros.operators.model import MODEL_KEYS, OPERATING_POINT_KEYS
+from mpi_ros.operators.model import MODEL_KEYS, OPERATING_POINT_KEYS, RECORD_START_STATES
 from mpi_ros.params import read_params_yaml
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
@@ -72,9 +72,9 @@ def test_fit_and_push_applies_the_model(ros_context, compensator, excitation_bag
     applied = compensator.compensator.model.to_params()
     assert applied == fit.parameters
     written = read_params_yaml(params_file)
-    for key in MODEL_KEYS + OPERATING_POINT_KEYS:
+    for key in MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,):
         assert written[key] == pytest.approx(fit.parameters[key], rel=1e-12, abs=0.0)
-    assert set(fit.parameters) == set(MODEL_KEYS + OPERATING_POINT_KEYS)
+    assert set(fit.parameters) == set(MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,))
     for key in OPERATING_POINT_KEYS:
         assert compensator.get_parameter(key).value == fit.parameters[key]
 

@@ -7,7 +7,7 @@ import time
 from mpi_ros.errors import ModelError
 from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes.plant_simulator import PlantSimulatorNode
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, RECORD_START_STATES
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import read_bag_signals
@@ -23,9 +23,9 @@ from std_msgs.msg import Float64
 MODEL = {
     MODEL_KEYS[0]: [0.0, 0.3, 0.6],
     MODEL_KEYS[1]: [1.0, 0.4, 0.2],
-    MODEL_KEYS[2]: [0.0, 0.0, 0.0],
-    MODEL_KEYS[3]: [-0.5, 0.0, 0.8],
-    MODEL_KEYS[4]: [1.0e-5, 2.0e-5, -0.5e-5],
+    RECORD_START_STATES: [0.0, 0.0, 0.0],
+    MODEL_KEYS[2]: [-0.5, 0.0, 0.8],
+    MODEL_KEYS[3]: [1.0e-5, 2.0e-5, -0.5e-5],
 }
 
 

@@ -1,0 +1,296 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+Where a new input starts: the plays' initial states z_H0 (32) of an actuator model.
+
+An actuator model (the ``model.*`` keys) does not say where the actuator is when a new input
+begins; its identification record started somewhere of its own (``record_start.*``: the plays'
+states at the record's first sample, a mode's deflection there), which reproduces that record
+and nothing else.  A new input (``mpi-ros simulate``, ``mpi-ros compensate``, the compensator
+and its nodes) starts from a :class:`StartState`:
+
+``rest_low`` (the default)
+    At rest after a descent to the lowest identified input ``a``: every play at
+    ``z_i = a - x0 + r_i``, where Gamma is at the end of its identified displacement range
+    that the lowest input reaches (the low end for a rising sensor); a mode at rest.
+``rest_high``
+    At rest after an ascent to the highest identified input ``b``: ``z_i = b - x0 - r_i``.
+``record``
+    The identification record's start (``record_start.*``; a file without it: the states it
+    holds, ``model.hysteresis.initial_states`` of an older file, else 0, the paper's (32)).
+explicit states
+    ``z_H0`` given, one per play [A], relative to the input offset as
+    ``record_start.hysteresis.initial_states``; a mode at rest.
+
+The identified range ``[a, b]`` is the record's current range (the header ``identify``
+writes into a parameter file, :mod:`mpi_ros.app.ranges`), else the closed form of the model's
+thresholds (:func:`identified_ranges`); a compensator raises ``a`` to its lowest command and
+lowers ``b`` to its highest.  A model that tells no range (hand-written thresholds, ``l = 0``)
+and has no such limits starts at its record start.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..errors import ModelError
+
+__all__ = ['START_CHOICES', 'StartState', 'identified_ranges', 'rest_states', 'start_range']
+
+FloatArray = npt.NDArray[np.float64]
+
+#: The named starts (besides explicit states).
+START_CHOICES = ('rest_low', 'rest_high', 'record')
+
+
+def rest_states(gamma: Any, current: float, *, descent: bool = True) -> FloatArray:
+    """
+    Return the play states at rest after a descent (or an ascent) to ``current``.
+
+    Parameters
+    ----------
+    gamma : MPIModel
+        The forward model (its thresholds and input offset).
+    current : float
+        The input reached [A].
+    descent : bool
+        True: coming down from above every threshold (``z_i = u + r_i``); False: up
+        (``z_i = u - r_i``), with ``u = current - x0``.
+
+    Returns
+    -------
+    ndarray of float, shape (n+1,)
+        ``z_H0`` [A], relative to the input offset.
+
+    Examples
+    --------
+    >>> from mpi_ros import MPIModel
+    >>> gamma = MPIModel.from_params({
+    ...     'model.hysteresis.thresholds': [0.0, 1.0], 'model.hysteresis.weights': [1.0, 0.5],
+    ...     'model.superposition.thresholds': [0.0], 'model.superposition.weights': [1.0],
+    ...     'model.input_offset': 2.0})
+    >>> rest_states(gamma, 0.0).tolist(), rest_states(gamma, 4.0, descent=False).tolist()
+    ([-2.0, -1.0], [2.0, 1.0])
+
+    """
+    r = np.asarray(gamma.hysteresis.thresholds, dtype=np.float64)
+    u = float(current) - float(gamma.input_offset)
+    return np.asarray(u + r if descent else u - r, dtype=np.float64)
+
+
+def identified_ranges(gamma: Any, inverse: Any = None) -> tuple[
+        tuple[float, float], tuple[float, float]] | None:
+    """
+    Return the current and displacement ranges a model's thresholds say it was fitted on.
+
+    ``identify`` spaces the thresholds of S' over the record's output range (29)-(31): the
+    ``k`` thresholds of a branch end at ``(k - 1/2)/k`` of its extent.  The current range is
+    where the major loop reaches the two ends: after a descent to ``a`` every play is at
+    ``a - x0 + r_i``, after an ascent to ``b`` at ``b - x0 - r_i``, so with ``W = sum w_i``
+    ``a = x0 + (S'[v_lo] - sum w_i r_i) / W`` and ``b = x0 + (S'[v_hi] + sum w_i r_i) / W``.
+
+    Parameters
+    ----------
+    gamma : MPIModel
+        The forward model.
+    inverse : MPIModel, optional
+        Its inverse, when already built (None: built here).
+
+    Returns
+    -------
+    ((float, float), (float, float)) or None
+        ``(a, b)`` [A] and the displacement range [m]; None when the thresholds of S' are
+        not spaced as (29)-(31) space them (written by hand, or ``l = 0``) or give no proper
+        range.
+
+    """
+    s_inv = (gamma.inverse() if inverse is None else inverse).superposition
+    r = np.asarray(s_inv.thresholds, dtype=np.float64)
+    positive, negative = r[r > 0.0], -r[r < 0.0][::-1]
+    if not (positive.size or negative.size) or not all(
+            _spaced_as_identified(branch) for branch in (positive, negative)):
+        return None
+    v_hi = float(positive[-1]) * positive.size / (positive.size - 0.5) if positive.size else 0.0
+    v_lo = -float(negative[-1]) * negative.size / (negative.size - 0.5) if negative.size else 0.0
+    h = gamma.hysteresis
+    w = np.asarray(h.weights, dtype=np.float64)
+    total, spread = float(np.sum(w)), float(np.sum(w * np.asarray(h.thresholds)))
+    h_lo, h_hi = (float(v) for v in s_inv.apply(np.array([v_lo, v_hi])))
+    a = gamma.input_offset + (h_lo - spread) / total
+    b = gamma.input_offset + (h_hi + spread) / total
+    ends = sorted(gamma.output_offset + gamma.output_sign * v for v in (v_lo, v_hi))
+    if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
+        return None
+    return (float(a), float(b)), (float(ends[0]), float(ends[1]))
+
+
+def start_range(identified: tuple[float, float] | None,
+                limits: tuple[float, float] | None = None) -> tuple[float, float] | None:
+    """
+    Return the currents a rest start may rest at: the identified range within the limits.
+
+    Parameters
+    ----------
+    identified : (float, float) or None
+        The identified current range [A]; None: unknown.
+    limits : (float, float), optional
+        The lowest and highest command allowed [A] (a compensator's ``output.min`` /
+        ``output.max``).
+
+    Returns
+    -------
+    (float, float) or None
+        ``identified`` with each end moved inside ``limits``; None when unknown.
+
+    Examples
+    --------
+    >>> start_range((-0.2, 2.5), (0.0, 2.0))
+    (0.0, 2.0)
+
+    """
+    if identified is None:
+        return None
+    if limits is None:
+        return float(identified[0]), float(identified[1])
+    lo, hi = float(limits[0]), float(limits[1])
+    return (min(max(float(identified[0]), lo), hi), min(max(float(identified[1]), lo), hi))
+
+
+@dataclass(frozen=True)
+class StartState:
+    """
+    Where a new input starts: a named start or explicit play states.
+
+    Attributes
+    ----------
+    name : str
+        ``'rest_low'``, ``'rest_high'``, ``'record'`` or ``'explicit'``.
+    states : tuple of float
+        The explicit ``z_H0`` [A] (empty for a named start).
+
+    """
+
+    name: str = 'rest_low'
+    states: tuple[float, ...] = ()
+
+    @classmethod
+    def parse(cls, value: Any, *, option: str = 'start_state') -> 'StartState':
+        """
+        Read a start as the user writes it: a name, or play states.
+
+        Parameters
+        ----------
+        value : str, sequence of float or StartState
+            ``'rest_low'``, ``'rest_high'``, ``'record'``, or the explicit states as a
+            sequence or as a text of numbers separated by commas (``'-1.5, -0.5, 0.5'``).
+        option : str
+            How the user names it, for the message (``--start``, ``start_state``).
+
+        Returns
+        -------
+        StartState
+            The start.
+
+        Raises
+        ------
+        ModelError
+            Neither a name nor finite numbers.
+
+        Examples
+        --------
+        >>> StartState.parse('rest_high')
+        StartState(name='rest_high', states=())
+        >>> StartState.parse('-1, 0.5').states
+        (-1.0, 0.5)
+
+        """
+        if isinstance(value, StartState):
+            return value
+        if isinstance(value, str):
+            text = value.strip()
+            if text in START_CHOICES:
+                return cls(text)
+            items: list[Any] = [part for part in text.replace(',', ' ').split() if part]
+        else:
+            items = list(value) if hasattr(value, '__iter__') else [value]
+        try:
+            states = tuple(float(item) for item in items if not isinstance(item, bool))
+        except (TypeError, ValueError):
+            states = ()
+        if not items or len(states) != len(items) or not all(map(math.isfinite, states)):
+            msg = (f'{option} must be one of {", ".join(START_CHOICES)} or the play states'
+                   f' z_H0 [A] as numbers separated by commas (one per threshold of H);'
+                   f' found {value!r}')
+            raise ModelError(msg)
+        return cls('explicit', states)
+
+    @property
+    def text(self) -> str:
+        """Return the start as the user writes it (``rest_low``, or the numbers)."""
+        if self.name != 'explicit':
+            return self.name
+        return ', '.join(repr(v) for v in self.states)
+
+    def plays(self, gamma: Any, current_range: tuple[float, float] | None, *,
+              strict: bool = True) -> tuple[FloatArray, float | None, str]:
+        """
+        Return the play states of this start for a model, the current, and a description.
+
+        Parameters
+        ----------
+        gamma : MPIModel
+            The forward model; its ``hysteresis.initial_states`` is its record start.
+        current_range : (float, float) or None
+            The identified current range ``(a, b)`` [A] (already limited to the commands
+            allowed); None: unknown (a rest start then falls back to the record start).
+        strict : bool
+            True: explicit states of another number of plays are refused; False: the record
+            start is used instead, and the description says so (a running compensator's
+            model arrives after its start was chosen).
+
+        Returns
+        -------
+        states : ndarray of float, shape (n+1,)
+            ``z_H0`` [A].
+        current : float or None
+            The current of a rest start [A]; None for the record or explicit states.
+        description : str
+            The start in words, for a note or a log line.
+
+        Raises
+        ------
+        ModelError
+            Explicit states whose number differs from the model's plays (``strict``).
+
+        """
+        record = np.array(gamma.hysteresis.initial_states, dtype=np.float64)
+        if self.name == 'explicit':
+            msg = (f'start_state gives {len(self.states)} play states; the model has'
+                   f' {record.size} plays (thresholds of H): give one state per play,'
+                   f' or rest_low, rest_high or record')
+            if len(self.states) == record.size:
+                return np.array(self.states), None, f'explicit play states [{self.text}] A'
+            if strict:
+                raise ModelError(msg)
+            return record, None, f"record: the model's record start ({msg})"
+        if self.name == 'record' or current_range is None:
+            why = ('' if self.name == 'record' else
+                   f' ({self.name} asked, but the model tells no identified input range)')
+            return record, None, f"record: the model's record start{why}"
+        low = self.name == 'rest_low'
+        current = float(current_range[0] if low else current_range[1])
+        words = ('at rest after a descent to the lowest identified input' if low
+                 else 'at rest after an ascent to the highest identified input')
+        return (rest_states(gamma, current, descent=low), current,
+                f'{self.name}: {words}, {current:.6g} A')
+
+
+def _spaced_as_identified(branch: FloatArray) -> bool:
+    # (30)-(31): the k thresholds of a branch, ascending, are (i - 1/2)/k of its extent,
+    # i.e. 1, 3, 5, ... times the first (an empty branch: the output never went there).
+    if not branch.size:
+        return True
+    odd = 2.0 * np.arange(branch.size) + 1.0
+    return bool(np.allclose(branch, odd * branch[0], rtol=1e-6, atol=0.0))
