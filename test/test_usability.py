@@ -16,7 +16,7 @@ from mpi_ros.compensation import Compensator
 from mpi_ros.compensation.parameters import check_values, compensator_parameters, specs_by_name
 from mpi_ros.compensation.updates import apply, complete, model_keys, prepare, usable
 from mpi_ros.errors import ModelError, MPIError
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, RECORD_START_STATES
 from mpi_ros.operators.usability import check_usable, ROUND_TRIP, usability_sweep
 import numpy as np
 import pytest
@@ -24,7 +24,8 @@ import pytest
 from .core_models import random_model
 from .hostile_values import pushes, type_name
 
-R_H, W_H, Z_H0, R_S, W_S = MODEL_KEYS
+R_H, W_H, R_S, W_S = MODEL_KEYS
+Z_H0 = RECORD_START_STATES
 LIMITS = (0.2, 1.8)
 SPECS = specs_by_name(compensator_parameters())
 #: Seeds fixed before the first run.

@@ -52,7 +52,7 @@ ROUND_TRIP = 1e-6
 
 _TINY = float(np.finfo(np.float64).tiny)
 _KEYS = ('model.hysteresis.thresholds', 'model.hysteresis.weights',
-         'model.hysteresis.initial_states', 'model.superposition.thresholds',
+         'record_start.hysteresis.initial_states', 'model.superposition.thresholds',
          'model.superposition.weights')
 _R_H, _W_H, _Z_H0, _R_S, _W_S = _KEYS
 _X0, _Y0 = 'model.input_offset', 'model.output_offset'

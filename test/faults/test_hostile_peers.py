@@ -20,7 +20,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from mpi_ros.array_layout import encode_float64_multiarray
 from mpi_ros.compensation import Compensator
 from mpi_ros.nodes.multi_axis import axis_key
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel
+from mpi_ros.operators.model import MODEL_KEYS, MPIModel, RECORD_START_STATES
 from mpi_ros.params import write_params_yaml
 import numpy as np
 import pytest
@@ -31,7 +31,8 @@ from std_msgs.msg import Float64, Float64MultiArray
 
 from .helpers import call_service, commands_for, first_command, LIMITS, log_text, wait_exit
 
-R_H, W_H, Z_H0, R_S, W_S = MODEL_KEYS
+R_H, W_H, R_S, W_S = MODEL_KEYS
+Z_H0 = RECORD_START_STATES
 #: A valid model (0.2 to 1.8 A -> roughly 0 to 40 um), with an operating point.
 MODEL = {
     R_H: [0.0, 0.3, 0.6], W_H: [1.0, 0.4, 0.2], Z_H0: [0.0, 0.1, 0.0],
