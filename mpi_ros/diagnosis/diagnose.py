@@ -293,10 +293,21 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     # record has one), its segments, the ringing after steps left out, the start state.
     say(f'identifying the baseline MPI model on {tt.size} samples (order {order})')
     prepared: dict[str, Any] = {'time': tt if timed else None, 'dynamics': 'off'}
-    if order == 'auto':
-        base = identify(xt, yt, order='auto', **prepared)
-    else:
-        base = identify(xt, yt, n=int(order[0]), l=int(order[1]), **prepared)
+    try:
+        if order == 'auto':
+            base = identify(xt, yt, order='auto', **prepared)
+        else:
+            base = identify(xt, yt, n=int(order[0]), l=int(order[1]), **prepared)
+    except IdentificationError as err:
+        # A split's training part that holds only part of the record's loops is refused for
+        # what that part shows; the cause is the split: say so, with the fraction outside.
+        outside = (_outside_training(xt, xv[start:], {}) if validation is None else '')
+        if not outside:
+            raise
+        msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
+               f' the likely cause is the split: {outside}; pass a record of several cycles,'
+               ' another --split, or a separate --validate record')
+        raise IdentificationError(msg) from err
     # The dynamics finding `mpi-ros identify` states for DATA (the training record, or the
     # whole record of a split), and the step response's onset that bounds a dead time.
     td, xd, yd = (tt, xt, yt) if validation is not None else (tv, xv, yv)
@@ -662,11 +673,13 @@ def _records(recording: Any, validation: Any, split: float) -> tuple[
         if not 0.1 <= split <= 0.9:
             msg = f'split must be in [0.1, 0.9]; found {split!r}'
             raise DataError(msg)
-        # The split divides the excited part: a hold before the input first moves (a
-        # capture that starts with 1.5 s at one level) goes to training, else a short
-        # excitation after a long hold would leave the training part without motion.
+        # The split divides the excited part: a long hold before the input first moves (a
+        # capture that starts with 1.5 s at one level, a tenth of the record or more) goes
+        # to training, else a short excitation after it would leave the training part
+        # without motion.
         moving = np.flatnonzero(np.abs(x - x[0]) > 1e-3 * float(np.ptp(x)))
-        lead = int(moving[0]) if moving.size and t.size - moving[0] >= 300 else 0
+        lead = (int(moving[0]) if moving.size and moving[0] >= 0.1 * t.size
+                and t.size - moving[0] >= 300 else 0)
         n_train = lead + int(round(split * (t.size - lead)))
         tt, xt, yt = t[:n_train], x[:n_train], y[:n_train]
         tv, xv, yv, start = t, x, y, n_train
