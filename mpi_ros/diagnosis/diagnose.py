@@ -411,11 +411,13 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         chosen = _try_pair(scorer, pair, candidates, chosen, (n, l), decision['steps'],
                            min_gain=min_gain, z_critical=z_critical, excess=excess)
     _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
-    agreed = _agree_with_finding(decision, chosen, candidates, finding)
+    beyond = _separate_evidence(validation is not None, scorer.residuals, z_critical,
+                                bandwidth)
+    agreed = _agree_with_finding(decision, chosen, candidates, finding, beyond)
     if agreed is not chosen:
         chosen = agreed
         _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
-        _agree_with_finding(decision, chosen, candidates, finding)
+        _agree_with_finding(decision, chosen, candidates, finding, beyond)
     series.update({'baseline': sim0, 'candidates': scorer.sims})
     if chosen is None:
         cause, model, extended, gain = 'none', base.model, dict(baseline), 0.0
@@ -959,15 +961,34 @@ def _unphysical_dead_time(candidates: list[Candidate], onset: StepOnset,
     return ''
 
 
+def _separate_evidence(separate: bool, residuals: dict[str, FloatArray], z_critical: float,
+                       bandwidth: int | None) -> Callable[[Candidate, Candidate | None], str]:
+    # What a separate validation record (another experiment, often another rate: data the
+    # analysis of the training record never saw) adds beyond that analysis: the chosen
+    # candidate beats the other input stage significantly there.  '' for a split, whose
+    # validation part is a part of the record the finding was made on.
+    def beyond(chosen: Candidate, other: Candidate | None) -> str:
+        if not separate:
+            return ''
+        if other is None:
+            return f'the separate validation record shows it (z {chosen.z:.3g})'
+        z, _ = _dm_statistic(residuals[other.cause], residuals[chosen.cause], bandwidth)
+        return (f'the separate validation record separates them (z {z:.3g} >= {z_critical:.4g}'
+                f' against {other.cause})' if z >= z_critical else '')
+    return beyond
+
+
 def _agree_with_finding(decision: dict[str, Any], chosen: Candidate | None,
-                        candidates: list[Candidate],
-                        finding: DynamicsFinding) -> Candidate | None:
+                        candidates: list[Candidate], finding: DynamicsFinding,
+                        beyond: Callable[[Candidate, Candidate | None], str]
+                        ) -> Candidate | None:
     # The verdict on the two input stages never contradicts the finding `identify` states
     # for the same record (held-out blocks, step onset): when the validation data name the
     # other kind, or the finding is a tie, the verdict is a stated tie, unless the
     # validation's bursts at several rates separate them (one signature present, the other
-    # absent); when the finding is none, the validation gain alone does not name an input
-    # stage.  Returns the chosen candidate (another one only for a finding of none).
+    # absent) or a separate validation record does (`beyond`); when the finding is none,
+    # the validation gain of a split alone does not name an input stage.  Returns the
+    # chosen candidate (another one only for a finding of none).
     decision['dynamics_finding'] = finding.kind
     if (chosen is None or chosen.cause not in _INPUT_STAGES
             or finding.kind in ('unavailable', _INPUT_STAGES[chosen.cause])):
@@ -978,6 +999,11 @@ def _agree_with_finding(decision: dict[str, Any], chosen: Candidate | None,
     if other is not None and chosen.signature == 'present' and other.signature == 'absent':
         steps.append(f"the analysis of the record (identify's) finds {finding.kind}; the"
                      f" validation data's bursts separate the two: {chosen.cause}")
+        return chosen
+    more = beyond(chosen, other if finding.kind != 'none' else None)
+    if more:
+        steps.append(f"the analysis of the training record (identify's) finds"
+                     f' {finding.kind.replace("_", " ")}; {more}: {chosen.cause}')
         return chosen
     if finding.kind == 'none':
         rest = [c for c in candidates if c.cause not in _INPUT_STAGES and c.significant
