@@ -13,7 +13,7 @@ import math
 import re
 
 from mpi_ros.app.cli import main
-from mpi_ros.diagnosis.report import data_units, markdown, summary_lines
+from mpi_ros.diagnosis.report import data_units, markdown, summary_lines, z_wording
 from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
@@ -109,6 +109,28 @@ def _check_agreement(facts, summary, err):
         assert '`mpi-ros diagnose --excitation' in section
     else:
         assert '## Ambiguous' not in summary
+    # The decision steps word each z as the table does and say whether it counts (never
+    # "not significant" beside a table's "significantly better").
+    steps = facts['decision'].get('steps', [])
+    for c in facts['candidates']:
+        for step in (s for s in steps if s.startswith(f'{c["cause"]}: gain ')):
+            assert f'({z_wording(c["z"], zc)})' in step, (step, c['z'])
+            assert (', counts;' in step) == c['significant'], step
+    # What decided, worded from the chosen candidate's signature, everywhere.
+    chosen = next((c for c in facts['candidates'] if c['cause'] == facts['cause']), None)
+    said = ' '.join([facts['evidence'], *steps])
+    if chosen is not None and chosen['signature'] == 'unavailable':
+        assert 'the signature decided' not in said
+    elif chosen is not None:
+        assert 'decided on the gain alone' not in said
+    # The holds the evidence speaks of are the holds the signature test used.
+    if residual['hold_signature'] is not None:
+        assert 'no hold of' not in facts['evidence']
+    # stdout/stderr state errors and gains in percent of the range, never as fractions.
+    for line in err.splitlines():
+        for number in re.finditer(r'(?:RMS error|gain) ([-+]?\d[\d.]*(?:e[-+]?\d+)?)( %)?',
+                                  line):
+            assert number.group(2), line
     # The stderr summary is the summary's head, line by line.
     for line in summary_lines(facts):
         assert line in err.splitlines()
@@ -227,6 +249,64 @@ def test_dead_time_plot_has_its_minimum_at_the_fitted_delay():
     step = float(delays[1] - delays[0])
     # The shifted extended simulation matches best where the delay is the truth.
     assert abs(delays[int(np.argmin(rms))] - 1e3 * dead) <= step
+    # The title states both numbers, the minimum as the curve has it, and whether they meet.
+    title = re.search(r'fitted L = (\S+) ms; the residual is smallest at\sd = (\S+) ms'
+                      r' \((.+)\)', ax.get_title())
+    assert title is not None, ax.get_title()
+    assert _close(title.group(1), 1e3 * fitted)
+    assert _close(title.group(2), float(delays[int(np.argmin(rms))]))
+    meets = abs(float(title.group(2)) - 1e3 * fitted) <= step
+    assert title.group(3) == ('at the fitted delay' if meets else 'not at the fitted delay')
+
+
+def test_dead_time_plot_title_says_when_the_minimum_is_elsewhere():
+    """A fitted delay far from the residual's minimum (0.0382 ms vs 0.0833 ms, seen)."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    from mpi_ros.extensions import EFFECTS
+    rate, dead, fitted = 10000.0, 0.0833e-3, 0.0382e-3
+    t = np.arange(20000) / rate
+    x = 1.0 + 0.6 * np.sin(2.0 * np.pi * 20.0 * t)
+    measured = np.interp(t - dead, t, np.tanh(x))
+    fig, ax = plt.subplots()
+    EFFECTS['dead_time'].plot(ax, t, x, measured, np.tanh(x), np.interp(t - fitted, t,
+                                                                        np.tanh(x)),
+                              100, parameters={'model.dead_time': fitted})
+    delays, rms = ax.get_lines()[0].get_xdata(), ax.get_lines()[0].get_ydata()
+    title = ax.get_title()
+    plt.close(fig)
+    minimum = float(delays[int(np.argmin(rms))])
+    assert f'smallest at\nd = {minimum:.3g} ms (not at the fitted delay)' in title, title
+    assert f'fitted L = {1e3 * fitted:.3g} ms' in title
+
+
+def test_resonance_plot_of_a_sine_says_there_is_no_step_and_has_a_caption():
+    """A 100 Hz sine has no step: the title must not claim ringing after one."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    from mpi_ros.diagnosis.report import markdown
+    from mpi_ros.extensions import EFFECTS
+    t = np.arange(5000) / 10000.0
+    x = 1.0 + 0.5 * np.sin(2.0 * np.pi * 100.0 * t)
+    fig, ax = plt.subplots()
+    EFFECTS['resonance'].plot(ax, t, x, x, x, x, 0, parameters={})
+    title = ax.get_title()
+    plt.close(fig)
+    assert 'has no step' in title and 'rings after a step' not in title, title
+    assert 'no mode fitted' in title
+    x[2500:] += 0.5                                         # now a step
+    fig, ax = plt.subplots()
+    EFFECTS['resonance'].plot(ax, t, x, x, x, x, 0, parameters={})
+    assert 'after the largest input step' in ax.get_title()
+    plt.close(fig)
+    facts = {'cause': 'none', 'gain': 0.0, 'candidates': [], 'baseline': {}, 'data': {},
+             'evidence': ''}
+    text = markdown(facts, images=['signature_resonance.png', 'signature_creep.png'])
+    captions = re.findall(r'^\*(.+)\*$', text, flags=re.MULTILINE)
+    assert len(captions) == 2 and all(not c.endswith('.png') for c in captions), captions
+    assert captions[0].startswith('Resonance:')
 
 
 def test_a_pair_states_each_effect_and_a_weak_strength(tmp_path, capsys):

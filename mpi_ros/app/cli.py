@@ -120,6 +120,11 @@ def _cmd_identify(args: argparse.Namespace) -> int:
               ' outside it, compensate clamps to it)')
     if result.findings:
         _progress(f'found: {result.findings}')
+    from ..diagnosis.time_base import implausible_dynamics, time_base_warning
+    warning = time_base_warning(implausible_dynamics(result.dynamics_estimate),
+                                [('record', recording.time)], command='identify')
+    if warning is not None:
+        _progress(f'warning: {warning}')
     for note in result.notes:
         _progress(f'note: {note}')
     summary = dict(result.summary(), source=str(args.data))
@@ -219,9 +224,16 @@ def _refuse_unknown_keys(path: str, parameters: dict[str, Any]) -> None:
     raise MPIError(msg)
 
 
-def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool) -> tuple[
-        str | None, str]:
-    """Return the time column (None: none) and the input column of a --input table."""
+def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool,
+                  numeric: list[bool] | None = None) -> tuple[str | None, str]:
+    """
+    Return the time column (None: none) and the input column of a --input table.
+
+    Without ``--input-column`` the input is the one column besides the time whose values
+    are numbers (``numeric``: per column, whether its first value is one); text columns
+    (labels, notes) are ignored, as ``identify`` ignores them.
+
+    """
     what = 'desired displacement' if inverse else 'current'
     time_column = args.time_column or None
     if time_column is not None and time_column not in header:
@@ -239,6 +251,8 @@ def _input_column(header: list[str], args: argparse.Namespace, *, inverse: bool)
                    f'column holding the {what}')
             raise MPIError(msg)
         return time_column, args.input_column
+    if numeric is not None:
+        names = [name for name in names if numeric[header.index(name)]]
     if len(names) != 1:
         listing = ', '.join(names) or 'none'
         msg = (f'--input {args.input} has {len(names)} columns besides the time ({listing}); '
@@ -261,9 +275,15 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     described = extended_model_from_params(parameters)
     quantity = parameters.get(INPUT_QUANTITY_KEY) or 'current'
     unit = input_unit_of(quantity)
-    header, table = read_csv_table(args.input,
+    used: list[str | None] = []
+
+    def select(names: list[str], numeric: list[bool]) -> list[str]:
+        used[:] = _input_column(names, args, inverse=inverse, numeric=numeric)
+        return [name for name in used if name is not None]
+
+    header, table = read_csv_table(args.input, select=select,
                                    nonfinite_hint='remove those rows or fill in the values')
-    time_column, input_column = _input_column(header, args, inverse=inverse)
+    time_column, input_column = used[0], str(used[1])
     result_column = args.column_name or (quantity if inverse else 'displacement')
     if result_column in (input_column, time_column):
         msg = (f'--column-name {result_column}: the result column would replace the '

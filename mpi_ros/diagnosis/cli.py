@@ -91,6 +91,30 @@ def _window(recording: Recording, window: Sequence[float]) -> Recording:
                      notes=recording.notes)
 
 
+def _check_output_folders(args: argparse.Namespace) -> None:
+    # Fail before reading and fitting (minutes on a long record) when a file to write
+    # cannot be created: its folder is missing, or the name is a folder (the report folder
+    # itself is created, with its parents).
+    for option, path in (('--json', args.json), ('--params-out', args.params_out),
+                         ('--excitation', args.excitation)):
+        if path is None:
+            continue
+        target = Path(path)
+        if not target.parent.is_dir():
+            msg = (f'{option} {target}: directory {target.parent} does not exist; create it'
+                   ' first (nothing was computed or written)')
+            raise DataError(msg)
+        if target.is_dir():
+            msg = (f'{option} {target} is a directory; give a file name (nothing was computed'
+                   ' or written)')
+            raise DataError(msg)
+    if args.report is not None and Path(args.report).exists() and not Path(
+            args.report).is_dir():
+        msg = (f'--report {args.report} is a file; give a folder for summary.md and the plots'
+               ' (nothing was computed or written)')
+        raise DataError(msg)
+
+
 def _write_excitation(args: argparse.Namespace) -> None:
     t, current = diagnostic_excitation(sample_rate=args.excitation_rate,
                                        bias=args.excitation_bias,
@@ -192,7 +216,8 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
         if args.data and (args.json is None or args.report is None):
             parser.error('--json and --report are required with DATA')
         data_options(args)                   # refuse bad data options before any work
-        _check_outputs(args)
+        _check_output_folders(args)          # outputs that cannot be written
+        _check_outputs(args)                 # and outputs that would replace an input
         if args.excitation:
             _write_excitation(args)
             say(f'wrote {args.excitation}')

@@ -14,7 +14,16 @@ Procedure (documented in ``docs/diagnosis.md``):
    and no fit.  A separate validation record is checked on its own.
 2. **Baseline.**  Gamma is identified on the training data by
    :func:`mpi_ros.identification.identify` (operating point, detected sign, burn-in, the
-   order selection of ``order='auto'``); a record it refuses (worse than a straight line,
+   order selection of ``order='auto'``), with the record's time base when it has one: the
+   same preparation as ``mpi-ros identify`` (segments, ringing after steps left out, start
+   state; ``dynamics='off'``: the effects are the candidates).  The dynamics finding
+   (lag, dead time, tie or none; :mod:`mpi_ros.identification.finding`) is the one
+   ``identify`` states for the same record (``data['dynamics_finding']``); the verdict on
+   the two input stages never contradicts it (a stated tie instead), and a dead time longer
+   than the step response's onset is not physical (its signature absent).  A split
+   divides the excited part (a hold at the record's start goes to training).  A validation
+   input beyond the training input's range is warned about, with the fraction outside;
+   a record it refuses (worse than a straight line,
    too little excitation, ...) is refused here with its message.  Training/validation: the
    ``validation`` recording if given (a separate experiment; best), else a split of the
    record at ``split`` (default 0.6): the model is simulated over the *whole* record and
@@ -71,13 +80,18 @@ from ..extensions import EFFECTS, fit_composite
 from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
 from ..extensions.composite import check_combination, composite_cause
+from ..extensions.dead_time import DEAD_TIME
 from ..identification import burn_in, identify, output_sign
-from ..identification.procedure import estimate_start_state
+from ..identification.dynamics import return_point_drift, step_onset, StepOnset
+from ..identification.finding import DynamicsFinding, record_dynamics, \
+    SEPARATE_LAG_AND_DEAD_TIME
+from ..identification.procedure import estimate_start_state, prepare_record, \
+    refuse_if_unmodellable
 from ..metrics import range_error, rms_range_error
 from ..operators.model import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
-__all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor']
+__all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor', 'z_wording']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -119,10 +133,14 @@ class DiagnosisReport:
     residual : dict
         Structure of the baseline residual (noise floor, holds, rate, power, lag).
     decision : dict
-        The rule's thresholds and the steps taken.
+        The rule's thresholds and the steps taken; ``tied_with`` and ``tie_reasons`` (per
+        tied cause, why: the validation data's z, or the record's dynamics finding).
     data : dict
-        Sources, sample counts, split, ``output_sign``, burn-ins,
-        ``output_offset_reestimated``.
+        Sources, sample counts, split (``leading_hold``: the samples of a hold at the
+        record's start given to training), ``output_sign``, burn-ins,
+        ``output_offset_reestimated``, ``dynamics_finding`` (the finding ``identify``
+        states for the record, :class:`~mpi_ros.identification.finding.DynamicsFinding`),
+        ``validation_outside_training_range`` (fraction of the scored samples).
     warnings : list of str
         What looks wrong without stopping the diagnosis, one sentence each: time constants
         the record's time base makes implausible (:mod:`mpi_ros.diagnosis.time_base`).
@@ -202,7 +220,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     validation : Recording-like, optional
         A separate validation experiment.  Without it, the record is split at ``split``.
     split : float
-        Fraction of the record used for training when no validation is given, in (0, 1).
+        Fraction of the record used for training when no validation is given, in (0, 1):
+        of the samples after a hold at the record's start (the hold goes to training).
     order : 'auto' or (int, int)
         Model order of Gamma (``'auto'``: the order selection of :func:`identify`).
     causes : tuple of str, optional
@@ -252,7 +271,15 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     series: dict[str, Any] = {'time': tv, 'current': xv, 'displacement': yv,
                               'start': start}
     _refuse_constant_output(yt, yv, validation is not None)
+    timed = bool(getattr(recording, 'timed', True))
     check = _class_check(xt, sign * yt, xv[start:], sign * yv[start:], validation is not None)
+    if not check.inside:
+        # One analysis: the identification's tests of the record (butterfly, switching,
+        # drift, unrelated signals) name the cause, or explain the reversals (a lag).
+        # Each record on its own; a split's whole record.
+        analysed = [(tt, xt, yt), (tv, xv, yv)] if validation is not None else [(tv, xv, yv)]
+        check = _with_analysis(check, analysed, timed)
+        data['class_check'] = check.reason
     if not check.inside:
         say(f'outside the invertible class: {check.reason}')
         return DiagnosisReport(
@@ -261,11 +288,39 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
             residual={'reversal_ratio': check.reversal_ratio, 'branches': check.branches},
             decision={'rule': 'invertible-class check failed; no model fitted'}, data=data,
             series=series)
+    if data.get('class_check'):
+        say(f'invertible class: {check.reason}')
+    # One analysis of the record, as `mpi-ros identify` makes it: the time base (when the
+    # record has one), its segments, the ringing after steps left out, the start state.
     say(f'identifying the baseline MPI model on {tt.size} samples (order {order})')
-    if order == 'auto':
-        base = identify(xt, yt, order='auto')
-    else:
-        base = identify(xt, yt, n=int(order[0]), l=int(order[1]))
+    prepared: dict[str, Any] = {'time': tt if timed else None, 'dynamics': 'off'}
+    try:
+        if order == 'auto':
+            base = identify(xt, yt, order='auto', **prepared)
+        else:
+            base = identify(xt, yt, n=int(order[0]), l=int(order[1]), **prepared)
+    except IdentificationError as err:
+        # A split's training part that holds only part of the record's loops is refused for
+        # what that part shows; the cause is the split: say so, with the fraction outside.
+        outside = (_outside_training(xt, xv[start:], {}) if validation is None else '')
+        if not outside:
+            raise
+        msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
+               f' the likely cause is the split: {outside}; pass a record of several cycles,'
+               ' another --split, or a separate --validate record')
+        raise IdentificationError(msg) from err
+    # The dynamics finding `mpi-ros identify` states for DATA (the training record, or the
+    # whole record of a split), and the step response's onset that bounds a dead time.
+    td, xd, yd = (tt, xt, yt) if validation is not None else (tv, xv, yv)
+    finding = DynamicsFinding()
+    onset = StepOnset()
+    if timed:
+        say('dynamics: the analysis identify makes of the record (dead time, lag, steps)')
+        _, finding = record_dynamics(xd, yd, td)
+        onset = step_onset(td, xd, yd, sign=sign)
+    data['dynamics_finding'] = finding.to_json()
+    if finding.kind != 'unavailable':
+        say(finding.describe())
     n, l = base.order  # noqa: E741
     data['training_burn_in'] = base.burn_in
     estimate_start = False
@@ -303,17 +358,26 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                 'operating_point': {'input_offset': base.model.input_offset,
                                     'output_offset': base.model.output_offset,
                                     'output_sign': base.model.output_sign}}
-    say(f'baseline order n={n}, l={l}: validation RMS error {baseline["rms_error"]:.4f}'
-        f' of the output range (straight line {baseline["linear_rms_error"]:.4f}),'
-        f' (37) {baseline["nonlinearity_error"]:.4f}'
+    say(f'baseline order n={n}, l={l}: validation RMS error'
+        f' {100 * baseline["rms_error"]:.3g} % of the output range (straight line'
+        f' {100 * baseline["linear_rms_error"]:.3g} %), (37)'
+        f' {100 * baseline["nonlinearity_error"]:.3g} %'
         + (f'; validation output offset re-estimated: {shift0:+.4g} m' if reestimate else ''))
+    outside = _outside_training(xt, xv[val], data)
+    drift = return_point_drift(xd, yd)
+    data['return_point_drift'] = {'visits': drift.visits, 'change': drift.change,
+                                  'monotone': drift.monotone, 'end': drift.end,
+                                  'drifts': drift.drifts}
     if not baseline['rms_error'] < baseline['linear_rms_error']:
+        likely = [text for text in (drift.describe(), outside) if text]
+        cause = (f'; the likely cause: {"; and ".join(likely)}' if likely else
+                 '; check that both records come from the same actuator, with the same'
+                 ' columns/topics, units and sign, and that the validation record sweeps the'
+                 ' range of the training record')
         msg = (f'the baseline MPI model (n={n}, l={l}) is no better than a straight line on'
                f' the validation data: RMS error {100 * baseline["rms_error"]:.3g} % of the'
                f' output range vs {100 * baseline["linear_rms_error"]:.3g} % for the line'
-               ' fitted on the training data; check that both records come from the same'
-               ' actuator, with the same columns/topics, units and sign, and that the'
-               ' validation record sweeps the range of the training record')
+               f' fitted on the training data{cause}')
         raise IdentificationError(msg)
     residual = _residual_structure(tv, xv, yv, sim0, start, sigma)
     holds = hold_signature(tv[val], xv[val], r0)
@@ -331,17 +395,30 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     for c in candidates:
         c.signature = EFFECTS[c.cause].signature(residual, level)
         c.significant = bool(excess and c.gain >= min_gain and c.z >= z_critical)
+    unphysical = _unphysical_dead_time(candidates, onset, td)
+    residual['step_onset'] = ({'bound': onset.bound, 'steps': onset.steps,
+                               'dead_time_check': unphysical}
+                              if math.isfinite(onset.bound) else None)
     decision: dict[str, Any]
     decision = {'min_gain': min_gain, 'z_critical': z_critical, 'alpha': alpha,
                 'signature_level': level, 'bandwidth': bandwidth,
                 'noise_factor': noise_factor, 'noise_floor': sigma,
                 'baseline_above_noise': bool(excess), 'steps': []}
-    chosen = _decide(candidates, excess, decision['steps'])
+    if unphysical:
+        decision['steps'].append(unphysical)
+    chosen = _decide(candidates, excess, decision['steps'], min_gain, z_critical)
     pair = _pair(candidates) if excess else None
     if pair is not None:
         chosen = _try_pair(scorer, pair, candidates, chosen, (n, l), decision['steps'],
                            min_gain=min_gain, z_critical=z_critical, excess=excess)
     _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
+    beyond = _separate_evidence(validation is not None, scorer.residuals, z_critical,
+                                bandwidth)
+    agreed = _agree_with_finding(decision, chosen, candidates, finding, beyond)
+    if agreed is not chosen:
+        chosen = agreed
+        _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
+        _agree_with_finding(decision, chosen, candidates, finding, beyond)
     series.update({'baseline': sim0, 'candidates': scorer.sims})
     if chosen is None:
         cause, model, extended, gain = 'none', base.model, dict(baseline), 0.0
@@ -355,16 +432,18 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     evidence = _evidence(cause, baseline, public, residual, sigma, yv[val], data)
     evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(yv[val])))
     if decision['ambiguous']:
-        evidence += (f' Ambiguous: {", ".join(decision["tied_with"])} explain(s) the validation'
-                     f' data as well, within the noise (ranked by gain; the signature'
-                     f' decided). To separate them: {decision["separate_by"]}.')
+        tied = '; '.join(f'{k} is tied ({v})' for k, v in decision['tie_reasons'].items())
+        evidence += (f' Ambiguous: {tied} ({cause} ranks first by its validation gain;'
+                     f' {_who_decided(chosen)}).'
+                     f' To separate them: {decision["separate_by"]}.')
     records = ([('record', t)] if validation is None
                else [('training record', t), ('validation record', tv)])
     warning = time_base_warning(implausible_time_constants(public, residual), records)
     warnings = [] if warning is None else [warning]
+    warnings += [text for text in (drift.describe(), outside) if text]
     for text in warnings:
         say(f'warning: {text}')
-    say(f'verdict: {cause} (gain {gain:.3f})')
+    say(f'verdict: {cause} (validation gain {100 * gain:.3g} %)')
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,
@@ -478,8 +557,8 @@ class _Scorer:
         tt, xt, yt = self.training
         keep = self.determined
         train = rms_range_error(model.response(tt, xt)[keep], yt[keep])
-        self.say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
-                 f' z {z:.1f}')
+        self.say(f'  {cause}: validation RMS error {100 * errs["rms_error"]:.3g} % of the'
+                 f' output range, gain {100 * gain:+.3g} %, z {z:.3g}')
         return Candidate(cause, model, errs['rms_error'], errs['nonlinearity_error'], gain, z,
                          lags, train, shift, parameter_count, params)
 
@@ -523,14 +602,17 @@ def _try_pair(scorer: _Scorer, pair: tuple[Candidate, Candidate], candidates: li
                                           scorer.residuals[cause], scorer.bandwidth)[0]
     candidates.append(both)
     each = all(both.part_gains[m] >= min_gain and both.part_z[m] >= z_critical for m in names)
-    parts_text = ', '.join(f'{m} {both.part_gains[m]:+.3f} (z {both.part_z[m]:.1f})'
-                           for m in names)
+    parts_text = ', '.join(f'{m} {100 * both.part_gains[m]:+.3g} % (z {both.part_z[m]:.3g},'
+                           f' {z_wording(both.part_z[m], z_critical)})' for m in names)
+    head = (f'{cause}: gain {100 * both.gain:+.3g} %, z {both.z:.3g}'
+            f' ({z_wording(both.z, z_critical)})')
     if both.significant and each and (chosen is None or both.gain > chosen.gain):
-        steps.append(f'{cause}: gain {both.gain:+.3f}, z {both.z:.1f}; each effect adds'
-                     f' beyond the other alone ({parts_text}): both')
+        steps.append(f'{head}; each effect adds beyond the other alone ({parts_text}): both')
         return both
-    steps.append(f'{cause}: gain {both.gain:+.3f}, z {both.z:.1f}; not significant, or not'
-                 f' each effect adds beyond the other alone ({parts_text}):'
+    why = ('the pair does not count' if not both.significant else
+           'not each effect adds beyond the other alone' if not each else
+           f'its gain is not above {chosen.cause if chosen is not None else "none"}\'s')
+    steps.append(f'{head}; {why} ({parts_text}):'
                  f' {chosen.cause if chosen is not None else "none"}')
     return chosen
 
@@ -543,8 +625,24 @@ def _state_ties(decision: dict[str, Any], chosen: Candidate | None,
     decision['ranking'] = _ranking(chosen, candidates, residuals, bandwidth)
     decision['ambiguous'] = bool(ties)
     decision['tied_with'] = [c.cause for c in ties]
+    # Why each is tied, in words written from the same z as the ranking's.
+    z_of = {row['cause']: row['z_against_chosen'] for row in decision['ranking']}
+    decision['tie_reasons'] = {
+        c.cause: (f'within the noise of {chosen.cause} on the validation data (z'
+                  f' {z_of[c.cause]:.3g} < {z_critical:.4g})' if chosen is not None else '')
+        for c in ties}
     decision['separate_by'] = (_separation([chosen.cause, *decision['tied_with']])
                                if chosen is not None and ties else '')
+
+
+def _who_decided(chosen: Candidate | None) -> str:
+    # The words for what chose the verdict, from the chosen candidate's signature (the same
+    # value the decision steps word).
+    if chosen is None:
+        return 'no candidate qualified'
+    if chosen.signature == 'unavailable':
+        return 'its signature is unavailable in this record: decided on the gain alone'
+    return f'its physical signature is {chosen.signature}'
 
 
 def _strength(decision: dict[str, Any], chosen: Candidate | None, baseline: dict[str, Any],
@@ -579,11 +677,18 @@ def _records(recording: Any, validation: Any, split: float) -> tuple[
         if not 0.1 <= split <= 0.9:
             msg = f'split must be in [0.1, 0.9]; found {split!r}'
             raise DataError(msg)
-        n_train = int(round(split * t.size))
+        # The split divides the excited part: a long hold before the input first moves (a
+        # capture that starts with 1.5 s at one level, a tenth of the record or more) goes
+        # to training, else a short excitation after it would leave the training part
+        # without motion.
+        moving = np.flatnonzero(np.abs(x - x[0]) > 1e-3 * float(np.ptp(x)))
+        lead = (int(moving[0]) if moving.size and moving[0] >= 0.1 * t.size
+                and t.size - moving[0] >= 300 else 0)
+        n_train = lead + int(round(split * (t.size - lead)))
         tt, xt, yt = t[:n_train], x[:n_train], y[:n_train]
         tv, xv, yv, start = t, x, y, n_train
         data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
-                'split': split, 'training_samples': n_train,
+                'split': split, 'training_samples': n_train, 'leading_hold': lead,
                 'validation': f'samples {n_train}..{t.size - 1} of the same record',
                 'validation_scored': {'from_sample': n_train, 'samples': int(t.size - n_train),
                                       'left_out': 'the training part',
@@ -600,6 +705,23 @@ def _records(recording: Any, validation: Any, split: float) -> tuple[
                ' for validation; record at least a few loops (>= 300 samples)')
         raise DataError(msg)
     return t, (tt, xt, yt), (tv, xv, yv), start, data
+
+
+def _outside_training(xt: FloatArray, scored: FloatArray, data: dict[str, Any]) -> str:
+    # The scored validation input beyond the training input's range (more than 1 % of the
+    # training range outside): the models extrapolate there.  Stated in data and worded.
+    lo, hi = float(xt.min()), float(xt.max())
+    margin = 0.01 * (hi - lo)
+    beyond = (scored < lo - margin) | (scored > hi + margin)
+    fraction = float(np.mean(beyond)) if scored.size else 0.0
+    data['validation_outside_training_range'] = fraction
+    if not beyond.any():
+        return ''
+    return (f'the validation input leaves the training range: {float(scored.min()):.4g} to'
+            f' {float(scored.max()):.4g} against {lo:.4g} to {hi:.4g} seen in training;'
+            f' {100 * fraction:.3g} % of the scored samples lie outside, where every model'
+            " extrapolates (its errors there are not an effect's); record a training part"
+            ' that covers the validation range')
 
 
 def _scored_part(tv: FloatArray, xv: FloatArray, yv: FloatArray, sign: int,
@@ -692,6 +814,33 @@ def _refuse_constant_output(yt: FloatArray, yv: FloatArray, separate: bool) -> N
             raise DataError(msg)
 
 
+def _with_analysis(check: InvertibilityCheck,
+                   records: list[tuple[FloatArray, FloatArray, FloatArray]],
+                   timed: bool) -> InvertibilityCheck:
+    # The binned branch check saw the output move against the input.  The identification's
+    # analysis of each record names the cause in identify's words (a butterfly, switching,
+    # an output unrelated to the input, a drift at the input's return points), or explains
+    # the reversals (a lag or dead time, ringing after steps): then the record is inside.
+    verdicts = []
+    for t, x, y in records:
+        record = prepare_record(x, y, time=t if timed else None)
+        _, correlation = output_sign(x[record.keep], y[record.keep])
+        try:
+            refuse_if_unmodellable(record, correlation)
+        except IdentificationError as err:
+            return replace(check, reason=str(err))
+        drift = return_point_drift(x, y)
+        if drift.drifts:
+            return replace(check, reason=f'{drift.describe()}; the MPI model cannot follow it:'
+                           " remove the drift (e.g. a leakage current's integrated charge)"
+                           ' or record a shorter, drift-free part')
+        verdicts.append(record.analysis.verdict)
+    return replace(check, inside=True, reason=(
+        f'the binned branches show the output against the input (reversal ratio'
+        f' {check.reversal_ratio:.2f}), but the analysis identify makes of the record explains'
+        f' it ({", ".join(verdicts)}: no butterfly, switching or drift); diagnosed'))
+
+
 def _class_check(xt: FloatArray, yt: FloatArray, xv: FloatArray, yv: FloatArray,
                  separate: bool) -> InvertibilityCheck:
     # A separate validation record has its own sensor zero: each record is checked on its
@@ -728,24 +877,44 @@ def _dm_statistic(r_a: FloatArray, r_b: FloatArray,
     return float(d.mean() / math.sqrt(max(variance, 1e-300) / n)), lags
 
 
-def _decide(candidates: list[Candidate], excess: bool,
-            steps: list[str]) -> Candidate | None:
+def z_wording(z: float | None, z_critical: float) -> str:
+    """
+    Say what a Diebold-Mariano z of a candidate against the baseline means.
+
+    ``z >= z_critical``: significantly better; ``z <= -z_critical``: significantly worse;
+    else not significant (``z_critical`` the one-sided critical value the diagnosis used).
+    The decision steps, the JSON and the report word every z with this one function.
+
+    """
+    if z is None:
+        return 'not tested'
+    if z >= z_critical:
+        return 'significantly better'
+    if z <= -z_critical:
+        return 'significantly worse'
+    return 'not significant'
+
+
+def _decide(candidates: list[Candidate], excess: bool, steps: list[str], min_gain: float,
+            z_critical: float) -> Candidate | None:
     if not excess:
         steps.append('the baseline residual does not exceed the noise floor: none')
         return None
     for c in candidates:
-        steps.append(f'{c.cause}: gain {c.gain:+.3f}, z {c.z:.1f}'
-                     f' ({"" if c.significant else "not "}significant), signature'
-                     f' {c.signature}')
+        # The z is worded as the report's table words it; whether the candidate counts
+        # also needs the gain (one statement each, never "not significant" for a large z).
+        short = ([] if c.gain >= min_gain else [f'gain below {100 * min_gain:.3g} %']) + (
+            [] if c.z >= z_critical else [f'z below {z_critical:.4g}'])
+        counts = 'counts' if c.significant else 'does not count: ' + ' and '.join(short)
+        steps.append(f'{c.cause}: gain {100 * c.gain:+.3g} %, z {c.z:.3g}'
+                     f' ({z_wording(c.z, z_critical)}), {counts}; signature {c.signature}')
     eligible = [c for c in candidates if c.significant and c.signature != 'absent']
     if not eligible:
         steps.append('no candidate is both significant and physically supported: none')
         return None
     best = max(eligible, key=lambda c: c.gain)
-    note = (' (signature unavailable in this record: decided on the gain alone)'
-            if best.signature == 'unavailable' else '')
     steps.append(f'largest gain among the eligible: {best.cause}'
-                 f' ({best.gain:.3f}){note}')
+                 f' ({100 * best.gain:.3g} %; {_who_decided(best)})')
     return best
 
 
@@ -781,9 +950,99 @@ def _ties(best: Candidate | None, candidates: list[Candidate],
         z, _ = _dm_statistic(residuals[c.cause], residuals[best.cause], bandwidth)
         if z < z_critical:
             tied.append(c)
-            steps.append(f'{c.cause} is within the noise of {best.cause} (z {z:.1f} <'
-                         f' {z_critical}): ambiguous')
+            steps.append(f'{c.cause} is within the noise of {best.cause} (z {z:.3g} <'
+                         f' {z_critical:.4g}): ambiguous')
     return tied
+
+
+#: The two input stages one excitation rate cannot tell apart, and the finding each is.
+_INPUT_STAGES = {'rate_dependence': 'lag', 'dead_time': 'dead_time'}
+
+
+def _unphysical_dead_time(candidates: list[Candidate], onset: StepOnset,
+                          time: FloatArray) -> str:
+    # A dead time holds the output still after a step: one longer than the onset the
+    # record's steps show (plus one sample for the step's place) is not physical, and its
+    # physical signature is absent.  Returns the decision step ('' when it fits).
+    if not math.isfinite(onset.bound) or time.size < 2:
+        return ''
+    period = float(np.median(np.diff(time)))
+    for c in candidates:
+        value = float(c.parameters.get(DEAD_TIME, 0.0)) if c.cause == 'dead_time' else 0.0
+        if value > onset.bound + period:
+            c.signature = 'absent'
+            return (f'dead_time: a dead time of {1e3 * value:.3g} ms is not physical:'
+                    f' {onset.describe()}; its signature is absent')
+    return ''
+
+
+def _separate_evidence(separate: bool, residuals: dict[str, FloatArray], z_critical: float,
+                       bandwidth: int | None) -> Callable[[Candidate, Candidate | None], str]:
+    # What a separate validation record (another experiment, often another rate: data the
+    # analysis of the training record never saw) adds beyond that analysis: the chosen
+    # candidate beats the other input stage significantly there.  '' for a split, whose
+    # validation part is a part of the record the finding was made on.
+    def beyond(chosen: Candidate, other: Candidate | None) -> str:
+        if not separate:
+            return ''
+        if other is None:
+            return f'the separate validation record shows it (z {chosen.z:.3g})'
+        z, _ = _dm_statistic(residuals[other.cause], residuals[chosen.cause], bandwidth)
+        return (f'the separate validation record separates them (z {z:.3g} >= {z_critical:.4g}'
+                f' against {other.cause})' if z >= z_critical else '')
+    return beyond
+
+
+def _agree_with_finding(decision: dict[str, Any], chosen: Candidate | None,
+                        candidates: list[Candidate], finding: DynamicsFinding,
+                        beyond: Callable[[Candidate, Candidate | None], str]
+                        ) -> Candidate | None:
+    # The verdict on the two input stages never contradicts the finding `identify` states
+    # for the same record (held-out blocks, step onset): when the validation data name the
+    # other kind, or the finding is a tie, the verdict is a stated tie, unless the
+    # validation's bursts at several rates separate them (one signature present, the other
+    # absent) or a separate validation record does (`beyond`); when the finding is none,
+    # the validation gain of a split alone does not name an input stage.  Returns the
+    # chosen candidate (another one only for a finding of none).
+    decision['dynamics_finding'] = finding.kind
+    if (chosen is None or chosen.cause not in _INPUT_STAGES
+            or finding.kind in ('unavailable', _INPUT_STAGES[chosen.cause])):
+        return chosen
+    steps = decision['steps']
+    other = next((c for c in candidates if c.cause in _INPUT_STAGES
+                  and c.cause != chosen.cause), None)
+    if other is not None and chosen.signature == 'present' and other.signature == 'absent':
+        steps.append(f"the analysis of the record (identify's) finds {finding.kind}; the"
+                     f" validation data's bursts separate the two: {chosen.cause}")
+        return chosen
+    more = beyond(chosen, other if finding.kind != 'none' else None)
+    if more:
+        steps.append(f"the analysis of the training record (identify's) finds"
+                     f' {finding.kind.replace("_", " ")}; {more}: {chosen.cause}')
+        return chosen
+    if finding.kind == 'none':
+        rest = [c for c in candidates if c.cause not in _INPUT_STAGES and c.significant
+                and c.signature != 'absent' and not set(c.parts) & set(_INPUT_STAGES)]
+        after = max(rest, key=lambda c: c.gain) if rest else None
+        steps.append(f"the analysis of the record (identify's held-out blocks) finds no lag"
+                     f' or dead time that beats the static model ({finding.reason}), and no'
+                     f' burst signature supports {chosen.cause}: it is not named;'
+                     f' {after.cause if after is not None else "none"}')
+        return after
+    if other is not None and other.cause not in decision['tied_with']:
+        decision['tied_with'].append(other.cause)
+        why = ('a tie of lag and dead time' if finding.kind == 'tie'
+               else f'{finding.kind.replace("_", " ")}, not {_INPUT_STAGES[chosen.cause]}'
+               .replace('dead_time', 'dead time'))
+        decision['tie_reasons'][other.cause] = (
+            f"the analysis of the record (identify's held-out blocks) finds {why}, and no"
+            ' burst signature of the validation data separates them')
+        steps.append(f'{other.cause} is tied with {chosen.cause}: the analysis of the record'
+                     f' (identify\'s held-out blocks) finds {finding.kind.replace("_", " ")}'
+                     f' ({finding.reason}): ambiguous')
+    decision['ambiguous'] = bool(decision['tied_with'])
+    decision['separate_by'] = _separation([chosen.cause, *decision['tied_with']])
+    return chosen
 
 
 def _ranking(best: Candidate | None, candidates: list[Candidate],
@@ -801,9 +1060,7 @@ def _ranking(best: Candidate | None, candidates: list[Candidate],
 
 #: What separates two causes that tie (the record cannot tell them apart).
 _SEPARATIONS = {
-    frozenset({'rate_dependence', 'dead_time'}):
-        "bursts at two or more rates: a lag's phase saturates and its amplitude falls with"
-        " the frequency, a dead time's phase grows in proportion to it",
+    frozenset({'rate_dependence', 'dead_time'}): SEPARATE_LAG_AND_DEAD_TIME,
     frozenset({'creep', 'thermal_drift'}):
         'holds after steps up and down: creep follows log t in the direction of the step,'
         ' thermal drift follows the input power whatever the step',
@@ -877,8 +1134,17 @@ def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, A
     details = [EFFECTS[p].evidence(residual) for p in parts if p in EFFECTS]
     detail = '; '.join(d for d in details if d is not None)
     if not detail:
-        detail = ('the record has no hold of 1 s or more and no bursts the signature tests'
-                  ' can use')
+        # From the same residual facts the report's Holds and Bursts lines are written from.
+        holds = residual.get('hold_signature')
+        bursts = residual.get('burst_signature')
+        minimum = residual.get('holds', {}).get('signature_minimum_duration', 1.0)
+        used = (f'the hold signature test used {holds["holds"]} hold(s) of {minimum:g} s or'
+                ' more' if holds is not None else f'the record has no hold of {minimum:g} s or'
+                ' more')
+        rates = (f'the burst signature test used bursts at {len(bursts["frequencies"])}'
+                 ' frequencies' if bursts is not None else 'no bursts the signature tests can'
+                 ' use')
+        detail = f'{used}, {rates}: its physical signature is {c.get("signature", "-")}'
     each = ''
     if len(parts) > 1:
         each = ('; each adds beyond the other alone: ' + ', '.join(

@@ -26,7 +26,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from scipy.stats import norm
 
-from .diagnose import DiagnosisReport
+from .diagnose import DiagnosisReport, z_wording
 from ..extensions import EFFECTS
 from ..extensions._common import AxisUnits
 from ..params import write_params_yaml
@@ -155,23 +155,6 @@ def significant(value: Any, digits: int = 3) -> str:
     return f'{rounded:.{digits - 1}e}'
 
 
-def z_wording(z: Any, z_critical: float) -> str:
-    """
-    Say what a Diebold-Mariano z of a candidate against the baseline means.
-
-    ``z >= z_critical``: significantly better; ``z <= -z_critical``: significantly worse;
-    else not significant (``z_critical`` the one-sided critical value the diagnosis used).
-
-    """
-    if z is None:
-        return 'not tested'
-    if z >= z_critical:
-        return 'significantly better'
-    if z <= -z_critical:
-        return 'significantly worse'
-    return 'not significant'
-
-
 def summary_lines(facts: Mapping[str, Any]) -> list[str]:
     """
     Return the short summary (printed on stderr, and the head of ``summary.md``).
@@ -211,9 +194,11 @@ def summary_lines(facts: Mapping[str, Any]) -> list[str]:
                          f' {z_wording(chosen["part_z"][name], zc)})'
                          for name in chosen['parts']))
     if decision.get('ambiguous'):
-        lines.append(f'ambiguous: {" and ".join(_tied(facts))} explain the validation data'
-                     ' equally well within the noise; separate them with'
+        lines.append(f'ambiguous: {_tie_reasons(facts)}; separate them with'
                      ' mpi-ros diagnose --excitation (see summary.md)')
+    finding = facts.get('data', {}).get('dynamics_finding') or {}
+    if finding.get('text'):
+        lines.append(finding['text'])
     lines.append(f'scored part: {_scored(facts)}')
     lines.append(f'holds: {_holds(facts)}')
     lines.append(f'units: input {units["input"]}, output {units["output"]},'
@@ -380,8 +365,14 @@ def _caption(name: str) -> str:
         'signature_thermal_drift.png': 'Thermal drift: residual against the lagged input'
                                        ' power.',
         'signature_dead_time.png': "Dead time: the dead-time model's residual against the"
-                                   ' delay; the minimum should sit on the fitted value.'}
-    return captions.get(name, name)
+                                   ' delay; the minimum should sit on the fitted value.',
+        'signature_resonance.png': 'Resonance: measured, baseline and mode output after the'
+                                   ' largest input step of the validation data (the title'
+                                   ' says when the input has no step).'}
+    if name in captions:
+        return captions[name]
+    cause = name.removeprefix('signature_').removesuffix('.png').replace('_', ' ')
+    return f'The {cause} candidate against the measured output, validation data.'
 
 
 def _units(facts: Mapping[str, Any]) -> dict[str, str]:
@@ -447,6 +438,16 @@ def _ranked(facts: Mapping[str, Any]) -> list[Mapping[str, Any]]:
 
 def _tied(facts: Mapping[str, Any]) -> list[str]:
     return [facts['cause'], *facts.get('decision', {}).get('tied_with', [])]
+
+
+def _tie_reasons(facts: Mapping[str, Any]) -> str:
+    # Each tied cause with the reason the diagnosis gave (the validation data's z, or the
+    # analysis of the record that identify states), in one sentence.
+    decision = facts.get('decision', {})
+    reasons = decision.get('tie_reasons') or {}
+    return '; '.join(f'{cause} is tied with {facts["cause"]}'
+                     + (f': {reasons[cause]}' if reasons.get(cause) else '')
+                     for cause in decision.get('tied_with', []))
 
 
 def _scored(facts: Mapping[str, Any]) -> str:
@@ -541,11 +542,8 @@ def _candidate_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> li
 def _tie_section(facts: Mapping[str, Any]) -> list[str]:
     decision = facts['decision']
     tied = _tied(facts)
-    zc = float(decision.get('z_critical', 1.645))
     lines = ['## Ambiguous: the record cannot tell these causes apart', '',
-             f'{" and ".join(tied)} explain the validation data equally well within the'
-             f' noise ({facts["cause"]} beats none of them with z >= {significant(zc, 4)}).'
-             ' Ranked by gain:', '']
+             f'{_tie_reasons(facts)}. Ranked by gain:', '']
     rank = 0
     for row in decision.get('ranking', []):
         if row['cause'] not in tied:
@@ -574,9 +572,10 @@ def _separation(tied: Sequence[str]) -> str:
         how.append(f'a hold separates {" and ".join(slow)} (the residual keeps moving while'
                    f' the input holds) from {" and ".join(fast)} (silent during a hold)')
     if len(fast) == 2:
-        how.append('two rates separate a lag (its phase saturates and its amplitude falls'
-                   ' with the frequency) from a dead time (its phase grows in proportion to'
-                   ' the frequency)')
+        how.append('a step separates a dead time (the output stays still for its length)'
+                   ' from a lag (the output moves at once); two rates separate a lag (its'
+                   ' phase saturates and its amplitude falls with the frequency) from a dead'
+                   ' time (its phase grows in proportion to the frequency)')
     return '; '.join(how) or 'its holds and bursts test every signature'
 
 
@@ -596,8 +595,8 @@ def _evidence_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> lis
                      f' (p = {significant(holds["drift_p"])}).')
     bursts = residual.get('burst_signature')
     if bursts is None:
-        lines.append('- Bursts: none the burst signature test can use (rate dependence and'
-                     ' dead time signatures unavailable).')
+        lines.append('- Bursts: none the burst signature test can use (no burst signature'
+                     ' for rate dependence and dead time).')
     else:
         f = bursts['frequencies']
         lines.append(f'- Bursts at {len(f)} frequencies, {significant(f[0])} to'
@@ -606,6 +605,11 @@ def _evidence_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> lis
                      f' {significant(bursts["delay_sse"])}; lag tau ='
                      f' {_seconds(bursts["lag_time_constant"])}, residual'
                      f' {significant(bursts["lag_sse"])}; p = {significant(bursts["p"])}).')
+    onset = residual.get('step_onset')
+    if onset:
+        check = onset.get('dead_time_check') or 'a dead time up to it is physical'
+        lines.append(f'- Step response: the output moves within {_seconds(onset["bound"])}'
+                     f' of a step ({onset["steps"]} step(s) measured); {check}.')
     level = facts.get('decision', {}).get('signature_level')
     if level is not None:
         lines.append(f'- Each signature test runs at p < {significant(level)}.')
@@ -617,7 +621,9 @@ def _data_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[st
     lines = ['## Data', '',
              f'- Training: `{data.get("source", "")}`, {data.get("samples", "?")} samples'
              + (f', the first {_percent(data["split"])} of the record' if 'split' in data
-                else '') + '.']
+                else '')
+             + (f' after its leading hold of {data["leading_hold"]} samples'
+                if data.get('leading_hold') else '') + '.']
     if 'validation_samples' in data:
         lines.append(f'- Validation: `{data.get("validation", "")}`,'
                      f' {data["validation_samples"]} samples (a separate record).')

@@ -23,7 +23,7 @@ import numpy.typing as npt
 from ..extensions import EFFECTS
 from ..extensions.effect import FAST_TIME_LIMIT
 
-__all__ = ['implausible_time_constants', 'time_base_warning']
+__all__ = ['implausible_dynamics', 'implausible_time_constants', 'time_base_warning']
 
 #: A reported time constant: (what it is, value [s], largest plausible value [s]).
 TimeConstant = tuple[str, float, float]
@@ -75,8 +75,34 @@ def implausible_time_constants(candidates: Sequence[Mapping[str, Any]],
     return found
 
 
+def implausible_dynamics(estimate: Any) -> list[TimeConstant]:
+    """
+    Return the dead time and lag of an identification that exceed what an actuator shows.
+
+    Parameters
+    ----------
+    estimate : DynamicsEstimate
+        :attr:`mpi_ros.identification.IdentificationResult.dynamics_estimate`: the best
+        dead time and lag time constant of its trials (modelled or not) [s].
+
+    Returns
+    -------
+    list of (str, float, float)
+        What each implausible value is, the value [s] and its plausible maximum [s]
+        (:data:`~mpi_ros.extensions.effect.FAST_TIME_LIMIT`).
+
+    """
+    found: list[TimeConstant] = []
+    for what, value in (('dead time', getattr(estimate, 'dead_time', 0.0)),
+                        ('lag time constant', getattr(estimate, 'lag_time_constant', 0.0))):
+        if math.isfinite(value) and value > FAST_TIME_LIMIT:
+            found.append((what, float(value), FAST_TIME_LIMIT))
+    return found
+
+
 def time_base_warning(found: Sequence[TimeConstant],
-                      records: Sequence[tuple[str, npt.NDArray[np.float64]]]) -> str | None:
+                      records: Sequence[tuple[str, npt.NDArray[np.float64]]], *,
+                      command: str = 'diagnose') -> str | None:
     """
     Word one warning about implausible time constants and the time base behind them.
 
@@ -87,6 +113,8 @@ def time_base_warning(found: Sequence[TimeConstant],
     records : sequence of (str, ndarray of float, shape (N,))
         Name and sample times [s] of each record the values come from (training,
         validation).
+    command : str
+        The command to run again with ``--time-scale`` (``diagnose`` or ``identify``).
 
     Returns
     -------
@@ -118,5 +146,5 @@ def time_base_warning(found: Sequence[TimeConstant],
     return (f'{values} {verb} implausible for a smart-material actuator (dead times and rate'
             f' lags are us to ms, creep and thermal time constants at most about an hour);'
             f' {base}: a time column in ms (or us) read as s gives such values - if so,'
-            ' pass --time-scale 1e-3 (us: 1e-6) and diagnose again; if the time really is in'
+            f' pass --time-scale 1e-3 (us: 1e-6) and {command} again; if the time really is in'
             ' s, do not trust these time constants')

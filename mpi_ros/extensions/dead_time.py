@@ -153,8 +153,12 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
                label=f'fitted dead time L = {1e3 * fitted:.3g} ms')
     ax.set_xlabel('delay d of the simulated output [ms]')
     ax.set_ylabel(f'RMS residual [{units.displacement}]')
-    ax.set_title(f'dead time: the residual is smallest at the fitted delay'
-                 f' L = {1e3 * fitted:.3g} ms', fontsize=10)
+    # The title states what the curve shows, from the same two numbers as the legend.
+    step = float(delays[1] - delays[0])
+    where = ('at the fitted delay' if abs(delays[best] - fitted) <= step
+             else 'not at the fitted delay')
+    ax.set_title(f'dead time: fitted L = {1e3 * fitted:.3g} ms; the residual is smallest at'
+                 f'\nd = {1e3 * delays[best]:.3g} ms ({where})', fontsize=10)
 
 
 def _plant_start(values: Mapping[str, Any]) -> dict[str, Any]:

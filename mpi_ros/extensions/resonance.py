@@ -412,17 +412,25 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
     decay = float(fitted.get(RESONANCE_DECAY, 0.0))
     x = current[start:]
     k = start + (int(np.argmax(np.abs(np.diff(x)))) + 1 if x.size > 1 else 0)
+    # A step: the input moves by a tenth of its range between two samples (the analysis'
+    # definition); else the plot shows the largest change of a smooth input, and says so.
+    jump = float(abs(current[k] - current[k - 1])) if k > 0 else 0.0
+    stepped = jump >= 0.1 * float(np.ptp(x)) if x.size > 1 else False
     span = 6.0 * decay if decay > 0.0 else 0.05
     keep = (time >= time[k] - 0.2 * span) & (time <= time[k] + span)
     ms = 1e3 * (time[keep] - time[k])
     ax.plot(ms, units.scale * measured[keep], lw=0.8, color='k', label='measured')
     ax.plot(ms, units.scale * baseline[keep], lw=0.8, label='baseline MPI')
     ax.plot(ms, units.scale * extended[keep], lw=0.8, label='MPI + mode')
-    ax.set_xlabel('time after the largest input step [ms]')
+    what = 'the largest input step' if stepped else 'the largest input change (no step)'
+    ax.set_xlabel(f'time after {what} [ms]')
     ax.set_ylabel(f'displacement [{units.displacement}]')
-    mode = f' (f = {f:.4g} Hz, decay {1e3 * decay:.3g} ms)' if f > 0.0 else ''
-    ax.set_title(f'resonance: the output rings after a step;\nthe mode{mode} follows it',
-                 fontsize=10)
+    mode = (f'the mode f = {f:.4g} Hz, decay {1e3 * decay:.3g} ms' if f > 0.0
+            else 'no mode fitted')
+    head = ('resonance: the output after the largest input step;\n' if stepped else
+            'resonance: the validation input has no step\n(it moves by at most'
+            f' {100 * jump / max(float(np.ptp(x)), 1e-300):.2g} % of its range per sample); ')
+    ax.set_title(f'{head}{mode}', fontsize=10)
 
 
 def _plant_start(values: Mapping[str, Any]) -> FloatArray:

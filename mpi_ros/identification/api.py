@@ -104,9 +104,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .procedure import (DynamicsEstimate, estimate_dynamics, fit_record, held_out_rows,
-                        InputDynamics, prepare_record, PreparedRecord, RecordFit,
-                        refuse_if_unmodellable, Segment, StartState)
+from .dynamics import return_point_drift
+from .finding import DynamicsFinding, estimate_record_dynamics, finding_of, reference_order
+from .procedure import (DynamicsEstimate, fit_record, held_out_rows, InputDynamics,
+                        prepare_record, PreparedRecord, RecordFit, refuse_if_unmodellable,
+                        Segment, StartState)
 from .qp import _check_excitation, _check_signals, _errors, _quality_check, ANCHORS, \
     DEFAULT_ORDERS, FloatArray, output_sign
 from ..errors import DataError, IdentificationError
@@ -380,6 +382,9 @@ class IdentificationResult:
         Dead time and lag of the input path modelled with Gamma (zeros: none).
     dynamics_estimate : DynamicsEstimate
         Both kinds as estimated (with a time base), their held-out errors, whether they tie.
+    dynamics_finding : DynamicsFinding
+        Lag, dead time, tie or none (:mod:`.finding`: the rule ``mpi-ros diagnose`` states
+        for the same record, with the step response's check of a dead time).
     findings : str
         What moves the output against the input (ringing, lag, dead time), in words.
     excluded : int
@@ -408,6 +413,7 @@ class IdentificationResult:
     segments: list[dict[str, Any]] = field(default_factory=list)
     dynamics: InputDynamics = field(default_factory=InputDynamics)
     dynamics_estimate: DynamicsEstimate = field(default_factory=DynamicsEstimate)
+    dynamics_finding: DynamicsFinding = field(default_factory=DynamicsFinding)
     findings: str = ''
     excluded: int = 0
     notes: list[str] = field(default_factory=list)
@@ -431,7 +437,8 @@ class IdentificationResult:
                                     'output_offset': m.output_offset,
                                     'output_sign': m.output_sign},
                 'start_state': self.start_state, 'segments': self.segments,
-                'dynamics': {**self.dynamics_estimate.to_json(), 'findings': self.findings},
+                'dynamics': {**self.dynamics_estimate.to_json(), 'findings': self.findings,
+                             'finding': self.dynamics_finding.to_json()},
                 'resonance': self.resonance.to_json(),
                 'notes': list(self.notes),
                 'solver_status': self.solver_status, 'iterations': self.iterations,
@@ -575,7 +582,10 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     record = prepare_record(x, y, time=t, anchor=anchor, epsilon=epsilon)
     keep = record.keep
     _, correlation = output_sign(x[keep], y[keep])
-    refuse_if_unmodellable(record, correlation)
+    try:
+        refuse_if_unmodellable(record, correlation)
+    except IdentificationError as err:
+        raise _true_cause(err, x, y) from None
     notes: list[str] = []
     if periodic:
         record = replace(record, segments=[Segment(0, x.size, 'start', StartState('periodic'))])
@@ -586,16 +596,17 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     choose = not periodic
     # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
     # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
-    reference = (8, 4) if x.size >= 10 * 15 else (min(n, 8), min(l, 4))
+    reference = reference_order(x.size, n, l)
     estimate = DynamicsEstimate()
-    if t is not None and dynamics == 'auto' and bool(np.all(np.diff(t) > 0.0)):
-        # On a window of a long record: trials cost the window, not the record.
-        trial = record.window(_DYNAMICS_WINDOW)
-        held = held_out_rows(trial.current.size, holdout, trial.keep)
-        say('dynamics: start state of the trial window')
-        base = fit_record(trial, *reference, held=held, choose=choose)
-        estimate = estimate_dynamics(trial, *reference, held, base.segments,
-                                     burn_in=base.burn_in, progress=progress)
+    if t is not None and dynamics == 'auto':
+        # On a window of a long record: trials cost the window, not the record (the
+        # analysis `mpi-ros diagnose` states for the same record).
+        estimate = estimate_record_dynamics(record, reference, holdout=holdout, choose=choose,
+                                            progress=progress)
+    # Lag, dead time, tie or none, with the step response's check of a dead time.
+    finding = finding_of(record, estimate) if dynamics == 'auto' else DynamicsFinding()
+    if finding.kind != 'unavailable':
+        estimate = replace(estimate, modelled=finding.modelled)
     found = estimate.modelled
     table: list[dict[str, Any]] = []
     if auto:
@@ -617,7 +628,10 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     say('judging the fit against the straight line')
     sim = with_mode(t, fit.simulate(), resonance)    # each segment from its start state
     fitted = fit.fitted if fit.fitted is not None else keep
-    rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
+    try:
+        rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
+    except IdentificationError as err:
+        raise _true_cause(err, x, y) from None
     # What `mpi-ros simulate` gives: the model from its initial states, straight through
     # (Gamma of the input after the dynamics, then the output mode if one is modelled); one
     # segment from sample 0 without a mode is that already.
@@ -647,7 +661,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
                      f'{"; ".join(s.reason for s in fit.segments[1:])}), each with its own'
                      ' start state')
     findings = '; '.join(part for part in (record.analysis.describe(), resonance.describe(),
-                                           estimate.describe()) if part)
+                                           estimate.describe(), finding.describe()) if part)
     info = fit.info
     return IdentificationResult(
         model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
@@ -655,12 +669,21 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         solve_time=time_module.perf_counter() - started, order_table=table,
         linear_rms_error=linear, burn_in=int(fit.burn_in), whole_record_rms_error=whole,
         start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
-        findings=findings,
+        dynamics_finding=finding, findings=findings,
         excluded=int(np.count_nonzero(~keep)), notes=notes, resonance=resonance)
 
 
 def _silent(text: str) -> None:
     pass
+
+
+def _true_cause(err: IdentificationError, x: FloatArray, y: FloatArray) -> IdentificationError:
+    # A refusal of a record whose output drifts at the input's return points names the
+    # drift first (a leakage drift under loops looks unrelated, or worse than a line).
+    drift = return_point_drift(x, y)
+    if not drift.drifts:
+        return err
+    return IdentificationError(f'{drift.describe()}: the MPI model cannot follow it; {err}')
 
 
 def _check_time(time: npt.ArrayLike | None, size: int) -> FloatArray | None:
@@ -682,9 +705,6 @@ def _check_levels(x: FloatArray, y: FloatArray) -> None:
     # Too few samples, or an input or output that does not move: nothing to identify.
     _check_excitation(x, y, 0, 0)
 
-
-#: Samples of the window the dynamics grid runs on (a long record's busiest part).
-_DYNAMICS_WINDOW = 20000
 
 #: Samples of the window the order selection runs on.
 _ORDER_WINDOW = 100000

@@ -28,7 +28,7 @@ explains the counter-movement.  Its :class:`DynamicsAnalysis` says which of the 
 found, in words a control engineer can check.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from typing import Any
 
@@ -36,7 +36,12 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['DynamicsAnalysis', 'analyse_dynamics', 'noise_std', 'MAX_COUNTER_MOVE']
+__all__ = ['DynamicsAnalysis', 'analyse_dynamics', 'noise_std', 'MAX_COUNTER_MOVE', 'StepOnset',
+           'step_onset', 'ReturnPointDrift', 'return_point_drift', 'DRIFT_LIMIT']
+
+#: A monotone change of the output at the input's extreme over the record, as a fraction of
+#: the output's range, from which the record is said to drift.
+DRIFT_LIMIT = 0.05
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -269,6 +274,201 @@ def analyse_dynamics(time: npt.ArrayLike | None, current: npt.ArrayLike,
     return DynamicsAnalysis(verdict, explained_counter_move=max(remaining, 0.0),
                             worst_sweep=(int(first), int(last)), band=band,
                             band_sweeps=counts, **common)
+
+
+@dataclass(frozen=True)
+class StepOnset:
+    """
+    How soon the output moves after the record's steps: the longest dead time it allows.
+
+    Attributes
+    ----------
+    bound : float
+        Longest dead time [s] the steps allow: over the steps, the smallest time from the
+        last sample before the step to the output's first sample beyond the noise; a dead
+        time ``L`` holds the output still for ``L`` after a step.  Infinite when the record
+        has no step.
+    sample : int
+        The sample of that step (-1: none).
+    steps : int
+        Steps measured.
+    at_start : bool
+        That step is the one just before the record (the output jumps at its start with
+        the input already at its new level), taken as at most one sample before it.
+
+    """
+
+    bound: float = math.inf
+    sample: int = -1
+    steps: int = 0
+    at_start: bool = False
+
+    def describe(self) -> str:
+        """Return where the output moved, in words (empty without a step)."""
+        if not math.isfinite(self.bound):
+            return ''
+        where = ('the step just before the record' if self.at_start
+                 else f'the input step at sample {self.sample}')
+        return (f'the output moves within {1e3 * self.bound:.3g} ms of {where} (the shortest'
+                f' onset of {self.steps} step(s))')
+
+
+def step_onset(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.ArrayLike, *,
+               sign: int = 1) -> StepOnset:
+    """
+    Measure how soon the output moves after each input step: a dead time must show there.
+
+    Input steps are those :func:`analyse_dynamics` finds (the input moves by 10 % of its
+    range within two samples); an output jump in the record's first samples while the input
+    holds is the step just before the record (taken as one sample before its first).  After
+    each, the output's first sample that differs from its level before the step by more than
+    four noise standard deviations (:func:`noise_std`) in the step's direction is its onset
+    (an input that keeps moving fast around its steps moves the output too: the bound is
+    then shorter than the true onset, never longer).
+
+    Parameters
+    ----------
+    time : array_like of float, shape (N,)
+        Sample times [s].
+    current : array_like of float, shape (N,)
+        Input [A].
+    displacement : array_like of float, shape (N,)
+        Output [m].
+    sign : {1, -1}
+        Whether the output rises (1) or falls (-1) with the input.
+
+    Returns
+    -------
+    StepOnset
+        The longest dead time the steps allow (infinite without a step).
+
+    """
+    t = np.ascontiguousarray(time, dtype=np.float64).reshape(-1)
+    x = np.ascontiguousarray(current, dtype=np.float64).reshape(-1)
+    v = sign * np.ascontiguousarray(displacement, dtype=np.float64).reshape(-1)
+    span_x, span_y = float(np.ptp(x)) if x.size else 0.0, float(np.ptp(v)) if v.size else 0.0
+    if x.size < 8 or not span_x > 0.0 or not span_y > 0.0:
+        return StepOnset()
+    margin = 4.0 * noise_std(v)
+    input_steps, events = _steps(x, v, span_x, span_y, margin)
+    dt = float(np.median(np.diff(t)))
+    best = StepOnset()
+    count = 0
+    for k in events:
+        at_start = k not in input_steps
+        if at_start and k > _START_SAMPLES:
+            continue                     # a jump inside the record: its step is unknown
+        if at_start:
+            k0, level, direction = 0, v[0], float(np.sign(v[min(k + 5, v.size - 1)] - v[0]))
+            before = t[0] - dt
+        else:
+            k0 = k if abs(x[k + 1] - x[k]) > 0.5 * abs(x[k + 2] - x[k]) else k + 1
+            level, direction = v[k0], float(np.sign(x[min(k + 2, x.size - 1)] - x[k]))
+            before = t[k0]
+        later = [s for s in input_steps if s > k + 2]
+        stop = later[0] if later else v.size       # the output's answer to this step only
+        moved = np.flatnonzero(direction * (v[k0 + 1:stop] - level) > margin)
+        if not moved.size or direction == 0.0:
+            continue
+        count += 1
+        onset = float(t[k0 + 1 + int(moved[0])] - before)
+        if onset < best.bound:
+            best = StepOnset(onset, int(k0), 0, at_start)
+    return replace(best, steps=count) if count else StepOnset()
+
+
+@dataclass(frozen=True)
+class ReturnPointDrift:
+    """
+    The output at the input's repeated extreme: a hysteresis returns there, a drift does not.
+
+    Attributes
+    ----------
+    visits : int
+        Times the input reached its extreme (within 1 % of its range), at separate turns.
+    change : float
+        Output at the last visit minus the first, over the output's range (signed).
+    monotone : bool
+        The output moved the same way from each visit to the next.
+    end : str
+        ``'maximum'`` or ``'minimum'`` of the input.
+
+    """
+
+    visits: int = 0
+    change: float = 0.0
+    monotone: bool = False
+    end: str = 'maximum'
+
+    @property
+    def drifts(self) -> bool:
+        """Return True when the output drifts: monotone over three visits or more, 5 % or more."""
+        return self.visits >= 3 and self.monotone and abs(self.change) >= DRIFT_LIMIT
+
+    def describe(self) -> str:
+        """Return the finding in words (empty when the record does not drift)."""
+        if not self.drifts:
+            return ''
+        return (f"the output drifts: at the input's {self.end}, reached {self.visits} times, it"
+                f' moves monotonically by {100 * self.change:+.3g} % of its range (a'
+                ' rate-independent hysteresis returns to the same output there; leakage,'
+                ' creep or thermal drift do not)')
+
+
+def return_point_drift(current: npt.ArrayLike, displacement: npt.ArrayLike) -> ReturnPointDrift:
+    """
+    Measure how the output at the input's repeated extreme moves over a record.
+
+    By the return-point memory of a rate-independent hysteresis (and of the MPI model) the
+    output is the same each time the input comes back to its largest (smallest) value.  A
+    monotone change there over the visits is a drift the model cannot follow: leakage (the
+    integrated charge of a ferroelectric film), creep, thermal drift.
+
+    Parameters
+    ----------
+    current : array_like of float, shape (N,)
+        Input [A].
+    displacement : array_like of float, shape (N,)
+        Output [m].
+
+    Returns
+    -------
+    ReturnPointDrift
+        Of the ends the input returns to three times or more, the one with the larger
+        change (else the other).
+
+    """
+    x = np.asarray(current, dtype=np.float64).reshape(-1)
+    y = np.asarray(displacement, dtype=np.float64).reshape(-1)
+    span_x, span_y = float(np.ptp(x)) if x.size else 0.0, float(np.ptp(y)) if y.size else 0.0
+    if x.size < 8 or not span_x > 0.0 or not span_y > 0.0:
+        return ReturnPointDrift()
+    best = ReturnPointDrift()
+    for end, near in (('maximum', x >= x.max() - 0.01 * span_x),
+                      ('minimum', x <= x.min() + 0.01 * span_x)):
+        # Separate visits: runs of samples near the extreme, apart by a move of 10 %.
+        away = np.abs(x - (x.max() if end == 'maximum' else x.min())) > 0.1 * span_x
+        values, inside, left = [], False, True
+        for k in range(x.size):
+            if near[k] and left:
+                values.append([float(y[k])])
+                inside, left = True, False
+            elif near[k] and inside:
+                values[-1].append(float(y[k]))
+            elif away[k]:
+                inside, left = False, True
+            else:
+                inside = False
+        levels = np.array([np.median(v) for v in values])
+        if levels.size < 2:
+            continue
+        steps = np.diff(levels)
+        found = ReturnPointDrift(int(levels.size), float((levels[-1] - levels[0]) / span_y),
+                                 bool(np.all(steps > 0.0) or np.all(steps < 0.0)), end)
+        # The end the input returns to (three visits or more) with the larger change.
+        if (found.visits >= 3, abs(found.change)) > (best.visits >= 3, abs(best.change)):
+            best = found
+    return best
 
 
 def _duration(value: float, unit: str) -> str:

@@ -29,7 +29,11 @@ from ..errors import DataError
 from ..extensions.effect import plant_switch
 
 __all__ = ['SyntheticRecord', 'synthetic_record', 'SYNTHETIC_KINDS', 'rising_amplitude_sine',
-           'RING_DECAY']
+           'RING_DECAY', 'rates_record', 'TWIN_KINDS', 'twin_record']
+
+#: The records :func:`twin_record` builds: what real captures were refused for, or passed
+#: with, without the true cause being named.
+TWIN_KINDS = ('leakage drift', 'deepening FORC')
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -192,6 +196,110 @@ def synthetic_record(kind: str, seed: int, *, noise: float = 0.002) -> Synthetic
         return SyntheticRecord(None, x, zero + sign * y, {**truth, 'noise': noise})
     y = _measured(t, x, config, seed, rest + [float(x[0])] if rest else [], noise)
     return SyntheticRecord(t, x, zero + sign * y, {**truth, 'noise': noise})
+
+
+def rates_record(effect: str, value: float, seed: int, *,
+                 rates: tuple[float, ...] = (20.0, 100.0), noise: float = 0.002,
+                 sample_rate: float = 10000.0) -> SyntheticRecord:
+    """
+    Build a record of rising-amplitude sines at one or more rates, with a lag or a dead time.
+
+    One rate cannot tell a first-order lag from a dead time (each shifts the phase of the one
+    frequency); two rates can (a lag's phase saturates, a dead time's grows with the
+    frequency).  The sines follow each other without a step (each starts at the lower end
+    with zero slope), so the step response does not decide either.
+
+    Parameters
+    ----------
+    effect : {'lag', 'dead_time'}
+        The input path's dynamics.
+    value : float
+        Its time constant or dead time [s].
+    seed : int
+        Seed of the noise, the sensor zero and sign.
+    rates : tuple of float
+        Cycle frequencies [Hz] of the parts (10 cycles at the first, 30 at the others).
+    noise : float
+        Sensor noise, RMS, as a fraction of the displacement range.
+    sample_rate : float
+        Samples per second [Hz].
+
+    Returns
+    -------
+    SyntheticRecord
+        The record and its truth.
+
+    """
+    if effect not in ('lag', 'dead_time'):
+        msg = f"rates_record: effect must be 'lag' or 'dead_time'; found {effect!r}"
+        raise DataError(msg)
+    rng = np.random.default_rng(seed)
+    zero = float(rng.uniform(-2e-5, 2e-5))
+    sign = 1 if rng.random() < 0.7 else -1
+    parts = [rising_amplitude_sine(sample_rate, f, cycles=10 if k == 0 else 30,
+                                   hold=0.2 if k == 0 else 0.05)[1]
+             for k, f in enumerate(rates)]
+    x = np.concatenate(parts)
+    t = np.arange(x.size) / sample_rate
+    key = plant_switch('rate_dependence' if effect == 'lag' else 'dead_time')
+    y = _measured(t, x, {key: value}, seed, [0.0, 2.0, float(x[0])], noise)
+    truth = {'lag_time_constant': value if effect == 'lag' else 0.0,
+             'dead_time': value if effect == 'dead_time' else 0.0, 'resonance_hz': 0.0,
+             'resonance_decay': 0.0, 'start': 'at rest after a descent', 'noise': noise,
+             'rates': list(rates)}
+    return SyntheticRecord(t, x, zero + sign * y, truth)
+
+
+def twin_record(kind: str, seed: int, *, drift: float = 0.3,
+                noise: float = 0.002) -> SyntheticRecord:
+    """
+    Build the synthetic twin of a real capture whose refusal named the wrong cause.
+
+    ``'leakage drift'``: first-order reversal curves from the top of the range, reaching
+    lower each time (a ferroelectric film's FORC measurement), on top of a monotone drift
+    of the output over the record (the integrated charge of a leakage current), ``drift``
+    times the loops' range in all.  ``'deepening FORC'``: the same curves without drift,
+    the later ones reaching below everything the first 60 % of the record reached (a
+    validation part beyond the training range).
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`TWIN_KINDS`.
+    seed : int
+        Seed of the noise, the sensor zero and sign.
+    drift : float
+        The drift over the record, as a fraction of the loops' output range.
+    noise : float
+        Sensor noise, RMS, as a fraction of the displacement range.
+
+    Returns
+    -------
+    SyntheticRecord
+        The record; its truth holds ``drift`` (fraction) and ``training_low`` (the lowest
+        input of the first 60 %, A).
+
+    """
+    if kind not in TWIN_KINDS:
+        msg = f'unknown twin record {kind!r}; one of: {", ".join(TWIN_KINDS)}'
+        raise DataError(msg)
+    rng = np.random.default_rng(seed)
+    zero = float(rng.uniform(-2e-5, 2e-5))
+    rate = 1000.0
+    levels = (np.linspace(1.4, 0.2, 7) if kind == 'leakage drift'
+              else np.array([1.5, 1.4, 1.3, 1.2, 1.1, 0.6, 0.2]))
+    parts = [np.linspace(1.0, 1.8, 200)]
+    for level in levels:
+        parts += [np.linspace(1.8, level, 300), np.linspace(level, 1.8, 300)]
+    x = np.concatenate(parts)
+    t = np.arange(x.size) / rate
+    y = _measured(t, x, {}, seed, [0.0, 2.0, 0.2, float(x[0])], noise)
+    amount = drift if kind == 'leakage drift' else 0.0
+    y = y + amount * _RANGE_M * (t - t[0]) / (t[-1] - t[0])
+    truth = {'lag_time_constant': 0.0, 'dead_time': 0.0, 'resonance_hz': 0.0,
+             'resonance_decay': 0.0, 'start': 'at rest after a descent', 'noise': noise,
+             'drift': amount, 'training_low': float(x[:int(0.6 * x.size)].min())}
+    return SyntheticRecord(t, x, zero + y, truth)
 
 
 def _measured(t: FloatArray, x: FloatArray, config: dict[str, float], seed: int,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import math
 from pathlib import Path
 import re
-from typing import Iterator, Mapping, Sequence
+from typing import Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -198,9 +198,10 @@ def read_csv_table(
     comment: str | None = '#',
     drop_nonfinite: bool = False,
     nonfinite_hint: str = 'pass drop_nonfinite=True to drop those rows',
+    select: Callable[[list[str], list[bool]], Sequence[str]] | None = None,
 ) -> tuple[list[str], FloatArray]:
     """
-    Read a CSV file whose columns are all numeric.
+    Read a CSV file whose columns are all numeric (or the columns `select` names).
 
     Used by the command line: the input signal is the first column not named
     ``time``; a ``time`` column passes through to the output file.
@@ -216,11 +217,16 @@ def read_csv_table(
     nonfinite_hint : str, optional
         What the NaN/Inf error tells the user to do (callers name their own
         options).
+    select : callable, optional
+        Given the header and whether each column's first data field is a
+        number, returns the names of the columns to read (it may raise with a
+        message naming the option); the other columns may hold text and are
+        ignored. Default: every column.
 
     Returns
     -------
     header : list of str
-        Column names, in file order.
+        Column names read, in file order.
     table : ndarray of float, shape (N, M)
         The values, one row per data line, in the units of the file.
 
@@ -243,14 +249,17 @@ def read_csv_table(
         msg = f'CSV file {source} has a header but no data rows; add the samples'
         raise DataError(msg)
     notes: list[str] = []
-    columns, keep = _numeric_columns(table, list(range(len(table.header))),
-                                     drop_nonfinite=drop_nonfinite, notes=notes,
-                                     hint=nonfinite_hint)
+    header = list(table.header)
+    numeric = [_NUMBER.fullmatch(field) is not None for field in table.rows[0]]
+    chosen = set(select(header, numeric)) if select is not None else set(header)
+    indices = [index for index, name in enumerate(header) if name in chosen]
+    columns, keep = _numeric_columns(table, indices, drop_nonfinite=drop_nonfinite,
+                                     notes=notes, hint=nonfinite_hint)
     if not np.any(keep):
         msg = f'CSV file {source}: every row holds NaN/Inf or an empty field; no data left'
         raise DataError(msg)
-    data = np.column_stack([columns[index][keep] for index in range(len(table.header))])
-    return list(table.header), data.astype(np.float64)
+    data = np.column_stack([columns[index][keep] for index in indices])
+    return [header[index] for index in indices], data.astype(np.float64)
 
 
 def write_csv_columns(
