@@ -71,9 +71,11 @@ Extended models (:mod:`mpi_ros.extensions`)
     ``model.thermal_drift.*`` and ``model.dead_time`` keys add one extension to Gamma;
     the candidate is built with ``extended_model_from_params`` (a bad key is rejected with
     a reason naming it). Creep, rate dependence and thermal drift plug their exact
-    per-step inverse into the one :class:`~mpi_ros.compensation.Compensator`, fed with
-    each message's arrival time on the steady clock (``message_time``; queued messages
-    served together get close times); a dead time cannot be inverted, so Gamma alone is
+    per-step inverse into the one :class:`~mpi_ros.compensation.Compensator`, on the
+    stream's own time base (``message_time``, :mod:`mpi_ros.compensation.message_time`:
+    ``nominal``, the default, ``sample_period`` apart; ``arrival``, the same but a pause of
+    the stream counted in whole periods; never the jittered arrival times, which a lead
+    filter would differentiate); a dead time cannot be inverted, so Gamma alone is
     compensated and a warning is logged. An extension is off while its keys are unset or
     0 / empty. Pushing a plain model (all five core keys, no extension key) switches an
     extension off. Extension keys alone (no core key) change the extension of the running
@@ -93,7 +95,7 @@ nobody asked for (with ``autostart: false`` it starts, and configure fails inste
 
 import struct
 import time
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from rclpy.node import Node
 from std_msgs.msg import Float64
@@ -103,6 +105,7 @@ from .multi_axis import MultiAxisCompensatorNode
 from .parameters import declare_parameters, parameter_values
 from .spinning import run_node_main
 from ..compensation import Compensator
+from ..compensation.message_time import MessageClock
 from ..compensation.parameters import compensator_parameters, specs_by_name, wants_multi_axis
 from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
@@ -162,10 +165,14 @@ class CompensatorNode(CompensatorNodeBase):
         self._model_version = 0
         declare_parameters(self, specs)
         self._declared()
-        # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
-        # Time object per message) or None: sample_period apart.
-        self._stamp = (time.monotonic if self.get_parameter('message_time').value == 'arrival'
-                       else _no_stamp)
+        # message_time (mpi_ros.compensation.message_time): nominal reads no clock (each
+        # message sample_period after the one before); arrival reads the steady clock
+        # (CLOCK_MONOTONIC, without building a Time object per message) and counts only the
+        # pauses of the stream, in whole sample periods.  Never the raw arrival times.
+        self._arrival_clock: Callable[[], float] = time.monotonic
+        self._message_clock = (MessageClock()
+                               if self.get_parameter('message_time').value == 'arrival'
+                               else None)
         # Last: with autostart, configure (_load: the model) and activate run here.
         self._open_topics(Float64, 'desired_displacement', 'current_command',
                           self._on_desired_displacement, 'desired displacements')
@@ -215,8 +222,8 @@ class CompensatorNode(CompensatorNodeBase):
         # encapsulation header, then the double), is decoded with one struct call and
         # answered with 12 bytes packed by another, published raw: no Float64 object is
         # built either way.  Every queued message is served in this callback (_drain), one
-        # by one, in order, each with its own command and, for an extended model, its own
-        # arrival time.
+        # by one, in order, each with its own command and, for an extended model with
+        # message_time arrival, its time on the stream's clock (nominal spacing; pauses).
         publish = self._publisher.handle.publish_raw
 
         def serve(data: bytes) -> None:
@@ -225,8 +232,10 @@ class CompensatorNode(CompensatorNodeBase):
             if compensator is None:
                 self._drop()          # no model, or not active: nothing published
                 return
-            current = (compensator.command(value, time=self._stamp()) if self._extended
-                       else compensator.command(value))
+            clock = self._message_clock
+            current = (compensator.command(value, time=clock.time(
+                self._arrival_clock(), compensator.sample_period))
+                if self._extended and clock is not None else compensator.command(value))
             publish(_PACK(_CDR_LE, current))
             self._messages_out += 1
 
@@ -262,6 +271,8 @@ class CompensatorNode(CompensatorNodeBase):
     def _unload(self) -> None:
         self._extended = False
         self._model_kind = 'none'
+        if self._message_clock is not None:
+            self._message_clock.reset()
 
     def _installed(self, model: Any, inverse: Any = None) -> None:
         """Count a model swapped in; build the core when there was none (``model`` given)."""
@@ -355,7 +366,3 @@ def make_node(**kwargs: Any) -> Node:
     if wants_multi_axis(given):
         return MultiAxisCompensatorNode(**kwargs)
     return CompensatorNode(**kwargs)
-
-
-def _no_stamp() -> None:
-    return None
