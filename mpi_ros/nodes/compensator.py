@@ -70,13 +70,13 @@ Extended models (:mod:`mpi_ros.extensions`)
     The ``model.creep.*``, ``model.rate_dependence.time_constant``,
     ``model.thermal_drift.*`` and ``model.dead_time`` keys add one extension to Gamma;
     the candidate is built with ``extended_model_from_params`` (a bad key is rejected with
-    a reason naming it). Creep, rate dependence and thermal drift plug their exact
-    per-step inverse into the one :class:`~mpi_ros.compensation.Compensator`, on the
-    stream's own time base (``message_time``, :mod:`mpi_ros.compensation.message_time`:
-    ``nominal``, the default, ``sample_period`` apart; ``arrival``, the same but a pause of
-    the stream counted in whole periods; never the jittered arrival times, which a lead
-    filter would differentiate); a dead time cannot be inverted, so Gamma alone is
-    compensated and a warning is logged. An extension is off while its keys are unset or
+    a reason naming it). Creep, rate dependence and thermal drift plug their per-step inverse
+    (the lag's lead filter bounded) into the one :class:`~mpi_ros.compensation.Compensator`, on
+    the stream's own time base (``message_time``, :mod:`mpi_ros.compensation.message_time`:
+    ``nominal``, the default, ``sample_period`` apart; ``arrival``, the same but a pause of the
+    stream counted in whole periods; never the jittered arrival times, which a lead filter
+    would differentiate); a dead time cannot be inverted, so Gamma alone is compensated and a
+    warning is logged. An extension is off while its keys are unset or
     0 / empty. Pushing a plain model (all five core keys, no extension key) switches an
     extension off. Extension keys alone (no core key) change the extension of the running
     Gamma. Every new model, of any kind, is installed into the running compensator
@@ -233,9 +233,11 @@ class CompensatorNode(CompensatorNodeBase):
                 self._drop()          # no model, or not active: nothing published
                 return
             clock = self._message_clock
-            current = (compensator.command(value, time=clock.time(
-                self._arrival_clock(), compensator.sample_period))
-                if self._extended and clock is not None else compensator.command(value))
+            if self._extended and clock is not None:
+                stamp = clock.time(self._arrival_clock(), compensator.sample_period)
+                current = compensator.command(value, time=stamp)
+            else:
+                current = compensator.command(value)
             publish(_PACK(_CDR_LE, current))
             self._messages_out += 1
 
