@@ -1,6 +1,7 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """Model extensions: parameter round trips, validation messages, simulation, compensation."""
 
+import math
 import warnings
 
 from mpi_ros.compensation import Compensator
@@ -109,7 +110,8 @@ def test_composite_model_chains_its_effects_and_inverts_exactly(seed):
                                creep.simulate(t, first_order_lag(t, x, 0.004)), atol=1e-15)
     again = extended_model_from_params(both.to_params())
     np.testing.assert_array_equal(again.simulate(t, x), both.simulate(t, x))
-    comp = Compensator(both, output_min=-10.0, output_max=10.0, start='record')
+    comp = Compensator(both, output_min=-10.0, output_max=10.0, start='record',
+                       lead_gain=math.inf)
     commands = [comp.command(s, time=tk) for s, tk in zip(both.simulate(t, x), t)]
     np.testing.assert_allclose(commands, x, atol=EXACT, rtol=0.0)
     three = extended_model_from_params({**both.to_params(), **dead.to_params()})
@@ -141,7 +143,8 @@ def test_extended_compensator_inverts_its_model(seed):
     t, x = _signal(rng)
     for model, tolerance in zip(_models(rng)[:3], (EXACT, EXACT, THERMAL)):
         # From the start the simulation starts from (the model's record start).
-        comp = Compensator(model, output_min=-10.0, output_max=10.0, start='record')
+        comp = Compensator(model, output_min=-10.0, output_max=10.0, start='record',
+                           lead_gain=math.inf)
         commands = [comp.command(s, time=tk) for s, tk in zip(model.simulate(t, x), t)]
         np.testing.assert_allclose(commands, x, atol=tolerance, rtol=0.0)
         assert comp.counters['clamped'] == 0

@@ -16,8 +16,9 @@ import sys
 
 from mpi_ros.compensation import MultiAxisCompensator
 from mpi_ros.compensation.loss import LOG_PERIOD_S, LossCounter
+from mpi_ros.compensation.message_time import MessageClock
 from mpi_ros.compensation.multi_axis import (
-    ArrivalTimes, AxisModels, chunk_times, InputCounts, joint_input, REPORTED_COUNTERS,
+    AxisModels, InputCounts, joint_input, REPORTED_COUNTERS,
     reported_counters,
 )
 from mpi_ros.compensation.parameters import (
@@ -279,16 +280,13 @@ def test_input_counts_tell_the_two_refusals_apart():
     assert inputs.last_malformed == 'not a samples x axes block'
 
 
-def test_arrival_times_chain_the_chunks():
-    arrivals = ArrivalTimes()
-    stamps = [(10.0, 5), (10.002, 5), (10.05, 5)]
-    times = [arrivals.times(t, k, 0.001) for t, k in stamps]
-    expected = [chunk_times(t, stamps[i - 1][0] if i else None, k, 0.001)
-                for i, (t, k) in enumerate(stamps)]
-    for got, want in zip(times, expected):
-        np.testing.assert_array_equal(got, want)
-    arrivals.reset()
-    np.testing.assert_array_equal(arrivals.times(20.0, 2, 0.5), [19.5, 20.0])
+def test_message_clock_chains_the_chunks_on_the_stream():
+    clock = MessageClock()
+    stamps = [(10.0, 5), (10.002, 5), (10.05, 5), (10.0501, 2)]
+    times = np.concatenate([clock.times(t, k, 0.001) for t, k in stamps])
+    np.testing.assert_allclose(times, 9.996 + 0.001 * np.arange(17), rtol=0, atol=1e-12)
+    clock.reset()
+    np.testing.assert_allclose(clock.times(20.0, 2, 0.5), [19.5, 20.0])
 
 
 def test_reported_counters_are_summed_over_the_axes():

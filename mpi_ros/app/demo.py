@@ -26,8 +26,9 @@ effect switched on (``actuator.creep_gain``, ``actuator.eddy_time_constant_s``; 
 order (14, 7): the plain MPI model and the extended model fitted by the extension's fit
 function (:mod:`mpi_ros.extensions`), each pushed into a fresh compensator in front of a
 fresh plant, tracking the same trajectory.  The identification excitation then has holds
-and bursts.  Both effects depend on time, and the plant and the compensator take a
-message's time from their steady clocks at its arrival, so the driver sends sample ``k``
+and bursts.  Both effects depend on time: the plant takes a command's time from its steady
+clock at its arrival, the compensator the stream's (``sample_period`` apart, its
+``message_time`` default), so the driver sends sample ``k``
 at ``t[k]`` in real time (:meth:`~mpi_ros.harness.driver.LoopDriver.exchange_paced`), still
 waiting for each answer; the bag's time stamps are the real send times.
 

@@ -76,7 +76,8 @@ def gamma_of(model: Any) -> MPIModel:
     return gamma
 
 
-def inverse_step_of(model: Any, inverse: MPIModel | None = None) -> 'InverseStep | None':
+def inverse_step_of(model: Any, inverse: MPIModel | None = None, *,
+                    lead_gain: float | None = None) -> 'InverseStep | None':
     """
     Return an extended model's per-step inverse, or None (plain, or not invertible).
 
@@ -87,6 +88,10 @@ def inverse_step_of(model: Any, inverse: MPIModel | None = None) -> 'InverseStep
     inverse : MPIModel, optional
         Gamma^-1 of the model, already built: handed to a step that takes it
         (``inverse_step(inverse=...)``), so it is built once.
+    lead_gain : float, optional
+        The high-frequency gain of a lag's lead filter, handed to a step that takes it
+        (``inverse_step(lead_gain=...)``); None: the step's default (bounded,
+        :data:`mpi_ros.extensions.rate_dependence.LEAD_GAIN`); ``inf``: the exact lead.
 
     Returns
     -------
@@ -97,8 +102,13 @@ def inverse_step_of(model: Any, inverse: MPIModel | None = None) -> 'InverseStep
     make = getattr(model, 'inverse_step', None)
     if make is None:
         return None
-    takes = inverse is not None and 'inverse' in inspect.signature(make).parameters
-    step: InverseStep | None = make(inverse=inverse) if takes else make()
+    accepted = inspect.signature(make).parameters
+    options: dict[str, Any] = {}
+    if inverse is not None and 'inverse' in accepted:
+        options['inverse'] = inverse
+    if lead_gain is not None and 'lead_gain' in accepted:
+        options['lead_gain'] = lead_gain
+    step: InverseStep | None = make(**options)
     return step
 
 
@@ -149,6 +159,11 @@ class Compensator:
         The identified current range [A] (e.g. from a parameter file's header); None: what
         the model's thresholds tell (:func:`~mpi_ros.operators.start.identified_ranges`).
         A model that tells none starts a rest start at its record start.
+    lead_gain : float, optional
+        High-frequency gain of the lead filter that inverts an input lag (rate dependence):
+        None, the default, bounds it
+        (:class:`~mpi_ros.extensions.rate_dependence.RateDependenceInverse`);
+        ``inf`` gives the exact, unbounded inverse of the lag (for comparison).
 
     Attributes
     ----------
@@ -168,9 +183,11 @@ class Compensator:
                  enabled: bool = True, sample_period: float = 1e-3,
                  memory: TurningPointMemory | None = None,
                  inverse: MPIModel | None = None, start: StartState | str = 'rest_low',
-                 current_range: tuple[float, float] | None = None) -> None:
+                 current_range: tuple[float, float] | None = None,
+                 lead_gain: float | None = None) -> None:
         self._check_limits(output_min, output_max)
         self.start = StartState.parse(start)
+        self.lead_gain = lead_gain
         _check_sample_period(sample_period)
         self.output_min = float(output_min)
         self.output_max = float(output_max)
@@ -235,7 +252,7 @@ class Compensator:
         gamma = gamma_of(model)
         if inverse is None:
             inverse = gamma.inverse()                  # (12)-(14), (22)-(25)
-        step = inverse_step_of(model, inverse)
+        step = inverse_step_of(model, inverse, lead_gain=self.lead_gain)
         if step is not None and not step.carry(self._step):
             step.start(self.last_command)
         h, s_inv, h_inv = gamma.hysteresis, inverse.superposition, inverse.hysteresis

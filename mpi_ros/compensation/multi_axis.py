@@ -9,9 +9,9 @@ on its slices of a few packed arrays: the columns are exactly the single-axis re
 
 What a multi-axis node keeps between its callbacks, on plain values: each axis's validated
 model until every axis has one (:class:`AxisModels`), the inputs it refused
-(:class:`InputCounts`), the arrival of the previous chunk (:class:`ArrivalTimes`), the
-counters it reports (:func:`reported_counters`) and the check of its ros2_control wiring
-(:func:`joint_input`).
+(:class:`InputCounts`), the counters it reports (:func:`reported_counters`) and the check
+of its ros2_control wiring (:func:`joint_input`).  The stream times of its chunks are
+:class:`mpi_ros.compensation.message_time.MessageClock`'s.
 """
 
 from collections.abc import Mapping, Sequence
@@ -30,9 +30,8 @@ from ..errors import DataError, ModelError, ParameterRejected
 from ..operators.memory import TurningPointMemory
 from ..operators.model import MPIModel
 
-__all__ = ['ArrivalTimes', 'AxisModels', 'InputCounts', 'JointOrder', 'MultiAxisCompensator',
-           'REPORTED_COUNTERS', 'chunk_times', 'joint_input', 'joint_names',
-           'reported_counters']
+__all__ = ['AxisModels', 'InputCounts', 'JointOrder', 'MultiAxisCompensator',
+           'REPORTED_COUNTERS', 'joint_input', 'joint_names', 'reported_counters']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -350,46 +349,6 @@ def joint_input(joints: Sequence[str], input_message: str) -> bool:
     return True
 
 
-def chunk_times(arrival: float, previous: float | None, samples: int,
-                sample_period: float) -> FloatArray:
-    """
-    Return the time stamps of the samples of a chunk that arrived at one time.
-
-    The last sample is at ``arrival``; the earlier ones are ``sample_period`` apart before
-    it, or closer, ``(arrival - previous) / samples`` apart, when the chunk came sooner
-    than ``samples`` sample periods after the previous one, so that the first sample still
-    comes after ``previous`` (``message_time: arrival`` of the multi-axis node).
-
-    Parameters
-    ----------
-    arrival : float
-        When the chunk arrived [s] (steady clock).
-    previous : float or None
-        When the previous chunk arrived [s]; None for the first one.
-    samples : int
-        Samples in the chunk, K >= 1.
-    sample_period : float
-        Nominal interval between two samples [s], > 0.
-
-    Returns
-    -------
-    ndarray of float, shape (K,)
-        Time stamps [s], increasing, the last one ``arrival``.
-
-    Examples
-    --------
-    >>> chunk_times(10.0, 9.0, 4, 0.1).tolist()
-    [9.7, 9.8, 9.9, 10.0]
-    >>> chunk_times(10.0, 9.9, 4, 0.1).tolist()
-    [9.925, 9.95, 9.975, 10.0]
-
-    """
-    spacing = sample_period
-    if previous is not None and arrival - previous < samples * sample_period:
-        spacing = (arrival - previous) / samples
-    return arrival - spacing * np.arange(samples - 1, -1, -1, dtype=np.float64)
-
-
 def _per_axis(value: float | Sequence[float], count: int, name: str) -> list[float]:
     if isinstance(value, (int, float)):
         values = [float(value)] * count
@@ -463,34 +422,6 @@ class JointOrder:
                                        f'{len(position)} positions; each joint needs its '
                                        'position')
         return np.asarray(position, dtype=np.float64)[index].reshape(1, -1), '', ''
-
-
-class ArrivalTimes:
-    """
-    The time stamps of chunks that arrive one after the other (``message_time: arrival``).
-
-    Remembers when the previous chunk arrived, for :func:`chunk_times`.
-
-    Examples
-    --------
-    >>> arrivals = ArrivalTimes()
-    >>> arrivals.times(9.0, 2, 0.1).tolist(), arrivals.times(10.0, 4, 0.1).tolist()
-    ([8.9, 9.0], [9.7, 9.8, 9.9, 10.0])
-
-    """
-
-    def __init__(self) -> None:
-        self.previous: float | None = None
-
-    def times(self, arrival: float, samples: int, sample_period: float) -> FloatArray:
-        """Return the stamps of a chunk that arrived at ``arrival`` (:func:`chunk_times`)."""
-        times = chunk_times(arrival, self.previous, samples, sample_period)
-        self.previous = arrival
-        return times
-
-    def reset(self) -> None:
-        """Forget the previous chunk (the next one is timed as the first)."""
-        self.previous = None
 
 
 class AxisModels:

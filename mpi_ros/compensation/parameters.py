@@ -303,12 +303,12 @@ START_STATE = ParameterSpec(
     constraints=f'{", ".join(START_CHOICES)}, or numbers separated by commas')
 
 MESSAGE_TIME = ParameterSpec(
-    'message_time', 'string', 'arrival',
-    'Time of each desired displacement for the lags of extended models: arrival '
-    '(steady clock when the message is served, as the plant simulator does; the last '
-    'sample of an array chunk of K, the earlier ones sample_period apart before it, or '
-    'closer when messages come faster) or nominal (sample_period apart, for a stream at a '
-    'fixed rate)',
+    'message_time', 'string', 'nominal',
+    'Time base of the desired displacements for the lags of extended models, never the '
+    'jittered arrival times (a lead filter would differentiate them): nominal (every sample '
+    'sample_period after the one before, across messages) or arrival (the same, but a gap '
+    'of more than 100 sample periods and 0.1 s between two messages is a pause of the '
+    'stream, counted in whole sample periods, for slow lags such as creep)',
     choices=('arrival', 'nominal'), read_only=True)
 
 #: The joint name of each axis (ros2_control); read-only.

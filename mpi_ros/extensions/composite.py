@@ -31,6 +31,7 @@ is fitted by its own fit on that current when there is no material effect.
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+import inspect
 from typing import Any
 
 import numpy as np
@@ -193,15 +194,31 @@ class CompositeModel(ExtendedModelBase):
         """Return the effects the compensator leaves out (no causal inverse: dead time, mode)."""
         return tuple(p.cause for p in self.parts if p.inverse_step() is None)
 
-    def inverse_step(self) -> 'CompositeInverse':
+    def inverse_step(self, *, lead_gain: float | None = None) -> 'CompositeInverse':
         """
-        Return the exact per-step inverse of the invertible parts.
+        Return the per-step inverse of the invertible parts.
 
         A dead time and the output stages (a mode) are left out: Gamma and the other
         stages are inverted, what they leave is the user's (feedback, input shaping).
 
+        Parameters
+        ----------
+        lead_gain : float, optional
+            Passed to the parts whose inverse is a lead filter (an input lag); None:
+            their default.
+
+        Returns
+        -------
+        CompositeInverse
+            The step.
+
         """
-        steps = tuple(step for step in (p.inverse_step() for p in self.inputs)
+        def step_of(part: Any) -> Any:
+            takes = (lead_gain is not None
+                     and 'lead_gain' in inspect.signature(part.inverse_step).parameters)
+            return part.inverse_step(lead_gain=lead_gain) if takes else part.inverse_step()
+
+        steps = tuple(step for step in (step_of(p) for p in self.inputs)
                       if step is not None)
         material = self.material
         core = material.inverse_step() if material is not None else None

@@ -6,7 +6,8 @@ Rate-dependence extension: a first-order input lag before the hysteresis operato
 with eddy currents in a magnetostrictive core; loops widen and round off as
 ``omega tau_e`` grows.  ``tau_e`` is found by a 1-D search (grid, then bounded refinement)
 with a full QP identification of Gamma on the lagged current per trial.  The compensator
-inverts the lag by the lead filter ``x = x_e + tau_e dx_e/dt`` (backward difference).
+inverts the lag by a bounded lead filter, the proper inverse ``(1 + s tau_e) / (1 + s tau_e / G)``
+(:class:`RateDependenceInverse`, ``G`` = :data:`LEAD_GAIN`).
 
 Parameter key (besides Gamma's ``model.*`` keys, operating point included):
 ``model.rate_dependence.time_constant`` (``tau_e`` [s], >= 0).
@@ -14,6 +15,7 @@ Parameter key (besides Gamma's ``model.*`` keys, operating point included):
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+import math
 from typing import Any
 
 import numpy as np
@@ -26,15 +28,20 @@ from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
 from .plant_steps import lag_state, lag_stream
+from ..errors import ModelError
 from ..identification import select_order
 from ..operators.model import MPIModel
 
 __all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',
-           'RATE_TIME_CONSTANT']
+           'LEAD_GAIN', 'RATE_TIME_CONSTANT']
 
 FloatArray = npt.NDArray[np.float64]
 
 RATE_TIME_CONSTANT = 'model.rate_dependence.time_constant'
+
+#: The lead filter's high-frequency gain ``G = tau_e / tau_f`` (:class:`RateDependenceInverse`):
+#: the command moves at most this many times as far as the lag-free target does.
+LEAD_GAIN = 10.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,9 +78,24 @@ class RateDependentModel(ExtendedModelBase):
         params[RATE_TIME_CONSTANT] = float(self.time_constant)
         return params
 
-    def inverse_step(self) -> 'RateDependenceInverse':
-        """Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses."""
-        return RateDependenceInverse(self)
+    def inverse_step(self, *, lead_gain: float | None = None) -> 'RateDependenceInverse':
+        """
+        Return the per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses.
+
+        Parameters
+        ----------
+        lead_gain : float, optional
+            High-frequency gain ``G`` of the lead filter (default :data:`LEAD_GAIN`);
+            ``inf``: the exact, unbounded inverse of the lag.
+
+        Returns
+        -------
+        RateDependenceInverse
+            The step.
+
+        """
+        return RateDependenceInverse(self, lead_gain=LEAD_GAIN if lead_gain is None
+                                     else lead_gain)
 
     def input_signal(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """Return the current [A] the material sees (this input stage's output)."""
@@ -88,48 +110,95 @@ class RateDependentModel(ExtendedModelBase):
 
 class RateDependenceInverse:
     """
-    Per-step inverse of the input lag: the lead filter ``x = x_e + tau_e dx_e/dt``.
+    Per-step inverse of the input lag: a bounded lead filter.
 
-    ``x_e,k = Gamma^-1[s_c]`` and the lag update solved for the present current (exact).
+    The exact inverse of the lag, ``x = x_e + tau_e dx_e/dt``, differentiates: solved per
+    step for the present current it multiplies a change of the target by ``1 / b`` (about
+    ``2 tau_e / h``), so a message ``h`` = 0.1 ms after the previous one in a 1 kHz stream
+    swung the command by 100 times the target's step, and its first-order-hold form has a
+    pole near -1 (the command rings at the Nyquist rate after every disturbance).  This step
+    is the proper inverse ``(1 + s tau_e) / (1 + s tau_f)`` with ``tau_f = tau_e / G``
+    (``G`` = :data:`LEAD_GAIN`): the target ``u = Gamma^-1[s_c]`` is filtered by the lag
+    ``tau_f`` (``g``, first-order hold, exact for any interval), and
+
+    ``x = g + G (u - g)``,
+
+    whose lag ``tau_e`` is ``g`` exactly in continuous time (``tau_e dg/dt + g = G (u - g) +
+    g``): the material follows the target ``tau_f`` behind instead of ``tau_e`` behind.
+
+    The bound: ``g`` is a convex combination of the earlier targets (the lag's coefficients
+    are positive), so ``|x - u| = (G - 1) |u - g|``, at most ``G - 1`` times how far the
+    target moved within the last few ``tau_f``, whatever the intervals: a bunched message
+    (``h`` -> 0) leaves ``g`` where it was and moves the command by at most ``G`` times the
+    target's own change; a late one (``h`` >> ``tau_f``) settles ``g`` on ``u``, and the
+    command on the target.  Bounded by the model: ``G`` is the high-frequency gain of the
+    lead, ``tau_e / tau_f``.
+
+    With ``lead_gain = inf`` it is the exact inverse of the lag, solved per step for the
+    present current, ``x_k = x_(k-1) + (u_k - a x_e - (1 - a) x_(k-1)) / b`` (unbounded: for
+    comparison, and for the round trip ``Gamma^-1[Gamma[x]] = x``).
 
     Parameters
     ----------
     model : RateDependentModel
         The extended model.
+    lead_gain : float
+        ``G`` >= 1; ``inf``: the exact inverse.
 
     """
 
-    def __init__(self, model: RateDependentModel) -> None:
+    def __init__(self, model: RateDependentModel, *, lead_gain: float = LEAD_GAIN) -> None:
+        if not lead_gain >= 1.0:
+            msg = f'lead_gain must be >= 1 (or inf: the exact inverse); found {lead_gain!r}'
+            raise ModelError(msg)
         self.model = model
-        self.state = np.zeros(1)          # the lagged current x_e [A]
-        self._a, self._b = 0.0, 1.0
+        self.lead_gain = float(lead_gain)
+        self.state = np.zeros(1)          # the lagged current x_e [A] (H's input)
+        self._filtered = (0.0, 0.0)       # (u, g) of the last step [A]
+        self._pending: tuple[float, float] | None = None
+        self._a, self._b = 0.0, 1.0       # the lag tau_e
+        self._af, self._bf = 0.0, 1.0     # the lead's filter tau_f
 
     def start(self, current: float) -> None:
-        """Settle the lag at ``current`` [A]."""
+        """Settle the lag and the lead's filter at ``current`` [A]."""
         self.state = np.array([float(current)])
+        self._filtered = (float(current), float(current))
 
     def carry(self, other: object) -> bool:
-        """Take over the lagged current of another rate-dependence step."""
+        """Take over the lagged current and the lead's filter of another rate step."""
         if isinstance(other, RateDependenceInverse):
             self.state = other.state.copy()
+            self._filtered = other._filtered
             return True
         return False
 
     def prepare(self, previous: float, interval: float, started: bool) -> None:
-        """Fix the lag coefficients for this step."""
-        if started and self.model.time_constant > 0.0:
-            self._a, self._b = lag_coefficients(interval, self.model.time_constant)
+        """Fix the coefficients of the lag and of the lead's filter for this step."""
+        tau = self.model.time_constant
+        self._pending = None
+        if started and tau > 0.0:
+            self._a, self._b = lag_coefficients(interval, tau)
+            self._af, self._bf = ((1.0, 0.0) if math.isinf(self.lead_gain) else
+                                  lag_coefficients(interval, tau / self.lead_gain))
         else:
             self._a, self._b = 0.0, 1.0
+            self._af, self._bf = 0.0, 1.0
 
     def invert(self, v: float, previous: float, started: bool,
                inverse: Callable[[float, float], float]) -> float:
-        """Return the current [A] that drives the lagged current to ``Gamma^-1`` of ``v``."""
+        """Return the current [A] of the bounded lead for the target ``Gamma^-1`` of ``v``."""
         target = inverse(v, 0.0)
-        if not started:
+        if not started or self.model.time_constant <= 0.0:
+            self._pending = (target, target)
             return target
-        a, b = self._a, self._b
-        return previous + (target - a * float(self.state[0]) - (1.0 - a) * previous) / b
+        if math.isinf(self.lead_gain):
+            self._pending = (target, target)
+            a, b = self._a, self._b
+            return previous + (target - a * float(self.state[0]) - (1.0 - a) * previous) / b
+        u0, g0 = self._filtered
+        g = self._af * g0 + (1.0 - self._af) * u0 + self._bf * (target - u0)
+        self._pending = (target, g)
+        return g + self.lead_gain * (target - g)
 
     def advance(self, current: float, previous: float, started: bool) -> float:
         """Update the lag with the applied ``current``; return the lagged current."""
@@ -137,6 +206,10 @@ class RateDependenceInverse:
         material = (a * float(self.state[0]) + (1.0 - a) * previous + b * (current - previous)
                     if started else current)
         self.state[0] = material
+        # Not inverted this step (the linear map, for comparison): the filter settles on
+        # what the material sees.
+        self._filtered = self._pending if self._pending is not None else (material, material)
+        self._pending = None
         return material
 
 

@@ -120,8 +120,9 @@ class LoopDriver(Node):
         """
         Publish ``values[k]`` at ``times[k]`` in real time, each in lock step.
 
-        The plant simulator and the compensator time a message by their steady clock at
-        its arrival, so creep or an eddy-current lag see the real command rate only if
+        The plant simulator times a command by its steady clock at its arrival (the
+        compensator by its ``message_time``: by default ``sample_period`` apart), so the
+        plant's creep or eddy-current lag see the rate the compensator assumes only if
         the samples are sent on schedule: sample ``k`` is published when ``times[k] -
         times[0]`` seconds have passed since the first one (or at once, if the previous
         answer came later), then its answer is awaited as in :meth:`exchange`.

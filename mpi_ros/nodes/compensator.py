@@ -75,11 +75,13 @@ Extended models (:mod:`mpi_ros.extensions`)
     The ``model.creep.*``, ``model.rate_dependence.time_constant``,
     ``model.thermal_drift.*`` and ``model.dead_time`` keys add one extension to Gamma;
     the candidate is built with ``extended_model_from_params`` (a bad key is rejected with
-    a reason naming it). Creep, rate dependence and thermal drift plug their exact
-    per-step inverse into the one :class:`~mpi_ros.compensation.Compensator`, fed with
-    each message's arrival time on the steady clock (``message_time``; queued messages
-    served together get close times); a dead time cannot be inverted, so Gamma alone is
-    compensated and a warning is logged. An extension is off while its keys are unset or
+    a reason naming it). Creep, rate dependence and thermal drift plug their per-step inverse
+    (the lag's lead filter bounded) into the one :class:`~mpi_ros.compensation.Compensator`, on
+    the stream's own time base (``message_time``, :mod:`mpi_ros.compensation.message_time`:
+    ``nominal``, the default, ``sample_period`` apart; ``arrival``, the same but a pause of the
+    stream counted in whole periods; never the jittered arrival times, which a lead filter
+    would differentiate); a dead time cannot be inverted, so Gamma alone is compensated and a
+    warning is logged. An extension is off while its keys are unset or
     0 / empty. Pushing a plain model (all four core keys, no extension key) switches an
     extension off. Extension keys alone (no core key) change the extension of the running
     Gamma. Every new model, of any kind, is installed into the running compensator
@@ -98,7 +100,7 @@ nobody asked for (with ``autostart: false`` it starts, and configure fails inste
 
 import struct
 import time
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -113,6 +115,7 @@ from ..array_layout import FLOAT64_SIZE, malformed_float64
 from ..compensation import Compensator
 from ..compensation.adaptation import Adaptation, AdaptationSettings, AdaptationWorker
 from ..compensation.multi_axis import InputCounts
+from ..compensation.message_time import MessageClock
 from ..compensation.parameters import compensator_parameters, specs_by_name, wants_multi_axis
 from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
@@ -183,10 +186,14 @@ class CompensatorNode(CompensatorNodeBase):
         self._adapt = bool(self.get_parameter('adaptation.enabled').value)
         if self._adapt:
             self._adaptation_timer = self.create_timer(0.1, self._adaptation_tick)
-        # Steady clock (CLOCK_MONOTONIC, like rclpy's STEADY_TIME, without building a
-        # Time object per message) or None: sample_period apart.
-        self._stamp = (time.monotonic if self.get_parameter('message_time').value == 'arrival'
-                       else _no_stamp)
+        # message_time (mpi_ros.compensation.message_time): nominal reads no clock (each
+        # message sample_period after the one before); arrival reads the steady clock
+        # (CLOCK_MONOTONIC, without building a Time object per message) and counts only the
+        # pauses of the stream, in whole sample periods.  Never the raw arrival times.
+        self._arrival_clock: Callable[[], float] = time.monotonic
+        self._message_clock = (MessageClock()
+                               if self.get_parameter('message_time').value == 'arrival'
+                               else None)
         # Last: with autostart, configure (_load: the model) and activate run here.
         self._open_topics(Float64, 'desired_displacement', 'current_command',
                           self._on_desired_displacement, 'desired displacements')
@@ -244,10 +251,11 @@ class CompensatorNode(CompensatorNodeBase):
         # encapsulation header, then the double), is decoded with one struct call and
         # answered with 12 bytes packed by another, published raw: no Float64 object is
         # built either way.  Every queued message is served in this callback (_drain), one
-        # by one, in order, each with its own command and, for an extended model, its own
-        # arrival time.  The bytes are checked before they are decoded (any process on
-        # the domain may publish anything): a message that is not a CDR Float64 is
-        # counted as malformed (/diagnostics) and dropped.
+        # by one, in order, each with its own command and, for an extended model with
+        # message_time arrival, its time on the stream's clock (nominal spacing; pauses).
+        # The bytes are checked before they are decoded (any process on the domain may
+        # publish anything): a message that is not a CDR Float64 is counted as malformed
+        # (/diagnostics) and dropped.
         publish = self._publisher.handle.publish_raw
         record = self._record
         inputs = self._inputs
@@ -261,8 +269,12 @@ class CompensatorNode(CompensatorNodeBase):
             if compensator is None:
                 self._drop()          # no model, or not active: nothing published
                 return
-            current = (compensator.command(value, time=self._stamp()) if self._extended
-                       else compensator.command(value))
+            clock = self._message_clock
+            if self._extended and clock is not None:
+                stamp = clock.time(self._arrival_clock(), compensator.sample_period)
+                current = compensator.command(value, time=stamp)
+            else:
+                current = compensator.command(value)
             publish(_PACK(_CDR_LE, current))
             self._messages_out += 1
             if record is not None:
@@ -303,6 +315,8 @@ class CompensatorNode(CompensatorNodeBase):
         self._extended = False
         self._model_kind = 'none'
         self._stop_adaptation()
+        if self._message_clock is not None:
+            self._message_clock.reset()
 
     def _installed(self, model: Any, inverse: Any = None) -> None:
         """Count a model swapped in; build the core when there was none (``model`` given)."""
@@ -500,7 +514,3 @@ def make_node(**kwargs: Any) -> Node:
     if wants_multi_axis(given):
         return MultiAxisCompensatorNode(**kwargs)
     return CompensatorNode(**kwargs)
-
-
-def _no_stamp() -> None:
-    return None

@@ -66,18 +66,15 @@ Extended models per axis
     logged).  The plain axes keep the compiled loop; an axis with an effect is stepped by
     its own compensator, sample by sample, next to it.
 
-Time stamps of a chunk (``message_time``)
-    An array message of K samples arrives at one time.  With ``nominal`` the lags see
+Time stamps of a chunk (``message_time``, :mod:`mpi_ros.compensation.message_time`)
+    An array message of K samples arrives at one time; its samples are the stream's own
+    time base, never the jittered arrivals.  With ``nominal`` (the default) the lags see
     ``sample_period`` between every two samples, across messages too (no clock is read).
-    With ``arrival`` (the default) the message's last sample is at its arrival time ``t``
-    on the steady clock (as the single-axis node and, for a bag, the recordings reader:
-    last sample at the message time) and the earlier ones ``sample_period`` apart before
-    it, or evenly spread over the time since the previous message's arrival ``t_prev``
-    when that is shorter than K sample periods (a burst of queued messages), so that the
-    times always increase: spacing ``min(sample_period, (t - t_prev) / K)``
-    (:func:`mpi_ros.compensation.multi_axis.chunk_times`).  K = 1 gives the single-axis
-    node's time, the arrival.  The clock is read only while some axis has an effect with
-    lags.
+    With ``arrival`` the same, but a message that comes more than the pause threshold
+    (100 sample periods, at least 0.1 s) after the previous one starts after the pause,
+    counted in whole sample periods (:class:`mpi_ros.compensation.message_time.MessageClock`;
+    the first message's last sample is at its arrival on the steady clock).  The clock is
+    read only while some axis has an effect with lags.
 
 Model updates
     The single-axis rule, per axis: a request is laid over the running values, and every
@@ -109,8 +106,9 @@ from ..array_layout import (
     ArrayLayoutError, block_of, encode_flat_float64_multiarray, encode_float64_multiarray,
 )
 from ..compensation import MultiAxisCompensator
+from ..compensation.message_time import MessageClock
 from ..compensation.multi_axis import (
-    ArrivalTimes, AxisModels, chunk_times, InputCounts, joint_input, joint_names, JointOrder,
+    AxisModels, InputCounts, joint_input, joint_names, JointOrder,
     reported_counters,
 )
 from ..compensation.parameters import (
@@ -122,7 +120,7 @@ from ..compensation.updates import apply, axis_key, load_axes, Prepared, refusal
 from ..errors import ParameterRejected
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
-           'axis_key', 'axis_parameters', 'chunk_times', 'joint_names']
+           'axis_key', 'axis_parameters', 'joint_names']
 
 #: Most messages served in one subscription callback (patched by tests).
 _DRAIN_LIMIT = DRAIN_LIMIT
@@ -177,11 +175,12 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._axis_models = AxisModels(self.axes)
         self._compensator: Optional[MultiAxisCompensator] = None
         # message_time: arrival reads the steady clock (CLOCK_MONOTONIC) per message while
-        # some axis has an effect with lags (_timed); nominal never does.
+        # some axis has an effect with lags (_timed) and counts only the stream's pauses
+        # (MessageClock); nominal never reads it.
         self._arrival_clock: Optional[Callable[[], float]] = (
             time.monotonic if self.get_parameter('message_time').value == 'arrival' else None)
         self._timed = False
-        self._arrivals = ArrivalTimes()
+        self._message_clock = MessageClock()
         self._inputs = InputCounts()
         self._joint_order = JointOrder(self.joints or ())
         # Last: with autostart, configure (_load: the models) and activate run here.
@@ -280,11 +279,11 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
             self._messages_out += 1
 
     def _timed_command(self, compensator: MultiAxisCompensator, block: Any) -> Any:
-        """Command a block with its samples' times (message_time: arrival, see chunk_times)."""
+        """Command a block with its samples' stream times (message_time: arrival)."""
         clock = self._arrival_clock
         now = clock() if clock is not None else 0.0      # _timed: always a clock
-        return compensator.command(
-            block, self._arrivals.times(now, block.shape[0], compensator.sample_period))
+        return compensator.command(block, self._message_clock.times(
+            now, block.shape[0], compensator.sample_period))
 
     # -- parameters ---------------------------------------------------------------------
     def _running(self, prefix: str) -> bool:
@@ -326,7 +325,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
     def _unload(self) -> None:
         self._axis_models.reset()
         self._timed = False
-        self._arrivals.reset()
+        self._message_clock.reset()
 
     def _effective_limits(self) -> Tuple[List[float], List[float]]:
         """Return each axis's applied range [A]: its own keys, else the node-wide ones."""

@@ -284,3 +284,52 @@ def test_model_keys_declared_with_units(make_node):
         assert '[s]' in node.describe_parameter(key).description
     assert '[1/A]' in node.describe_parameter('model.thermal_drift.weight').description
     assert all(node.has_parameter(key) for key in MODEL_KEYS)
+
+
+@pytest.mark.parametrize('message_time', ['default', 'arrival'])
+def test_message_path_does_not_depend_on_when_messages_arrive(ros_context, make_node,
+                                                              message_time):
+    """Jittered, bunched, late arrivals: the lagged model's commands of nominal spacing."""
+    overrides = limits() + typed(dict(MODEL_A, **RATE))
+    if message_time != 'default':
+        overrides.append(Parameter('message_time', value=message_time))
+    node = make_node(overrides)
+    # The node's steady clock replaced by a recorded one (read only with arrival).
+    rng = np.random.default_rng(3)
+    gaps = iter(np.where(rng.random(200) < 0.2, 1e-6, rng.lognormal(math.log(1e-3), 1.0, 200)))
+    readings = []
+
+    def clock():
+        readings.append((readings[-1] if readings else 50.0) + float(next(gaps)))
+        return readings[-1]
+
+    node._arrival_clock = clock
+    helper = rclpy.create_node('desired_source', context=ros_context)
+    received = []
+    publisher = helper.create_publisher(Float64, 'desired_displacement', 1000)
+    helper.create_subscription(Float64, 'current_command', lambda m: received.append(m.data),
+                               1000)
+    executor = events_executor(ros_context)
+    executor.add_node(node)
+    executor.add_node(helper)
+    try:
+        deadline = time.monotonic() + 5.0
+        while publisher.get_subscription_count() < 1 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        for value in DESIRED[:200]:
+            publisher.publish(Float64(data=float(value)))
+            executor.spin_once(timeout_sec=0.0)
+        deadline = time.monotonic() + 10.0
+        while len(received) < 200 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        executor.shutdown()
+        helper.destroy_node()
+    assert len(received) == 200
+    assert len(readings) == (200 if message_time == 'arrival' else 0)
+    nominal = Compensator(extended_model_from_params(dict(MODEL_A, **RATE)),
+                          output_min=OUTPUT_MIN, output_max=OUTPUT_MAX, sample_period=1e-3)
+    expected = [nominal.command(float(d)) for d in DESIRED[:200]]
+    # (to the rounding of the stream times near 50 s: 1e-14 s in a 1 ms interval)
+    np.testing.assert_allclose(received, expected, rtol=0.0, atol=1e-9)
+    assert node.counters['bad_time'] == 0

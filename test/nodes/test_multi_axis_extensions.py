@@ -7,8 +7,8 @@ Three axes: axis 0 with creep, axis 1 plain, axis 2 with rate dependence
 subscription and publisher and a real subscriber, and every column must equal a
 single-axis core :class:`mpi_ros.compensation.Compensator` with that axis's model fed the
 same values and times: ``message_time: nominal`` (``sample_period`` apart), and
-``arrival`` with the node's clock replaced by a recorded one and the times of
-:func:`mpi_ros.nodes.multi_axis.chunk_times`.  Parameter requests go through the node's
+``arrival`` with the node's clock replaced by a recorded one and the stream times of
+:class:`mpi_ros.compensation.message_time.MessageClock`.  Parameter requests go through the node's
 parameter services (``AsyncParameterClient``, what ``ros2 param`` uses).  Each test
 holds a ROS_DOMAIN_ID of its own (:func:`test.ros_domain.claim_domain`): the node names
 are the usual ``/compensator``, and another run on this machine must not answer.  No
@@ -19,9 +19,10 @@ import itertools
 import time
 
 from mpi_ros.compensation import Compensator
+from mpi_ros.compensation.message_time import MessageClock
 from mpi_ros.errors import ParameterRejected
 from mpi_ros.extensions import extended_model_from_params
-from mpi_ros.nodes.multi_axis import axis_key, chunk_times, MultiAxisCompensatorNode
+from mpi_ros.nodes.multi_axis import axis_key, MultiAxisCompensatorNode
 import numpy as np
 import pytest
 import rclpy
@@ -210,12 +211,14 @@ def test_nominal_every_column_equals_its_single_axis_core(rig):
     assert values['bad_time'] == '0'
 
 
-def test_arrival_gives_the_chunk_its_time_rule(rig):
+def test_arrival_times_the_chunks_on_the_stream_not_on_the_jitter(rig):
     models = gammas()
     started = rig(overrides_for(models, message_time='arrival'))
     # The node's steady clock replaced by a recorded one: chunks of 5 samples that come
-    # 5 sample periods apart, sooner (a burst: spread evenly) and later (a gap).
-    steps = itertools.cycle([0.005, 0.002, 0.0004, 0.03, 0.005, 0.001])
+    # 5 sample periods apart, sooner (a burst), later (a busy executor) and, once, after
+    # a pause of 0.5 s.
+    steps = itertools.chain([0.005, 0.002, 0.0004, 0.03, 0.005, 0.001] * 3, [0.5],
+                            itertools.cycle([0.005, 0.0004, 0.02]))
     stamps = []
 
     def clock():
@@ -227,24 +230,22 @@ def test_arrival_gives_the_chunk_its_time_rule(rig):
     chunks = chunks_of(desired, [5])
     commands = started.send(chunks)
     assert len(stamps) == len(chunks)                      # one clock reading per message
-    times = np.concatenate([chunk_times(t, stamps[i - 1] if i else None, 5, SAMPLE_PERIOD)
-                            for i, t in enumerate(stamps)])
-    assert np.all(np.diff(times) > 0.0)
+    stream = MessageClock()
+    times = np.concatenate([stream.times(t, 5, SAMPLE_PERIOD) for t in stamps])
+    assert stream.pauses == 1
+    # The 19th chunk (samples 90-94) came 0.5 s after the 18th: its last sample 0.5 s
+    # after the 18th's last one; every other interval the sample period.
+    intervals = np.diff(times)
+    assert intervals[89] == pytest.approx(0.496, abs=1e-9)
+    np.testing.assert_allclose(np.delete(intervals, 89), SAMPLE_PERIOD, rtol=0, atol=1e-9)
     cores = [core(m, e) for m, e in zip(models, EXTENSIONS)]
     assert_same(commands, reference(cores, desired, times))
-    # The times matter: nominal spacing gives other commands on the rate axis.
+    # Until the pause the jittered arrivals give the nominal commands; the pause matters.
     nominal = reference([core(m, e) for m, e in zip(models, EXTENSIONS)], desired)
-    assert np.max(np.abs(commands[:, 2] - nominal[:, 2])) > 1e-6
+    # (to the rounding of stream times near 100 s: 1e-14 s in a 1 ms interval)
+    np.testing.assert_allclose(commands[:90], nominal[:90], rtol=0, atol=1e-9)
+    assert np.max(np.abs(commands[90:, 0] - nominal[90:, 0])) > 1e-9
     assert started.node.counters['bad_time'] == 0
-
-
-def test_chunk_times_end_at_the_arrival_and_always_increase():
-    assert chunk_times(7.0, None, 1, 1e-3).tolist() == [7.0]    # one sample: the arrival
-    np.testing.assert_allclose(chunk_times(7.0, 6.0, 3, 1e-3), [6.998, 6.999, 7.0],
-                               rtol=0, atol=1e-12)
-    np.testing.assert_allclose(chunk_times(7.0, 6.9994, 3, 1e-3), [6.9996, 6.9998, 7.0],
-                               rtol=0, atol=1e-12)
-    assert chunk_times(7.0, None, 4, 1e-3)[0] == pytest.approx(6.997, abs=1e-12)
 
 
 def test_extension_keys_alone_change_one_axis_only(rig):
