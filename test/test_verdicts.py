@@ -48,14 +48,19 @@ def test_identify_on_time_in_ms_suggests_the_time_scale(tmp_path, capsys):
     cfg = ActuatorConfig(noise_std_m=2e-8, dead_time_s=0.0206)
     t, x = identification_excitation(10.0, sample_rate=1000.0, seed=1)
     y = MagnetostrictiveActuator(cfg, seed=1).simulate(t, x)
-    write_csv_columns(tmp_path / 'ms.csv', {'time_ms': 1e3 * t, 'current': x, 'displacement': y})
-    argv = ['identify', str(tmp_path / 'ms.csv'), '--time-column', 'time_ms', '--order', '6,3',
+    # A time column whose name gives no unit (a '_ms' suffix is read as ms: test_units.py).
+    write_csv_columns(tmp_path / 'ms.csv', {'t': 1e3 * t, 'current': x, 'displacement': y})
+    argv = ['identify', str(tmp_path / 'ms.csv'), '--time-column', 't', '--order', '6,3',
             '-o', str(tmp_path / 'p.yaml'), '--json', str(tmp_path / 'fit.json')]
     assert main(argv) == 0
     err = capsys.readouterr().err
     fit = json.loads((tmp_path / 'fit.json').read_text(encoding='utf-8'))
     assert fit['dynamics']['dead_time'] > 1.0                    # "seconds"
-    [warning] = [line for line in err.splitlines() if line.startswith('warning:')]
+    # Two warnings: the units rule's (samples 1 s apart) and the implausible dead time.
+    warnings = [line for line in err.splitlines() if line.startswith('warning:')]
+    [warning] = [line for line in warnings if 'dead time' in line]
+    [spacing] = [line for line in warnings if 'dead time' not in line]
+    assert 'the samples are 1 s apart' in spacing and '--time-unit ms' in spacing
     assert f'dead time {fit["dynamics"]["dead_time"]:.3g} s (plausible: up to 1 s)' in warning
     assert 'pass --time-scale 1e-3 (us: 1e-6) and identify again' in warning
     assert 'the record has a sample period of 1 s' in warning

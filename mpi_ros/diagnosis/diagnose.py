@@ -303,8 +303,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         # A split's training part that holds only part of the record's loops is refused for
         # what that part shows; the cause is the split: say so, with the fraction outside.
         outside = (_outside_training(xt, xv[start:], {}) if validation is None else '')
-        if not outside:
-            raise
+        if not outside or return_point_drift(xt, yt).drifts:
+            raise                       # no split to blame, or a drift: the record's cause
         msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
                f' the likely cause is the split: {outside}; pass a record of several cycles,'
                ' another --split, or a separate --validate record')
