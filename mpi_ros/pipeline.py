@@ -217,7 +217,8 @@ def fit_bag(path: str, *, input_topic: str = '/current_command',
         written, diagnosis = diagnosed_parameters(fit.recording, written, order=order)
     parameters = {key: value for key, value in written.items()
                   if key not in LIMIT_KEYS and key != INPUT_QUANTITY_KEY}
-    missing = [key for key in MODEL_KEYS + OPERATING_POINT_KEYS if key not in parameters]
+    missing = [key for key in MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,)
+               if key not in parameters]
     if missing:
         msg = f'identify returned parameters {sorted(parameters)}; missing {missing}'
         raise IdentificationError(msg)

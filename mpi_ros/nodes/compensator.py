@@ -114,8 +114,8 @@ from .spinning import run_node_main
 from ..array_layout import FLOAT64_SIZE, malformed_float64
 from ..compensation import Compensator
 from ..compensation.adaptation import Adaptation, AdaptationSettings, AdaptationWorker
-from ..compensation.multi_axis import InputCounts
 from ..compensation.message_time import MessageClock
+from ..compensation.multi_axis import InputCounts
 from ..compensation.parameters import compensator_parameters, specs_by_name, wants_multi_axis
 from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
