@@ -1004,7 +1004,7 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         if picked is None:
             segments, rule = jointly, ('joint' if rule is None else rule)
         elif rule is not None:
-            segments = picked[0]
+            segments = picked
         else:
             # The rules, judged on held-out folds: weights of the determined rows or of
             # every row, with the start states chosen under the determined rows' weights;
@@ -1012,18 +1012,20 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
             # A rule replaces the best so far only when it is lower beyond the folds' noise
             # (see better_on_folds); on a tie the in-sample choice stays (the start chosen
             # jointly: it also reproduces the record's start best).
-            options = {'joint start': jointly, 'determined': picked[0], 'joint': picked[0]}
+            options = {'joint start': jointly, 'determined': picked, 'joint': picked}
             for label, option in options.items():
                 folds[label] = fitter.fold_errors(option, _weight_rule(label), x, y)
                 if rule is None or better_on_folds(folds[label], folds[rule]):
                     rule, segments = label, option
     rule = rule or 'joint'
-    if rule == 'determined' and fitter.determined_fitter(segments) is None:
+    if rule == 'determined' and fitter.determined_parts(segments) is None:
         rule = 'joint'
     burn = int(burn_in or 0)
     every = fitter
     fitter = _rule_fitter(every, segments, _weight_rule(rule), burn)
     parts = fitter.parts(segments)
+    if fitter is every and rule == 'determined':
+        parts = fitter.determined_parts(segments) or parts      # cached: no new pass
     weights = fitter.solve(parts, tolerance)
     if burn_in is None and choose:
         burn = every.undetermined_start(segments, weights)
@@ -1035,6 +1037,11 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
                      ' explains them (the record starts on a transient or after a history'
                      ' none of the candidates covers)')
     fit = _finish(record, design, fitter, parts, weights, segments, x, held, burn, notes)
+    if _weight_rule(rule) == 'determined' and fit.fitted is not None:
+        fitted = fit.fitted.copy()
+        for seg in segments:
+            fitted[seg.start:fitter.split(seg)] = False
+        fit = replace(fit, fitted=fitted)
     if validate and rule not in folds:
         folds[rule] = _rule_fitter(every, segments, 'joint', burn).fold_errors(
             segments, _weight_rule(rule), x, y)
@@ -1049,8 +1056,9 @@ def _weight_rule(label: str) -> str:
 def _rule_fitter(fitter: '_Fitter', segments: list[Segment], rule: str,
                  burn: int) -> '_Fitter':
     # The fitter of the final weights: rows of the burn-in left out, and with the rule
-    # 'determined' the rows before each segment's plays are determined.
-    if not burn and rule != 'determined':
+    # 'determined' the rows before each segment's plays are determined (without a burn-in
+    # the fitter itself: its determined_parts are those rows).
+    if not burn:
         return fitter
     classes = fitter.classes.copy()
     classes[:burn] = -1
@@ -1064,10 +1072,11 @@ def better_on_folds(candidate: FoldErrors, incumbent: FoldErrors) -> bool:
     """
     Tell whether a rule's held-out error is lower than another's beyond the folds' noise.
 
-    The paired differences of the folds' mean squared errors must have a negative mean
-    larger than its standard error (one sigma over the folds), and the pooled held-out RMS
-    error must fall by more than :data:`_FOLD_FLOOR` of the output's range; otherwise they
-    tie.
+    The pooled held-out RMS error must fall by more than :data:`_FOLD_FLOOR` of the output's
+    range, and either the paired differences of the folds' mean squared errors have a
+    negative mean larger than its standard error (one sigma over the folds), or no fold is
+    worse by more than :data:`_FOLD_FLOOR` (a gain in one fold only, such as the record's
+    start, is a gain); otherwise they tie.
 
     Parameters
     ----------
@@ -1090,9 +1099,13 @@ def better_on_folds(candidate: FoldErrors, incumbent: FoldErrors) -> bool:
     d = (a - b)[finite]
     if d.size < 2:
         return bool(candidate.error < incumbent.error)
+    if not candidate.error < incumbent.error - _FOLD_FLOOR:
+        return False
     noise = float(np.std(d, ddof=1)) / math.sqrt(d.size)
-    return bool(float(np.mean(d)) < -noise
-                and candidate.error < incumbent.error - _FOLD_FLOOR)
+    rms_a = np.asarray(candidate.per_fold, dtype=np.float64)[finite]
+    rms_b = np.asarray(incumbent.per_fold, dtype=np.float64)[finite]
+    dominates = bool(np.all(rms_a <= rms_b + _FOLD_FLOOR))
+    return bool(float(np.mean(d)) < -noise or dominates)
 
 
 def fold_index(size: int, folds: int = FOLDS) -> npt.NDArray[np.int8]:
@@ -1218,6 +1231,7 @@ class _Fitter:
         self._dead_zones: dict[int, FloatArray] = {}
         self._splits: dict[tuple[int, int], int] = {}
         self._ends: dict[tuple[int, int], FloatArray] = {}
+        self._fold_suffix: dict[tuple[int, int, int], GramParts] = {}
 
     def _state(self, seg: Segment, previous: FloatArray | None) -> FloatArray:
         u = self.xs[seg.start:seg.stop]
@@ -1353,23 +1367,32 @@ class _Fitter:
             chosen[i] = self._refine_memory(chosen, i, best, previous, memory_steps)
         return chosen
 
-    def determined_fitter(self, segments: list[Segment]) -> '_Fitter | None':
+    def determined_parts(self, segments: list[Segment]) -> GramParts | None:
         """
-        Return a fitter of the rows after each segment's plays are determined (None: too few).
+        Return the Gram parts of the rows after each segment's plays are determined.
 
-        Those rows do not depend on any start state (wiping-out): the weights they pin down
-        come from them alone.  At least ten rows per weight must be left.
+        Those rows do not depend on any start state (wiping-out): they are the segments'
+        cached suffixes (no pass over the record of their own).  None: fewer than ten rows
+        per weight.
         """
-        classes = self.classes.copy()
+        total: GramParts | None = None
         for seg in segments:
-            classes[seg.start:self.split(seg)] = -1
+            split = self.split(seg)
+            if split >= seg.stop:
+                continue
+            cached = self._suffix.get(seg.start)
+            if cached is None or cached[0] != split:
+                u0 = float(self.xs[seg.start])
+                self._segment_parts(seg, StartState('descent').states(u0, self.r_h))
+                cached = self._suffix[seg.start]
+            total = cached[1] if total is None else total + cached[1]
         weights = self.r_h.size + self.r_s.size
-        if int(np.count_nonzero(classes == 0)) < 10 * weights:
+        if total is None or int(total.counts[0]) < 10 * weights:
             return None
-        return _Fitter(self.xs, self.ys, self.design, classes, self.epsilon)
+        return total
 
-    def choose_starts_determined(self, segments: list[Segment], *, memory_steps: bool = False
-                                 ) -> tuple[list[Segment], '_Fitter'] | None:
+    def choose_starts_determined(self, segments: list[Segment], *,
+                                 memory_steps: bool = False) -> list[Segment] | None:
         """
         Choose each segment's start state with the weights of the determined rows fixed.
 
@@ -1382,17 +1405,16 @@ class _Fitter:
 
         Returns
         -------
-        (segments, fitter) or None
-            The segments with their start states and the determined rows' fitter; None when
-            too few rows are determined (the joint choice of :meth:`choose_starts` applies).
+        list of Segment or None
+            The segments with their start states; None when too few rows are determined (the
+            joint choice of :meth:`choose_starts` applies).
 
         """
-        determined = self.determined_fitter(segments)
+        determined = self.determined_parts(segments)
         if determined is None:
             return None
         try:
-            weights = determined.solve(determined.parts(_placeholder(segments)),
-                                       _TRIAL_TOLERANCE)
+            weights = self.solve(determined, _TRIAL_TOLERANCE)
         except IdentificationError:
             return None
         chosen = _placeholder(segments)
@@ -1411,7 +1433,7 @@ class _Fitter:
             assert best is not None
             chosen[i] = replace(seg, start_state=best[1])
             chosen[i] = self._refine_held_out(chosen[i], weights, previous, memory_steps)
-        return chosen, determined
+        return chosen
 
     def _refine_held_out(self, seg: Segment, weights: Any, previous: FloatArray | None,
                          memory_steps: bool) -> Segment:
@@ -1469,10 +1491,20 @@ class _Fitter:
         state: FloatArray | None = None
         present = [seg for seg in segments if seg.start < size]
         for seg in present:
+            # The rows after the plays are determined are the same for every start state
+            # and rule: accumulated once per segment.
             z0 = self._state(seg, state)
+            stop = min(seg.stop, size)
+            split = min(self.split(seg), stop)
             p = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
-                               classes=classes, n_classes=folds, start=seg.start,
-                               stop=min(seg.stop, size))
+                               classes=classes, n_classes=folds, start=seg.start, stop=split)
+            if split < stop:
+                key = (seg.start, stop, folds)
+                if key not in self._fold_suffix:
+                    self._fold_suffix[key] = regressor_gram(
+                        self.xs, self.ys, self.r_h, self.r_s, state=p.end_state,
+                        classes=classes, n_classes=folds, start=split, stop=stop)
+                p = p + self._fold_suffix[key]
             state = p.end_state
             parts = p if parts is None else parts + p
         assert parts is not None
@@ -1491,8 +1523,13 @@ class _Fitter:
                     self.xs[:size] <= float(np.max(seen)))
             else:
                 inside = np.zeros(size, dtype=bool)
-            if not np.any(rows) or int(sum(int(parts.counts[c]) for c in others)) == 0:
+            if not np.any(rows):
                 per_fold.append(math.nan)
+                continue
+            if int(sum(int(parts.counts[c]) for c in others)) == 0:
+                # Nothing to fit without this fold: the rule cannot predict it.
+                per_fold.append(math.inf)
+                total, count = math.inf, count + int(np.count_nonzero(rows))
                 continue
             try:
                 w_h, w_s, constant, _ = self.solve(parts, _TRIAL_TOLERANCE, others)
