@@ -80,3 +80,32 @@ def test_closed_loop_on_a_new_trajectory_within_the_burn_in_fit(seed):
     assert len(result.held_out_errors) == 5 and result.weights_from in (
         'determined', 'joint', 'joint start')
     assert result.held_out_error < result.line_held_out_error
+
+
+def test_held_out_numbers_reported_against_the_line():
+    # A hysteresis record: the model beats the straight line on every held-out fold, and the
+    # JSON summary carries the per-fold numbers the refusal and the warnings use.
+    config, x, y = _plant(3)
+    result = identify(x, y, n=8, l=4)
+    assert len(result.held_out_errors) == len(result.line_held_out_errors) == 5
+    assert all(m < b for m, b in zip(result.held_out_errors, result.line_held_out_errors))
+    held = result.summary()['held_out']
+    assert held['rms_error'] == pytest.approx(result.held_out_error)
+    assert held['weights_from'] == result.weights_from
+
+
+@pytest.mark.parametrize('candidate, incumbent, better', [
+    ([1.0, 1.0, 1.0, 1.0, 1.0], [1.0, 1.0, 1.0, 1.0, 1.00001], False),   # a tie within the floor
+    ([0.5, 1.0, 1.0, 1.0, 1.0], [9.0, 1.0, 1.0, 1.0, 1.0], True),        # one fold, none worse
+    ([0.5, 1.5, 1.0, 1.0, 1.0], [9.0, 1.0, 1.0, 1.0, 1.0], False),       # one fold, within noise
+    ([0.9, 0.9, 0.9, 0.9, 0.9], [1.0, 1.0, 1.0, 1.0, 1.0], True),        # every fold
+    ([0.9, 0.9, 0.9, 0.9, float('inf')], [1.0, 1.0, 1.0, 1.0, 1.0], False),   # cannot fit one
+])
+def test_a_rule_replaces_another_only_beyond_the_folds_noise(candidate, incumbent, better):
+    from mpi_ros.identification.procedure import better_on_folds, FoldErrors
+
+    def errors(per_fold):
+        values = np.array(per_fold) / 100.0
+        return FoldErrors(float(np.sqrt(np.mean(values ** 2))), list(values))
+
+    assert better_on_folds(errors(candidate), errors(incumbent)) is better

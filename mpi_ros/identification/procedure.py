@@ -631,6 +631,8 @@ class FoldErrors:
         fold was fitted on (no extrapolation).
     outside : float
         Fraction of the held-out rows outside that range.
+    interior_per_fold : list of float
+        ``interior_error`` per fold (NaN: no such rows).
 
     """
 
@@ -639,6 +641,7 @@ class FoldErrors:
     rule: str = 'joint'
     interior_error: float = math.nan
     outside: float = 0.0
+    interior_per_fold: list[float] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -998,7 +1001,7 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
     folds: dict[str, FoldErrors] = {}
     if choose or any(s.start_state is None and s.start == 0 for s in segments):
         picked = (fitter.choose_starts_determined(segments, memory_steps=memory_steps)
-                  if rule in (None, 'determined') else None)
+                  if rule in (None, 'determined', 'joint') else None)
         jointly = (fitter.choose_starts(segments, memory_steps=memory_steps)
                    if picked is None or rule is None else segments)
         if picked is None:
@@ -1153,9 +1156,11 @@ def fold_line_errors(current: FloatArray, displacement: FloatArray,
     x, y, keep = current[:size], displacement[:size], rows[:size]
     span = float(np.ptp(displacement))
     per_fold: list[float] = []
+    inner_per_fold: list[float] = []
     total, count, inner, inner_count = 0.0, 0, 0.0, 0
     for k in range(folds):
         train, test = keep & (fold != k), keep & (fold == k)
+        inner_per_fold.append(math.nan)
         if int(np.count_nonzero(train)) < 2 or not np.any(test):
             per_fold.append(math.nan)
             continue
@@ -1171,10 +1176,12 @@ def fold_line_errors(current: FloatArray, displacement: FloatArray,
         inside = (x[test] >= float(np.min(xt))) & (x[test] <= float(np.max(xt)))
         inner += float(np.sum(e[inside] ** 2))
         inner_count += int(np.count_nonzero(inside))
+        if np.any(inside):
+            inner_per_fold[-1] = float(np.sqrt(np.mean(e[inside] ** 2))) / span
     pooled = math.sqrt(total / count) / span if count else math.nan
     interior = math.sqrt(inner / inner_count) / span if inner_count else math.nan
     return FoldErrors(pooled, per_fold, 'line', interior,
-                      1.0 - inner_count / count if count else 0.0)
+                      1.0 - inner_count / count if count else 0.0, inner_per_fold)
 
 
 def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
@@ -1511,6 +1518,7 @@ class _Fitter:
         windowed = [replace(seg, stop=min(seg.stop, size)) for seg in present]
         span = float(np.ptp(displacement))
         per_fold: list[float] = []
+        inner_per_fold: list[float] = []
         total, count = 0.0, 0
         inner, inner_count = 0.0, 0
         for k in range(folds):
@@ -1523,6 +1531,7 @@ class _Fitter:
                     self.xs[:size] <= float(np.max(seen)))
             else:
                 inside = np.zeros(size, dtype=bool)
+            inner_per_fold.append(math.nan)
             if not np.any(rows):
                 per_fold.append(math.nan)
                 continue
@@ -1546,10 +1555,12 @@ class _Fitter:
             e = residual[rows & inside]
             inner += float(np.sum(e * e))
             inner_count += int(e.size)
+            if e.size:
+                inner_per_fold[-1] = float(np.sqrt(np.mean(e * e))) / span
         pooled = math.sqrt(total / count) / span if count else math.nan
         interior = math.sqrt(inner / inner_count) / span if inner_count else math.nan
         return FoldErrors(pooled, per_fold, rule, interior,
-                          1.0 - inner_count / count if count else 0.0)
+                          1.0 - inner_count / count if count else 0.0, inner_per_fold)
 
     def _refine_memory(self, chosen: list[Segment], i: int,
                        best: tuple[float, StartState | None, Any],
