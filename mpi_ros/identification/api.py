@@ -100,18 +100,19 @@ from dataclasses import dataclass, field, replace
 import math
 import time as time_module
 from typing import Any
+import warnings
 
 import numpy as np
 import numpy.typing as npt
 
 from .dynamics import return_point_drift
 from .finding import DynamicsFinding, estimate_record_dynamics, finding_of, reference_order
-from .procedure import (DynamicsEstimate, fit_record, held_out_rows, InputDynamics,
-                        prepare_record, PreparedRecord, RecordFit, refuse_if_unmodellable,
-                        Segment, StartState)
+from .procedure import (DynamicsEstimate, fit_record, fold_line_errors, FoldErrors, FOLDS,
+                        held_out_rows, InputDynamics, prepare_record, PreparedRecord,
+                        RecordFit, refuse_if_unmodellable, Segment, StartState)
 from .qp import _check_excitation, _check_signals, _errors, _quality_check, ANCHORS, \
     DEFAULT_ORDERS, FloatArray, output_sign
-from ..errors import DataError, IdentificationError
+from ..errors import DataError, IdentificationError, MPIWarning
 from ..operators.model import MPIModel
 
 __all__ = ['DEFAULT_ORDERS', 'estimate_resonance', 'IdentificationResult', 'identify',
@@ -328,6 +329,10 @@ def _whole(fit: RecordFit) -> FloatArray:
     return np.asarray(fit.model.simulate(fit.material_input), dtype=np.float64)
 
 
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
 def _rms(sim: FloatArray, y: FloatArray, span: float) -> float:
     return float(np.sqrt(np.mean((sim - y) ** 2)) / span)
 
@@ -394,6 +399,20 @@ class IdentificationResult:
         the model carries it (:attr:`full_model`; see "The output mode" above).
     notes : list of str
         What the identification changed or noticed (lowered order, burn-in, ...).
+    held_out_error : float
+        RMS output error of the fit's procedure on the record's held-out blocks (blocked
+        cross-validation: :data:`~mpi_ros.identification.procedure.FOLDS` contiguous folds of
+        the record's first 100000 samples, each held out once), over the output's range.
+    held_out_errors : list of float
+        The same per fold, in the record's order.
+    line_held_out_error : float
+        The straight line's on the same folds (fitted on the others).
+    line_held_out_errors : list of float
+        The line's per fold.
+    weights_from : str
+        Where the weights came from: ``'determined'`` (the rows after the plays are
+        determined; the start state explains the rows before with those weights) or
+        ``'joint'`` (every row with the start state), chosen by the held-out error.
 
     """
 
@@ -418,6 +437,11 @@ class IdentificationResult:
     excluded: int = 0
     notes: list[str] = field(default_factory=list)
     resonance: ResonanceEstimate = field(default_factory=ResonanceEstimate)
+    held_out_error: float = math.nan
+    held_out_errors: list[float] = field(default_factory=list)
+    line_held_out_error: float = math.nan
+    line_held_out_errors: list[float] = field(default_factory=list)
+    weights_from: str = 'joint'
 
     @property
     def full_model(self) -> Any:
@@ -442,7 +466,13 @@ class IdentificationResult:
                 'resonance': self.resonance.to_json(),
                 'notes': list(self.notes),
                 'solver_status': self.solver_status, 'iterations': self.iterations,
-                'solve_time': self.solve_time, 'order_table': self.order_table}
+                'solve_time': self.solve_time, 'order_table': self.order_table,
+                'held_out': {'folds': len(self.held_out_errors),
+                             'rms_error': _finite(self.held_out_error),
+                             'per_fold': [_finite(v) for v in self.held_out_errors],
+                             'line_rms_error': _finite(self.line_held_out_error),
+                             'line_per_fold': [_finite(v) for v in self.line_held_out_errors],
+                             'weights_from': self.weights_from}}
 
 
 def model_with_dynamics(model: MPIModel, dynamics: InputDynamics) -> Any:
@@ -613,14 +643,20 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         trial = record.window(_ORDER_WINDOW)
         held = held_out_rows(trial.current.size, holdout, trial.keep)
         say('order selection: start state of the trial window')
-        base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose)
+        base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose,
+                          rule='joint start')
         (n, l), table = select_record_order(trial, held, found, base.segments,
-                                            burn_in=base.burn_in, progress=progress)
-    if auto:                             # an explicit order was checked above
-        _check_excitation(x, y, n, l, anchor=anchor)
+                                            burn_in=base.burn_in, progress=progress,
+                                            rule=base.rule)
+        n, l = _excited_order(x, y, (n, l), table, anchor, notes)  # noqa: E741
     say(f'fitting n={n}, l={l} on the whole record')
-    fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True)
+    fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True,
+                     validate=True)
     notes.extend(fit.notes)
+    held_out = fit.folds.get(fit.rule, FoldErrors())
+    scored = keep.copy()
+    scored[:fit.burn_in] = False
+    line = fold_line_errors(x, y, scored)
     resonance = ResonanceEstimate()
     if t is not None and dynamics == 'auto' and record.analysis.ringing:
         say('ringing: fitting the output mode')
@@ -630,6 +666,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     fitted = fit.fitted if fit.fitted is not None else keep
     try:
         rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
+        notes.extend(_judge_held_out(held_out, line, rms, (n, l), auto, table, x,
+                                     record.window(_ORDER_WINDOW).current.size))
     except IdentificationError as err:
         raise _true_cause(err, x, y) from None
     # What `mpi-ros simulate` gives: the model from its initial states, straight through
@@ -670,7 +708,10 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         linear_rms_error=linear, burn_in=int(fit.burn_in), whole_record_rms_error=whole,
         start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
         dynamics_finding=finding, findings=findings,
-        excluded=int(np.count_nonzero(~keep)), notes=notes, resonance=resonance)
+        excluded=int(np.count_nonzero(~keep)), notes=notes, resonance=resonance,
+        held_out_error=held_out.error, held_out_errors=list(held_out.per_fold),
+        line_held_out_error=line.error, line_held_out_errors=list(line.per_fold),
+        weights_from=fit.rule)
 
 
 def _silent(text: str) -> None:
@@ -684,6 +725,114 @@ def _true_cause(err: IdentificationError, x: FloatArray, y: FloatArray) -> Ident
     if not drift.drifts:
         return err
     return IdentificationError(f'{drift.describe()}: the MPI model cannot follow it; {err}')
+
+
+#: A held-out error this many times the in-sample one (and :data:`_FAR_ABSOLUTE` of the
+#: output's range above it) is far from it: a warning, with the numbers.
+_FAR_FACTOR = 2.0
+_FAR_ABSOLUTE = 0.005
+
+
+def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: tuple[int, int],
+                    auto: bool, table: list[dict[str, Any]], x: FloatArray,
+                    window: int) -> list[str]:
+    # The fit on the record's own held-out blocks: refused when no better than a straight
+    # line there, a warning when far from its in-sample figure or from its order-table row.
+    n, l = order  # noqa: E741
+    if not math.isfinite(held_out.error):
+        return []
+    folds = ', '.join(f'{100 * v:.3g}' for v in held_out.per_fold)
+    lines = ', '.join(f'{100 * v:.3g}' for v in line.per_fold)
+    worst = int(np.nanargmax(np.where(np.isfinite(held_out.per_fold), held_out.per_fold,
+                                      -np.inf)))
+    outside = _outside_fraction(x, worst, len(held_out.per_fold))
+    where = (f'fold {worst + 1} of {len(held_out.per_fold)} is worst'
+             + (f'; {100 * outside:.3g} % of its input lies outside the range of the other'
+                ' folds (the model extrapolates there)' if outside > 0.0 else ''))
+    notes: list[str] = []
+    if (n + l > 0 or auto) and math.isfinite(line.error) and held_out.error >= line.error:
+        # Clearly worse (by more than _FAR_ABSOLUTE of the range: folds of small loops tie
+        # with the line at the noise) on most folds, where the input stays inside the range
+        # the fold was fitted on (a fold that holds the record's widest sweep extrapolates:
+        # a warning below, not a refusal).
+        pairs = [(m, b) for m, b in zip(held_out.interior_per_fold, line.interior_per_fold)
+                 if math.isfinite(m) and math.isfinite(b)]
+        worse = sum(1 for m, b in pairs if m > b + _FAR_ABSOLUTE)
+        if 2 * worse > len(held_out.per_fold):
+            msg = (f'the identified model (n={n}, l={l}) is no better than a straight line on'
+                   f" the record's held-out blocks ({FOLDS} contiguous folds, each fitted on"
+                   f' the others): RMS {100 * held_out.error:.3g} % of the output range vs'
+                   f' {100 * line.error:.3g} % for the line (per fold {folds} % vs {lines} %;'
+                   f' {where}); in sample it is {100 * rms:.3g} %: the fit does not carry over'
+                   ' within its own record (drift or leakage, switching, or a part of the'
+                   ' record no other part resembles); record more cycles of the same'
+                   ' excitation, or remove the drift')
+            raise IdentificationError(msg)
+        note = (f"warning: on the record's held-out blocks the model is worse than a straight"
+                f' line ({100 * held_out.error:.3g} % vs {100 * line.error:.3g} % RMS; per'
+                f' fold {folds} % vs {lines} %; {where}), clearly so inside the range each fold'
+                f' was fitted on on {worse} of {len(held_out.per_fold)} folds only;'
+                f' {100 * held_out.outside:.3g} % of the held-out input lies outside that range:'
+                ' keep new inputs inside the identified range')
+        warnings.warn(note, MPIWarning, stacklevel=3)
+        notes.append(note)
+    # The median fold: the fold of the record's start (its transient, the input outside
+    # the range) alone is no reason to expect worse on new inputs; several folds are.
+    typical = float(np.nanmedian(held_out.per_fold))
+    if typical > max(_FAR_FACTOR * rms, rms + _FAR_ABSOLUTE):
+        note = (f"warning: on the record's held-out blocks the model is off by"
+                f' {100 * held_out.error:.3g} % RMS of the output range (per fold {folds} %,'
+                f' median {100 * typical:.3g} %; {where}), against {100 * rms:.3g} % in'
+                f' sample; better than a straight line there ({100 * line.error:.3g} %), but'
+                ' expect the larger figure on new inputs')
+        warnings.warn(note, MPIWarning, stacklevel=3)
+        notes.append(note)
+    row = next((r for r in table if (r['n'], r['l']) == order), None)
+    if row is not None and not (0.5 * row['rms_error'] <= held_out.error
+                                <= _FAR_FACTOR * row['rms_error'] + _FAR_ABSOLUTE):
+        scope = (f'the busiest {window} samples' if window < x.size else 'the whole record')
+        notes.append(f"the order table's row for n={n}, l={l} (held-out RMS"
+                     f" {100 * row['rms_error']:.3g} %) and the chosen model's held-out error"
+                     f' ({100 * held_out.error:.3g} %) differ: the table holds out 30 short'
+                     f' blocks of {scope} (every kind of excitation on both sides), the'
+                     f' model {FOLDS} long contiguous folds of the record ({where})')
+    return notes
+
+
+def _outside_fraction(x: FloatArray, fold: int, folds: int) -> float:
+    # Fraction of a fold's input outside the range of the other folds' input.
+    from .procedure import fold_index
+    size = min(x.size, 100000)
+    index = fold_index(size, folds)
+    mine, others = x[:size][index == fold], x[:size][index != fold]
+    if not mine.size or not others.size:
+        return 0.0
+    return float(np.mean((mine < np.min(others)) | (mine > np.max(others))))
+
+
+def _excited_order(x: FloatArray, y: FloatArray, order: tuple[int, int],
+                   table: list[dict[str, Any]], anchor: str,
+                   notes: list[str]) -> tuple[int, int]:
+    # The order chosen, or, when the record's excitation does not support it, the best
+    # lower order of the table that it supports (refused only when none is).
+    try:
+        _check_excitation(x, y, *order, anchor=anchor)
+        return order
+    except IdentificationError as err:
+        first = err
+    lower = sorted((r for r in table if not r['unstable']
+                    and r['n'] + 2 * r['l'] < order[0] + 2 * order[1]),
+                   key=lambda r: r['rms_error'])
+    for row in lower:
+        try:
+            _check_excitation(x, y, row['n'], row['l'], anchor=anchor)
+        except IdentificationError:
+            continue
+        notes.append(f"order lowered from n={order[0]}, l={order[1]} to n={row['n']},"
+                     f" l={row['l']} (the next best held-out error,"
+                     f" {100 * row['rms_error']:.3g} %): {first}")
+        return row['n'], row['l']
+    raise first
 
 
 def _check_time(time: npt.ArrayLike | None, size: int) -> FloatArray | None:
@@ -806,7 +955,8 @@ def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,
     base = fit_record(record, n_ref, n_ref // 2, held=held)
     return select_record_order(record, held, InputDynamics(), base.segments, orders=orders,
                                tolerance=tolerance, patience=patience,
-                               absolute_tolerance=absolute_tolerance, burn_in=base.burn_in)
+                               absolute_tolerance=absolute_tolerance, burn_in=base.burn_in,
+                               rule=base.rule)
 
 
 def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
@@ -814,7 +964,8 @@ def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
                         orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
                         tolerance: float = 0.02, patience: int = 3,
                         absolute_tolerance: float = 1e-3, burn_in: int = 0,
-                        progress: Callable[[str], None] | None = None) -> tuple[
+                        progress: Callable[[str], None] | None = None,
+                        rule: str = 'joint') -> tuple[
                             tuple[int, int], list[dict[str, Any]]]:
     """
     Choose (n, l) as in the paper: raise the order until the held-out error saturates.
@@ -851,6 +1002,9 @@ def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
         Samples at the start left out of every fit (the reference fit's burn-in).
     progress : callable, optional
         Called with a line of text before each order is fitted (a progress display).
+    rule : {'joint', 'determined'}
+        Where each order's weights come from (the reference fit's rule, see
+        :func:`~mpi_ros.identification.procedure.fit_record`).
 
     Returns
     -------
@@ -873,7 +1027,7 @@ def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
             progress(f'order selection: n={n}, l={l} ({i + 1} of at most {len(orders)})')
         try:
             fit = fit_record(record, n, l, dynamics=dynamics, held=held, starts=starts,
-                             choose=False, burn_in=burn_in)
+                             choose=False, burn_in=burn_in, rule=rule)
         except IdentificationError:
             continue
         peak, rms = _errors(fit.simulate(), y, held)

@@ -227,9 +227,11 @@ def estimate_record_dynamics(record: PreparedRecord, reference: tuple[int, int],
     held = held_out_rows(trial.current.size, holdout, trial.keep)
     if progress is not None:
         progress('dynamics: start state of the trial window')
-    base = fit_record(trial, *reference, held=held, choose=choose)
+    # The trial fits keep the start chosen jointly with the weights (their folds are one
+    # split of short blocks; the rules are cross-validated in the final fit).
+    base = fit_record(trial, *reference, held=held, choose=choose, rule='joint start')
     return estimate_dynamics(trial, *reference, held, base.segments, burn_in=base.burn_in,
-                             progress=progress)
+                             progress=progress, rule=base.rule)
 
 
 def record_dynamics(current: FloatArray, displacement: FloatArray, time: FloatArray, *,

@@ -76,6 +76,7 @@ from ..operators.model import MPIModel
 from ..operators.play import play_end_state, play_operator
 
 __all__ = ['DynamicsEstimate', 'estimate_start_state', 'find_segments', 'fit_record',
+           'better_on_folds', 'fold_index', 'fold_line_errors', 'FoldErrors', 'FOLDS',
            'InputDynamics', 'prepare_record', 'PreparedRecord', 'RecordFit', 'refine_memory',
            'Segment', 'start_candidates', 'START_KINDS', 'StartState', 'turning_point_candidates',
            'with_initial_states']
@@ -476,6 +477,22 @@ _DYNAMICS_GAIN = 0.1
 #: A dead time and a lag whose held-out errors are within this fraction tie.
 _TIE = 0.03
 
+#: Contiguous folds of the blocked cross-validation inside a record (:func:`fold_index`).
+FOLDS = 5
+
+#: The cross-validation covers the record's first samples, at most this many (a long
+#: record's cost stays that of a window; the start is where the rules differ).
+_CV_WINDOW = 100000
+
+#: Held-out RMS errors closer than this fraction of the output's range tie, however
+#: consistent over the folds (a tenth of the order selection's absolute tolerance; set after
+#: seeing issue 17's lag records tie at 1e-5 and a plant seed's real gain of 1.3e-4).
+_FOLD_FLOOR = 1e-4
+
+#: Blocks of the rows before the plays are determined, alternately refined on and held out
+#: when a memory is refined.
+_PREFIX_BLOCKS = 8
+
 #: Rounds of the joint estimate of the plays' start states (refine, refit).
 _MEMORY_ROUNDS = 3
 
@@ -592,6 +609,39 @@ class DynamicsEstimate:
 
 def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
+
+
+@dataclass(frozen=True)
+class FoldErrors:
+    """
+    Held-out errors of blocked cross-validation inside a record (see :func:`fold_index`).
+
+    Attributes
+    ----------
+    error : float
+        RMS output error over every held-out row, over the output's range (NaN: none).
+    per_fold : list of float
+        The same per fold, in the record's order.
+    rule : str
+        Where the weights came from: ``'determined'`` (the rows after the plays are
+        determined; the start state explains the rows before, with those weights) or
+        ``'joint'`` (every row, with the chosen start state).
+    interior_error : float
+        ``error`` over the held-out rows whose input lies inside the range of the input the
+        fold was fitted on (no extrapolation).
+    outside : float
+        Fraction of the held-out rows outside that range.
+    interior_per_fold : list of float
+        ``interior_error`` per fold (NaN: no such rows).
+
+    """
+
+    error: float = math.nan
+    per_fold: list[float] = field(default_factory=list)
+    rule: str = 'joint'
+    interior_error: float = math.nan
+    outside: float = 0.0
+    interior_per_fold: list[float] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -716,6 +766,10 @@ class RecordFit:
     fitted : ndarray of bool, shape (N,)
         The samples the weights were fitted on (training rows, outside ringing, after a
         burn-in, and, when enough samples follow, after the plays are determined).
+    rule : str
+        Where the weights came from (see :class:`FoldErrors`).
+    folds : dict
+        The cross-validation of each rule compared, by rule (empty when none ran).
 
     """
 
@@ -729,6 +783,8 @@ class RecordFit:
     info: Any = None
     notes: list[str] = field(default_factory=list)
     fitted: npt.NDArray[np.bool_] | None = None
+    rule: str = 'joint'
+    folds: dict[str, FoldErrors] = field(default_factory=dict)
 
     def simulate(self) -> FloatArray:
         """Return the model's output over the record, each segment from its start state."""
@@ -869,9 +925,19 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
                held: npt.NDArray[np.bool_] | None = None,
                starts: list[Segment] | None = None, choose: bool = True,
                tolerance: float = 1e-9, burn_in: int | None = None,
-               memory_steps: bool = False) -> RecordFit:
+               memory_steps: bool = False, rule: str | None = None,
+               validate: bool = False) -> RecordFit:
     """
     Fit Gamma on a prepared record, choosing each segment's start state.
+
+    Start states are chosen with the weights of the rows after the plays are determined
+    fixed (:meth:`_Fitter.choose_starts_determined`), where enough such rows exist (else
+    jointly with the weights, one QP per candidate).  The final weights come from the
+    determined rows alone (``rule='determined'``) or from every row with the chosen start
+    states (``'joint'``), or the start states are chosen jointly with the weights (``'joint
+    start'``, the choice before cross-validation): by default the rule with the smallest
+    held-out error of blocked cross-validation (:meth:`_Fitter.fold_errors`), beyond the
+    folds' noise (:func:`better_on_folds`; a tie keeps ``'joint start'``).
 
     Parameters
     ----------
@@ -887,7 +953,7 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         Segments with start states to use (e.g. from a fit at another order); chosen
         afresh when None or when ``choose`` is True.
     choose : bool
-        Choose the start states (one QP per candidate and segment).
+        Choose the start states.
     tolerance : float
         OSQP's tolerance of the final solve.
     burn_in : int, optional
@@ -898,6 +964,14 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         Where a memory beats every simple history, refine it also by the steps between
         plays (see :func:`refine_memory`); the final fit of :func:`mpi_ros.identify` does,
         the trial fits of the order selection and the dynamics grid do not.
+    rule : {'determined', 'joint', 'joint start'}, optional
+        Where the weights come from (``'joint start'``: every row, the start states chosen
+        jointly with the weights, one QP per candidate); None: the one of the three with the
+        smallest held-out error of blocked cross-validation when the start states are
+        chosen (:func:`better_on_folds`; a tie keeps ``'joint start'``), ``'joint'``
+        otherwise (trial fits pass their reference fit's rule).
+    validate : bool
+        Cross-validate the rule used (``RecordFit.folds[rule]``) when it was not already.
 
     Returns
     -------
@@ -924,25 +998,190 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         segments = [replace(s, start_state=StartState('virgin', (0.0,))) for s in segments]
         choose = False
     notes: list[str] = []
+    folds: dict[str, FoldErrors] = {}
     if choose or any(s.start_state is None and s.start == 0 for s in segments):
-        segments = fitter.choose_starts(segments, memory_steps=memory_steps)
-    if burn_in:
-        classes[:burn_in] = -1
-        fitter = _Fitter(xs, ys, design, classes, record.epsilon)
-    parts = fitter.parts(segments)
-    weights = fitter.solve(parts, tolerance)
+        picked = (fitter.choose_starts_determined(segments, memory_steps=memory_steps)
+                  if rule in (None, 'determined', 'joint') else None)
+        jointly = (fitter.choose_starts(segments, memory_steps=memory_steps)
+                   if picked is None or rule is None else segments)
+        if picked is None:
+            segments, rule = jointly, ('joint' if rule is None else rule)
+        elif rule is not None:
+            segments = picked
+        else:
+            # The rules, judged on held-out folds: weights of the determined rows or of
+            # every row, with the start states chosen under the determined rows' weights;
+            # every row with the start states chosen jointly (the start may pull weights).
+            # A rule replaces the best so far only when it is lower beyond the folds' noise
+            # (see better_on_folds); on a tie the in-sample choice stays (the start chosen
+            # jointly: it also reproduces the record's start best).
+            options = {'joint start': jointly, 'determined': picked, 'joint': picked}
+            for label, option in options.items():
+                folds[label] = fitter.fold_errors(option, _weight_rule(label), x, y)
+                if rule is None or better_on_folds(folds[label], folds[rule]):
+                    rule, segments = label, option
+    rule = rule or 'joint'
+    if rule == 'determined' and fitter.determined_parts(segments) is None:
+        rule = 'joint'
     burn = int(burn_in or 0)
+    every = fitter
+    fitter = _rule_fitter(every, segments, _weight_rule(rule), burn)
+    parts = fitter.parts(segments)
+    if fitter is every and rule == 'determined':
+        parts = fitter.determined_parts(segments) or parts      # cached: no new pass
+    weights = fitter.solve(parts, tolerance)
     if burn_in is None and choose:
-        burn = fitter.undetermined_start(segments, weights)
+        burn = every.undetermined_start(segments, weights)
     if burn and not burn_in:
-        classes[:burn] = -1
-        fitter = _Fitter(xs, ys, design, classes, record.epsilon)
+        fitter = _rule_fitter(every, segments, _weight_rule(rule), burn)
         parts = fitter.parts(segments)
         weights = fitter.solve(parts, tolerance)
         notes.append(f'the first {burn} samples are left out of the fit: no start state'
                      ' explains them (the record starts on a transient or after a history'
                      ' none of the candidates covers)')
-    return _finish(record, design, fitter, parts, weights, segments, x, held, burn, notes)
+    fit = _finish(record, design, fitter, parts, weights, segments, x, held, burn, notes)
+    if _weight_rule(rule) == 'determined' and fit.fitted is not None:
+        fitted = fit.fitted.copy()
+        for seg in segments:
+            fitted[seg.start:fitter.split(seg)] = False
+        fit = replace(fit, fitted=fitted)
+    if validate and rule not in folds:
+        folds[rule] = _rule_fitter(every, segments, 'joint', burn).fold_errors(
+            segments, _weight_rule(rule), x, y)
+    return replace(fit, rule=rule, folds=folds)
+
+
+def _weight_rule(label: str) -> str:
+    # 'joint start' (start states chosen jointly with the weights) fits the weights jointly.
+    return 'determined' if label == 'determined' else 'joint'
+
+
+def _rule_fitter(fitter: '_Fitter', segments: list[Segment], rule: str,
+                 burn: int) -> '_Fitter':
+    # The fitter of the final weights: rows of the burn-in left out, and with the rule
+    # 'determined' the rows before each segment's plays are determined (without a burn-in
+    # the fitter itself: its determined_parts are those rows).
+    if not burn:
+        return fitter
+    classes = fitter.classes.copy()
+    classes[:burn] = -1
+    if rule == 'determined':
+        for seg in segments:
+            classes[seg.start:fitter.split(seg)] = -1
+    return _Fitter(fitter.xs, fitter.ys, fitter.design, classes, fitter.epsilon)
+
+
+def better_on_folds(candidate: FoldErrors, incumbent: FoldErrors) -> bool:
+    """
+    Tell whether a rule's held-out error is lower than another's beyond the folds' noise.
+
+    The pooled held-out RMS error must fall by more than :data:`_FOLD_FLOOR` of the output's
+    range, and either the paired differences of the folds' mean squared errors have a
+    negative mean larger than its standard error (one sigma over the folds), or no fold is
+    worse by more than :data:`_FOLD_FLOOR` (a gain in one fold only, such as the record's
+    start, is a gain); otherwise they tie.
+
+    Parameters
+    ----------
+    candidate, incumbent : FoldErrors
+        The two rules' cross-validations on the same folds.
+
+    Returns
+    -------
+    bool
+        The candidate is better.
+
+    """
+    a = np.square(np.asarray(candidate.per_fold, dtype=np.float64))
+    b = np.square(np.asarray(incumbent.per_fold, dtype=np.float64))
+    if a.size != b.size or not math.isfinite(candidate.error):
+        return False
+    if not math.isfinite(incumbent.error):
+        return True
+    finite = np.isfinite(a) & np.isfinite(b)
+    d = (a - b)[finite]
+    if d.size < 2:
+        return bool(candidate.error < incumbent.error)
+    if not candidate.error < incumbent.error - _FOLD_FLOOR:
+        return False
+    noise = float(np.std(d, ddof=1)) / math.sqrt(d.size)
+    rms_a = np.asarray(candidate.per_fold, dtype=np.float64)[finite]
+    rms_b = np.asarray(incumbent.per_fold, dtype=np.float64)[finite]
+    dominates = bool(np.all(rms_a <= rms_b + _FOLD_FLOOR))
+    return bool(float(np.mean(d)) < -noise or dominates)
+
+
+def fold_index(size: int, folds: int = FOLDS) -> npt.NDArray[np.int8]:
+    """
+    Return each sample's fold: ``folds`` contiguous blocks of (nearly) equal length.
+
+    Parameters
+    ----------
+    size : int
+        Samples.
+    folds : int
+        Blocks.
+
+    Returns
+    -------
+    ndarray of int8, shape (size,)
+        0 for the first block, ``folds - 1`` for the last.
+
+    """
+    return np.minimum((np.arange(size) * folds) // max(size, 1), folds - 1).astype(np.int8)
+
+
+def fold_line_errors(current: FloatArray, displacement: FloatArray,
+                     rows: npt.NDArray[np.bool_], folds: int = FOLDS) -> FoldErrors:
+    """
+    Return the straight line's held-out errors on the folds of :meth:`_Fitter.fold_errors`.
+
+    Parameters
+    ----------
+    current, displacement : ndarray of float, shape (N,)
+        The record (the input the model sees).
+    rows : ndarray of bool, shape (N,)
+        The rows that are fitted and scored (outside ringing).
+    folds : int
+        Blocks.
+
+    Returns
+    -------
+    FoldErrors
+        The line ``y = a x + b`` fitted on the other folds, scored on each.
+
+    """
+    size = min(current.size, _CV_WINDOW)
+    fold = fold_index(size, folds)
+    x, y, keep = current[:size], displacement[:size], rows[:size]
+    span = float(np.ptp(displacement))
+    per_fold: list[float] = []
+    inner_per_fold: list[float] = []
+    total, count, inner, inner_count = 0.0, 0, 0.0, 0
+    for k in range(folds):
+        train, test = keep & (fold != k), keep & (fold == k)
+        inner_per_fold.append(math.nan)
+        if int(np.count_nonzero(train)) < 2 or not np.any(test):
+            per_fold.append(math.nan)
+            continue
+        xt, yt = x[train], y[train]
+        xc = xt - float(np.mean(xt))
+        denominator = float(np.sum(xc * xc))
+        slope = float(np.sum(xc * (yt - float(np.mean(yt))))) / denominator if denominator \
+            else 0.0
+        e = float(np.mean(yt)) + slope * (x[test] - float(np.mean(xt))) - y[test]
+        per_fold.append(float(np.sqrt(np.mean(e * e))) / span)
+        total += float(np.sum(e * e))
+        count += int(e.size)
+        inside = (x[test] >= float(np.min(xt))) & (x[test] <= float(np.max(xt)))
+        inner += float(np.sum(e[inside] ** 2))
+        inner_count += int(np.count_nonzero(inside))
+        if np.any(inside):
+            inner_per_fold[-1] = float(np.sqrt(np.mean(e[inside] ** 2))) / span
+    pooled = math.sqrt(total / count) / span if count else math.nan
+    interior = math.sqrt(inner / inner_count) / span if inner_count else math.nan
+    return FoldErrors(pooled, per_fold, 'line', interior,
+                      1.0 - inner_count / count if count else 0.0, inner_per_fold)
 
 
 def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
@@ -962,6 +1201,19 @@ def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
                   if held is not None else math.nan)
     return RecordFit(model, design, segments, x, train, held_error, burn, info, notes,
                      fitter.classes == 0)
+
+
+def _finish_model(fitter: '_Fitter', segments: list[Segment], material_input: FloatArray,
+                  w_h: FloatArray, w_s: FloatArray, constant: float) -> RecordFit:
+    # A fit of given weights with the segments' start states, for its simulation.
+    design = fitter.design
+    first = segments[0].start_state
+    xs = fitter.xs
+    z0 = (first.states(float(xs[0]), design.hysteresis_thresholds,
+                       fitter._end(segments[0]) if first.kind == 'periodic' else None)
+          if first is not None else np.zeros(w_h.size))
+    model = design.model(w_h, w_s, constant, initial_states=z0)
+    return RecordFit(model, design, segments, material_input, math.nan, math.nan)
 
 
 def _placeholder(segments: list[Segment]) -> list[Segment]:
@@ -986,6 +1238,7 @@ class _Fitter:
         self._dead_zones: dict[int, FloatArray] = {}
         self._splits: dict[tuple[int, int], int] = {}
         self._ends: dict[tuple[int, int], FloatArray] = {}
+        self._fold_suffix: dict[tuple[int, int, int], GramParts] = {}
 
     def _state(self, seg: Segment, previous: FloatArray | None) -> FloatArray:
         u = self.xs[seg.start:seg.stop]
@@ -1037,10 +1290,10 @@ class _Fitter:
         assert total is not None
         return total
 
-    def solve(self, parts: GramParts, tolerance: float) -> tuple[
-            FloatArray, FloatArray, float, Any]:
-        """Solve the QP on the training rows; return w_H, w'_S, the constant, OSQP info."""
-        gram, mean, count = parts.normalised((0,))
+    def solve(self, parts: GramParts, tolerance: float,
+              selected: tuple[int, ...] = (0,)) -> tuple[FloatArray, FloatArray, float, Any]:
+        """Solve the QP on the rows of the selected classes (training: 0); see :meth:`parts`."""
+        gram, mean, count = parts.normalised(selected)
         if count == 0:
             msg = 'no samples left to fit (all in ringing windows or held out)'
             raise IdentificationError(msg)
@@ -1120,6 +1373,194 @@ class _Fitter:
                     best = (error, top[1], weights)
             chosen[i] = self._refine_memory(chosen, i, best, previous, memory_steps)
         return chosen
+
+    def determined_parts(self, segments: list[Segment]) -> GramParts | None:
+        """
+        Return the Gram parts of the rows after each segment's plays are determined.
+
+        Those rows do not depend on any start state (wiping-out): they are the segments'
+        cached suffixes (no pass over the record of their own).  None: fewer than ten rows
+        per weight.
+        """
+        total: GramParts | None = None
+        for seg in segments:
+            split = self.split(seg)
+            if split >= seg.stop:
+                continue
+            cached = self._suffix.get(seg.start)
+            if cached is None or cached[0] != split:
+                u0 = float(self.xs[seg.start])
+                self._segment_parts(seg, StartState('descent').states(u0, self.r_h))
+                cached = self._suffix[seg.start]
+            total = cached[1] if total is None else total + cached[1]
+        weights = self.r_h.size + self.r_s.size
+        if total is None or int(total.counts[0]) < 10 * weights:
+            return None
+        return total
+
+    def choose_starts_determined(self, segments: list[Segment], *,
+                                 memory_steps: bool = False) -> list[Segment] | None:
+        """
+        Choose each segment's start state with the weights of the determined rows fixed.
+
+        The weights are fitted on the rows after the plays are determined (one QP); every
+        candidate history (simple ones, turning points, "continues") is then scored by the
+        generalised error of the rows before, with those weights: the start state explains
+        the first samples, it cannot pull weights that only it supports.  A memory (every
+        play's state) is refined on half of those rows (alternate blocks) and kept only when
+        it lowers the error of the other half (then refined on all of them).
+
+        Returns
+        -------
+        list of Segment or None
+            The segments with their start states; None when too few rows are determined (the
+            joint choice of :meth:`choose_starts` applies).
+
+        """
+        determined = self.determined_parts(segments)
+        if determined is None:
+            return None
+        try:
+            weights = self.solve(determined, _TRIAL_TOLERANCE)
+        except IdentificationError:
+            return None
+        chosen = _placeholder(segments)
+        for i, seg in enumerate(segments):
+            u = self.xs[seg.start:seg.stop]
+            previous = self._previous_state(chosen, i)
+            candidates: list[StartState | None] = [*start_candidates(u),
+                                                   *turning_point_candidates(u)]
+            if i > 0:
+                candidates.insert(0, None)                  # continues from the previous
+            best: tuple[float, StartState | None] | None = None
+            for cand in candidates:
+                error = self._prefix_error(seg, cand, weights, previous)
+                if best is None or error < best[0] * (1.0 - 1e-6):
+                    best = (error, cand)
+            assert best is not None
+            chosen[i] = replace(seg, start_state=best[1])
+            chosen[i] = self._refine_held_out(chosen[i], weights, previous, memory_steps)
+        return chosen
+
+    def _refine_held_out(self, seg: Segment, weights: Any, previous: FloatArray | None,
+                         memory_steps: bool) -> Segment:
+        # The joint estimate of the plays' states with fixed weights, judged on held-out
+        # blocks of the rows before the plays are determined.
+        split = self.split(seg)
+        rows = slice(seg.start, split)
+        train = self.classes[rows] == 0
+        if split - seg.start < 16 or int(np.count_nonzero(train)) < 16:
+            return seg
+        index = np.arange(split - seg.start)
+        half = (index * _PREFIX_BLOCKS // index.size) % 2 == 0
+        u = self.xs[rows]
+        w_h, w_s, constant, _ = weights
+        target = self.prefix_dead_zones(seg) @ w_s - constant
+        z = self._state(seg, previous)
+
+        def error(states: FloatArray, mask: npt.NDArray[np.bool_]) -> float:
+            plays, _ = play_operator(u, self.r_h, states)
+            e = (plays @ w_h - target)[mask]
+            return float(np.mean(e * e)) if e.size else 0.0
+
+        for tails in (False, True) if memory_steps else (False,):
+            if tails and not (seg.start_state is not None and seg.start_state.kind == 'memory'):
+                break
+            trial, _ = refine_memory(u, self.r_h, z, w_h, target, train & half, tails=tails)
+            if not error(trial, train & ~half) < error(z, train & ~half) * (1.0 - 1e-6):
+                break
+            z, _ = refine_memory(u, self.r_h, z, w_h, target, train, tails=tails)
+            seg = replace(seg, start_state=StartState('memory', memory=tuple(
+                (float(r), float(v - u[0])) for r, v in zip(self.r_h, z))))
+        return seg
+
+    def fold_errors(self, segments: list[Segment], rule: str, material_input: FloatArray,
+                    displacement: FloatArray, folds: int = FOLDS) -> 'FoldErrors':
+        """
+        Return the held-out errors of blocked cross-validation of this fit's rule.
+
+        The first :data:`_CV_WINDOW` samples are cut into ``folds`` contiguous blocks; each
+        is held out once: the weights are fitted on the training rows of the others (the
+        rows before the plays are determined left out with ``rule='determined'``), the model
+        is simulated from the record's start state (each segment from its own) and scored by
+        the RMS output error on the block's rows.  The Gram matrices are accumulated once
+        per block and added.
+        """
+        size = min(self.xs.size, _CV_WINDOW)
+        fold = fold_index(size, folds)
+        classes = np.full(self.xs.size, -1, dtype=np.int8)
+        train = self.classes[:size] == 0
+        classes[:size] = np.where(train, fold, -1)
+        if rule == 'determined':
+            for seg in segments:
+                classes[seg.start:min(self.split(seg), size)] = -1
+        parts: GramParts | None = None
+        state: FloatArray | None = None
+        present = [seg for seg in segments if seg.start < size]
+        for seg in present:
+            # The rows after the plays are determined are the same for every start state
+            # and rule: accumulated once per segment.
+            z0 = self._state(seg, state)
+            stop = min(seg.stop, size)
+            split = min(self.split(seg), stop)
+            p = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
+                               classes=classes, n_classes=folds, start=seg.start, stop=split)
+            if split < stop:
+                key = (seg.start, stop, folds)
+                if key not in self._fold_suffix:
+                    self._fold_suffix[key] = regressor_gram(
+                        self.xs, self.ys, self.r_h, self.r_s, state=p.end_state,
+                        classes=classes, n_classes=folds, start=split, stop=stop)
+                p = p + self._fold_suffix[key]
+            state = p.end_state
+            parts = p if parts is None else parts + p
+        assert parts is not None
+        windowed = [replace(seg, stop=min(seg.stop, size)) for seg in present]
+        span = float(np.ptp(displacement))
+        per_fold: list[float] = []
+        inner_per_fold: list[float] = []
+        total, count = 0.0, 0
+        inner, inner_count = 0.0, 0
+        for k in range(folds):
+            rows = train & (fold == k)
+            others = tuple(c for c in range(folds) if c != k)
+            fitted = np.isin(classes[:size], others)
+            if np.any(fitted):
+                seen = self.xs[:size][fitted]
+                inside = (self.xs[:size] >= float(np.min(seen))) & (
+                    self.xs[:size] <= float(np.max(seen)))
+            else:
+                inside = np.zeros(size, dtype=bool)
+            inner_per_fold.append(math.nan)
+            if not np.any(rows):
+                per_fold.append(math.nan)
+                continue
+            if int(sum(int(parts.counts[c]) for c in others)) == 0:
+                # Nothing to fit without this fold: the rule cannot predict it.
+                per_fold.append(math.inf)
+                total, count = math.inf, count + int(np.count_nonzero(rows))
+                continue
+            try:
+                w_h, w_s, constant, _ = self.solve(parts, _TRIAL_TOLERANCE, others)
+            except IdentificationError:
+                per_fold.append(math.inf)
+                total, count = math.inf, count + int(np.count_nonzero(rows))
+                continue
+            fit = _finish_model(self, windowed, material_input[:size], w_h, w_s, constant)
+            residual = fit.simulate() - displacement[:size]
+            e = residual[rows]
+            per_fold.append(float(np.sqrt(np.mean(e * e))) / span)
+            total += float(np.sum(e * e))
+            count += int(e.size)
+            e = residual[rows & inside]
+            inner += float(np.sum(e * e))
+            inner_count += int(e.size)
+            if e.size:
+                inner_per_fold[-1] = float(np.sqrt(np.mean(e * e))) / span
+        pooled = math.sqrt(total / count) / span if count else math.nan
+        interior = math.sqrt(inner / inner_count) / span if inner_count else math.nan
+        return FoldErrors(pooled, per_fold, rule, interior,
+                          1.0 - inner_count / count if count else 0.0, inner_per_fold)
 
     def _refine_memory(self, chosen: list[Segment], i: int,
                        best: tuple[float, StartState | None, Any],
@@ -1361,7 +1802,8 @@ def held_out_rows(size: int, holdout: float, keep: npt.NDArray[np.bool_],
 def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
                       held: npt.NDArray[np.bool_], starts: list[Segment],
                       burn_in: int = 0, *,
-                      progress: Callable[[str], None] | None = None) -> 'DynamicsEstimate':
+                      progress: Callable[[str], None] | None = None,
+                      rule: str = 'joint') -> 'DynamicsEstimate':
     """
     Estimate the input's dead time and first-order lag: a grid, one QP each, held-out.
 
@@ -1389,6 +1831,8 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
         The static fit's burn-in (every trial is scored on the same rows).
     progress : callable, optional
         Called with a line of text before each trial fit (a progress display).
+    rule : {'joint', 'determined'}
+        Where each trial's weights come from (the static fit's rule, see :func:`fit_record`).
 
     Returns
     -------
@@ -1413,7 +1857,7 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
                      f'{dyn.describe() if dyn.present else "static"}')
         try:
             fit = fit_record(record, n, l, dynamics=dyn, held=held, starts=starts,
-                             choose=False, burn_in=burn_in)
+                             choose=False, burn_in=burn_in, rule=rule)
         except (IdentificationError, DataError):
             return math.inf
         error = _held_output_error(fit, record.displacement, held)
