@@ -173,7 +173,9 @@ def read(folder, out, only=None):
     done = set()
     if out.exists():
         done = {json.loads(line)['name'] for line in out.read_text().splitlines() if line}
-    for meta_path in sorted(folder.glob('*.json')):
+    # Seed by seed, every cause of a seed together: a partial run covers every cause.
+    paths = sorted(folder.glob('*.json'), key=lambda q: (q.stem.rsplit('-', 1)[1], q.stem))
+    for meta_path in paths:
         name = meta_path.stem
         if name in done or (only and not any(name.startswith(o) for o in only)):
             continue
