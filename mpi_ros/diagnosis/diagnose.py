@@ -71,6 +71,7 @@ from ..extensions import EFFECTS, fit_composite
 from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
 from ..extensions.composite import check_combination, composite_cause
+from ..extensions.effect import unidentified_parameters
 from ..identification import burn_in, identify, output_sign
 from ..identification.procedure import estimate_start_state
 from ..metrics import range_error, rms_range_error
@@ -348,11 +349,15 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         cause, model, gain = chosen.cause, chosen.model, float(chosen.gain)
         extended = {'cause': cause, 'rms_error': chosen.rms_error,
                     'nonlinearity_error': chosen.nonlinearity_error,
-                    'parameters': chosen.parameters}
+                    'parameters': chosen.parameters,
+                    'not_identified': dict(chosen.not_identified)}
     extended.setdefault('parameters', {})
+    extended.setdefault('not_identified', {})
     public = [c.public() for c in candidates]
     evidence = _evidence(cause, baseline, public, residual, sigma, yv[val], data)
     evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(yv[val])))
+    if extended['not_identified']:
+        evidence += ' ' + _unidentified_sentence(extended['not_identified'])
     if decision['ambiguous']:
         evidence += (f' Ambiguous: {", ".join(decision["tied_with"])} explain(s) the validation'
                      f' data as well, within the noise (ranked by gain; the signature'
@@ -363,7 +368,9 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     warnings = [] if warning is None else [warning]
     for text in warnings:
         say(f'warning: {text}')
-    say(f'verdict: {cause} (gain {gain:.3f})')
+    unknown = (f'; not identified: {", ".join(extended["not_identified"])}'
+               if extended['not_identified'] else '')
+    say(f'verdict: {cause} (gain {gain:.3f}{unknown})')
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,
@@ -396,7 +403,10 @@ class Candidate:
     parameter_count : int
         Free parameters of the effect(s).
     parameters : dict
-        The effect's parameters (Gamma's left out).
+        The effect's identified parameters (Gamma's left out, and those in
+        ``not_identified``: a value at a bound of its search range is no physical value).
+    not_identified : dict
+        Parameter key -> why the fit could not identify it (at a bound of its search range).
     signature : str
         ``present``, ``absent`` or ``unavailable`` (the physical signature).
     significant : bool
@@ -419,6 +429,7 @@ class Candidate:
     validation_output_offset: float
     parameter_count: int
     parameters: dict[str, Any]
+    not_identified: dict[str, str] = field(default_factory=dict)
     signature: str = 'unavailable'
     significant: bool = False
     parts: list[str] = field(default_factory=list)
@@ -470,16 +481,17 @@ class _Scorer:
         # A baseline without error leaves nothing to gain (and no ratio to form).
         gain = 1.0 - errs['rms_error'] / base if base > 0.0 else 0.0
         z, lags = _dm_statistic(self.r0, rc, self.bandwidth)
+        unknown = unidentified_parameters(model)
         params = {k: v for k, v in model.to_params().items()
                   if not k.startswith(('model.hysteresis', 'model.superposition'))
-                  and k not in OPERATING_POINT_KEYS}
+                  and k not in OPERATING_POINT_KEYS and k not in unknown}
         tt, xt, yt = self.training
         keep = self.determined
         train = rms_range_error(model.response(tt, xt)[keep], yt[keep])
         self.say(f'  {cause}: validation RMS error {errs["rms_error"]:.4f}, gain {gain:+.3f},'
                  f' z {z:.1f}')
         return Candidate(cause, model, errs['rms_error'], errs['nonlinearity_error'], gain, z,
-                         lags, train, shift, parameter_count, params)
+                         lags, train, shift, parameter_count, params, unknown)
 
 
 def _fit_candidates(scorer: _Scorer, causes: tuple[str, ...],
@@ -543,6 +555,13 @@ def _state_ties(decision: dict[str, Any], chosen: Candidate | None,
     decision['tied_with'] = [c.cause for c in ties]
     decision['separate_by'] = (_separation([chosen.cause, *decision['tied_with']])
                                if chosen is not None and ties else '')
+
+
+def _unidentified_sentence(unknown: dict[str, str]) -> str:
+    # The parameters of the named effect its fit could not identify, and why.
+    return ('Not identified (the fitted value lies at a bound of its search range, so it is'
+            ' no physical value; the model keeps it to run): '
+            + '; '.join(f'{key} {why}' for key, why in unknown.items()) + '.')
 
 
 def _strength(decision: dict[str, Any], chosen: Candidate | None, baseline: dict[str, Any],
