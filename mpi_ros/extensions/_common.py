@@ -24,7 +24,7 @@ from ..metrics import rms_range_error
 from ..operators.model import MPIModel
 
 __all__ = ['AxisUnits', 'bound_note', 'check_series', 'choose_out_of_sample', 'determined_start',
-           'fit_gamma', 'held_out_error', 'lag_search_limits', 'Order', 'OutOfSampleChoice',
+           'fit_gamma', 'fixed_held_out_error', 'fold_simulations', 'held_out_error', 'lag_search_limits', 'Order', 'OutOfSampleChoice',
            'rate_cross_correlation', 'resolve_order', 'scalar_parameter', 'search_fit',
            'vector_parameter']
 
@@ -240,7 +240,8 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
 
 
 def held_out_error(fold_simulation: Callable[[BoolArray], FloatArray], displacement: FloatArray,
-                   folds: list[BoolArray], scored: BoolArray) -> float:
+                   folds: list[BoolArray], scored: BoolArray,
+                   nested: list[FloatArray] | None = None) -> float:
     """
     Return the pooled error of fits on the blocks they did not see (blocked folds).
 
@@ -256,6 +257,12 @@ def held_out_error(fold_simulation: Callable[[BoolArray], FloatArray], displacem
         Held-out rows of each fold (:func:`mpi_ros.identification.folds.blocked_folds`).
     scored : ndarray of bool, shape (N,)
         Rows that count (the determined samples).
+    nested : list of ndarray of float, shape (N,), optional
+        Per fold, the simulation of the baseline (the effect off) fitted on the same rows.
+        Each fold then uses the effect's fit only where it fits the fold's own training
+        rows better than the baseline, as the whole fit does (so the held-out error judges
+        the procedure, nesting included): the fits minimise the generalised error, not the
+        output error, and on a fold they can land worse than the baseline on their own rows.
 
     Returns
     -------
@@ -265,9 +272,14 @@ def held_out_error(fold_simulation: Callable[[BoolArray], FloatArray], displacem
 
     """
     total, count = 0.0, 0
-    for held in folds:
+    for k, held in enumerate(folds):
         rows = held & scored
         sim = fold_simulation(held)
+        if nested is not None:
+            fitted = ~held & scored
+            if not (np.mean((sim[fitted] - displacement[fitted]) ** 2)
+                    < np.mean((nested[k][fitted] - displacement[fitted]) ** 2)):
+                sim = nested[k]
         error = float(np.sum((sim[rows] - displacement[rows]) ** 2))
         if not math.isfinite(error):
             return math.inf
@@ -310,6 +322,19 @@ class OutOfSampleChoice:
     bound: str | None
     grid: FloatArray
     errors: FloatArray
+
+
+def fold_simulations(fold_simulation: Callable[[BoolArray], FloatArray],
+                     folds: list[BoolArray]) -> list[FloatArray]:
+    """Return each fold's simulation (e.g. the baseline's, for ``held_out_error(nested=)``)."""
+    return [fold_simulation(held) for held in folds]
+
+
+def fixed_held_out_error(simulations: list[FloatArray], displacement: FloatArray,
+                         folds: list[BoolArray], scored: BoolArray) -> float:
+    """Return :func:`held_out_error` of simulations computed already (one per fold)."""
+    by_fold = {id(held): sim for held, sim in zip(folds, simulations)}
+    return held_out_error(lambda held: by_fold[id(held)], displacement, folds, scored)
 
 
 def choose_out_of_sample(error_of: Callable[[float], float], grid: FloatArray, *,

@@ -45,8 +45,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import AxisUnits, check_series, held_out_error, hold_evidence, Order, \
-    residual_axes, resolve_order, vector_parameter
+from ._common import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
+    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
 from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
@@ -341,14 +341,15 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     scored = np.arange(t.size) >= design.burn_in
     folds = blocked_folds(t.size, start=design.burn_in)
     banks = [grid]
-    best, best_error = off, held_out_error(
-        lambda held: _off_fit(x, y, n_l, epsilon, ~held).simulate(x), y, folds, scored)
+    baseline = fold_simulations(lambda held: _off_fit(x, y, n_l, epsilon, ~held).simulate(x),
+                                folds)
+    best, best_error = off, fixed_held_out_error(baseline, y, folds, scored)
     for taus in banks:
         whole = _creep_rounds(t, x, y, n_l, taus, np.zeros(taus.size), epsilon)
         error = held_out_error(
-            lambda held: _creep_rounds(t, x, y, n_l, taus, whole.weights, epsilon,
-                                       rows=~held, rounds=_FOLD_ROUNDS).simulate(t, x),
-            y, folds, scored)
+            lambda held: _creep_rounds(t, x, y, n_l, taus, whole.weights, epsilon, rows=~held,
+                                       rounds=_FOLD_ROUNDS).simulate(t, x),
+            y, folds, scored, nested=baseline)
         if error < best_error:
             best, best_error = whole, error
     model = best

@@ -20,8 +20,9 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
-    choose_out_of_sample, determined_start, fit_gamma, held_out_error, lag_search_limits, \
-    Order, resolve_order, scalar_parameter
+    choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
+    fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
+    scalar_parameter
 from ._signals import delay
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
@@ -127,12 +128,16 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     scored = np.arange(t.size) >= start
     folds = blocked_folds(t.size, start=start)
 
+    def fold_fit(delayed: FloatArray, held: npt.NDArray[np.bool_]) -> FloatArray:
+        return fit_gamma(delayed, y, n_l, epsilon, start=start, held=held)[0].simulate(delayed)
+    baseline = fold_simulations(lambda held: fold_fit(x, held), folds)
+
     def held_out(delayed: FloatArray) -> float:
-        return held_out_error(
-            lambda held: fit_gamma(delayed, y, n_l, epsilon, start=start,
-                                   held=held)[0].simulate(delayed), y, folds, scored)
+        return held_out_error(lambda held: fold_fit(delayed, held), y, folds, scored,
+                              nested=baseline)
     choice = choose_out_of_sample(lambda v: held_out(delay(t, x, v)),
-                                  np.geomspace(dt, longest, 8), off_error=held_out(x),
+                                  np.geomspace(dt, longest, 8),
+                                  off_error=fixed_held_out_error(baseline, y, folds, scored),
                                   refine=2, bounds=(False, True))
     base, base_error = fit_gamma(x, y, n_l, epsilon, start=start)
     if choice.value is None:

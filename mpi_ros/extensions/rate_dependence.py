@@ -20,8 +20,9 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
-    choose_out_of_sample, determined_start, fit_gamma, held_out_error, lag_search_limits, \
-    Order, resolve_order, scalar_parameter
+    choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
+    fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
+    scalar_parameter
 from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
@@ -188,12 +189,16 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     scored = np.arange(t.size) >= start
     folds = blocked_folds(t.size, start=start)
 
+    def fold_fit(lagged: FloatArray, held: npt.NDArray[np.bool_]) -> FloatArray:
+        return fit_gamma(lagged, y, n_l, epsilon, start=start, held=held)[0].simulate(lagged)
+    baseline = fold_simulations(lambda held: fold_fit(x, held), folds)
+
     def held_out(lagged: FloatArray) -> float:
-        return held_out_error(
-            lambda held: fit_gamma(lagged, y, n_l, epsilon, start=start,
-                                   held=held)[0].simulate(lagged), y, folds, scored)
+        return held_out_error(lambda held: fold_fit(lagged, held), y, folds, scored,
+                              nested=baseline)
     choice = choose_out_of_sample(lambda v: held_out(first_order_lag(t, x, v)),
-                                  np.geomspace(0.5 * dt, longest, 8), off_error=held_out(x),
+                                  np.geomspace(0.5 * dt, longest, 8),
+                                  off_error=fixed_held_out_error(baseline, y, folds, scored),
                                   refine=2)
     base, base_error = fit_gamma(x, y, n_l, epsilon, start=start)
     if choice.value is None:

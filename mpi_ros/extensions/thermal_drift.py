@@ -27,7 +27,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ._common import AxisUnits, bound_note, check_series, choose_out_of_sample, \
-    held_out_error, hold_evidence, Order, residual_axes, resolve_order, scalar_parameter
+    fixed_held_out_error, fold_simulations, held_out_error, hold_evidence, Order, residual_axes, \
+    resolve_order, scalar_parameter
 from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
@@ -233,12 +234,14 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
     scored = np.arange(t.size) >= start
     folds = blocked_folds(t.size, start=start)
 
-    def held_out(tau: float | None) -> float:
-        return held_out_error(
-            lambda held: _fit_at(t, x, y, n, l, tau, epsilon, rows=~held)[0].simulate(t, x),
-            y, folds, scored)
-    choice = choose_out_of_sample(held_out, np.geomspace(duration / 20.0, 5.0 * duration, 7),
-                                  off_error=held_out(None), refine=2)
+    def fold_fit(tau: float | None, held: npt.NDArray[np.bool_]) -> FloatArray:
+        return _fit_at(t, x, y, n, l, tau, epsilon, rows=~held)[0].simulate(t, x)
+    baseline = fold_simulations(lambda held: fold_fit(None, held), folds)
+    choice = choose_out_of_sample(
+        lambda tau: held_out_error(lambda held: fold_fit(tau, held), y, folds, scored,
+                                   nested=baseline),
+        np.geomspace(duration / 20.0, 5.0 * duration, 7), refine=2,
+        off_error=fixed_held_out_error(baseline, y, folds, scored))
     unknown = {THERMAL_TIME_CONSTANT: 'not identified: no drift (weight 0), no time constant'}
     if choice.value is None:
         return replace(off, not_identified=unknown)
