@@ -169,6 +169,8 @@ class CreepModel(ExtendedModelBase):
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
         t, x = check_series(time, current)
+        if not np.any(self.weights):        # no creep: Gamma exactly (the nested baseline)
+            return self.model.simulate(x)
         g = self._displacement(x)
         out: FloatArray = self.model.output_offset + self.model.output_sign * (
             g + lag_bank(t, g, self.time_constants) @ self.weights)

@@ -105,6 +105,8 @@ class ThermalDriftModel(ExtendedModelBase):
     def simulate(self, time: npt.ArrayLike, current: npt.ArrayLike) -> FloatArray:
         """Return the displacement [m] for a current [A] sampled at ``time`` [s]."""
         t, x = check_series(time, current)
+        if self.weight == 0.0:              # no drift: Gamma exactly (the nested baseline)
+            return self.model.simulate(x)
         h, _ = self.model.hysteresis_output(x)
         return self.model.output(h + self.weight * self.thermal_state(t, x))
 

@@ -173,19 +173,18 @@ def random_preisach_core(seed: int, *, threshold_min: float = -0.2,
 def _relays(current: FloatArray, up: FloatArray, down: FloatArray, weights: FloatArray,
             state: FloatArray) -> FloatArray:  # pragma: no cover - compiled
     # The weighted share of relays that are up after each sample (state updated in place).
+    # The sum is formed afresh at every sample (not updated by the switches), so that a
+    # chunked run gives the same floats as one run.
     out = np.empty(current.shape[0])
-    total = 0.0
-    for j in range(up.shape[0]):
-        total += weights[j] * state[j]
     for k in range(current.shape[0]):
         x = current[k]
+        total = 0.0
         for j in range(up.shape[0]):
             if state[j] == 0.0 and x >= up[j]:
                 state[j] = 1.0
-                total += weights[j]
             elif state[j] == 1.0 and x <= down[j]:
                 state[j] = 0.0
-                total -= weights[j]
+            total += weights[j] * state[j]
         out[k] = total
     return out
 
