@@ -226,8 +226,8 @@ def summary(path):
           f' {sum(r["verdict"] == r["cause"] for r in effect_rows)}/{len(effect_rows)};'
           f' none on effect-free plants {sum(r["verdict"] == "none" for r in none_rows)}'
           f'/{len(none_rows)}')
-    named = [r for r in rows if r['verdict'] not in ('none', 'refused',
-                                                      'outside_invertible_class')]
+    named = [r for r in rows
+             if r['verdict'] not in ('none', 'refused', 'outside_invertible_class')]
     weak = [r for r in named if r['gain'] < 0.2]
     print(f'named effects with validation gain < 0.2: {len(weak)}/{len(named)}'
           + (' (' + ', '.join(f'{r["name"]} {r["verdict"]} {r["gain"]:.2f}' for r in weak) + ')'

@@ -26,8 +26,8 @@ DURATION = 30.0
 
 
 def _input():
-    return identification_excitation(DURATION, sample_rate=RATE, seed=3, burst_frequency=5.0,
-                                      hold_duration=3.0)
+    return identification_excitation(DURATION, sample_rate=RATE, seed=3,
+                                     burst_frequency=5.0, hold_duration=3.0)
 
 
 def _record(core=None, **effect):
@@ -151,7 +151,8 @@ def test_the_diagnosis_reports_a_bound_as_not_identified_never_as_a_value():
     t, x, y = _record(**slow)
     tv, xv = identification_excitation(DURATION, sample_rate=RATE, seed=4, burst_frequency=5.0,
                                        hold_duration=3.0)
-    yv = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8, **slow), seed=2).simulate(tv, xv)
+    plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8, **slow), seed=2)
+    yv = plant.simulate(tv, xv)
     report = diagnose(Recording(t, x, y, source='slow thermal'), order=ORDER,
                       validation=Recording(tv, xv, yv, source='validation'),
                       causes=('thermal_drift',))

@@ -368,9 +368,9 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     warnings = [] if warning is None else [warning]
     for text in warnings:
         say(f'warning: {text}')
-    unknown = (f'; not identified: {", ".join(extended["not_identified"])}'
-               if extended['not_identified'] else '')
-    say(f'verdict: {cause} (gain {gain:.3f}{unknown})')
+    unidentified = (f'; not identified: {", ".join(extended["not_identified"])}'
+                    if extended['not_identified'] else '')
+    say(f'verdict: {cause} (gain {gain:.3f}{unidentified})')
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,

@@ -24,7 +24,8 @@ from ..metrics import rms_range_error
 from ..operators.model import MPIModel
 
 __all__ = ['AxisUnits', 'bound_note', 'check_series', 'choose_out_of_sample', 'determined_start',
-           'fit_gamma', 'fixed_held_out_error', 'fold_simulations', 'held_out_error', 'lag_search_limits', 'Order', 'OutOfSampleChoice',
+           'fit_gamma', 'fixed_held_out_error', 'fold_simulations', 'held_out_error',
+           'lag_search_limits', 'Order', 'OutOfSampleChoice',
            'rate_cross_correlation', 'resolve_order', 'scalar_parameter', 'search_fit',
            'vector_parameter']
 
