@@ -39,7 +39,8 @@ the confusion matrix and the acceptance counts of a results file.
 
 Run: ``python benchmarks/eval_diagnosis_wide.py --write /tmp/plants``, then
 ``nice python benchmarks/eval_diagnosis_wide.py --read /tmp/plants --out results.jsonl``,
-then ``python benchmarks/eval_diagnosis_wide.py --summary results.jsonl``.
+then ``python benchmarks/eval_diagnosis_wide.py --summary results.jsonl`` (``--compare A B``:
+two results files side by side on the plants both hold).
 """
 
 import argparse
@@ -210,7 +211,7 @@ def read(folder, out, only=None):
 
 def summary(path):
     """Print the confusion matrix, the gains and the acceptance counts of a results file."""
-    rows = [json.loads(line) for line in Path(path).read_text().splitlines() if line]
+    rows = _rows(path)
     verdicts = sorted({r['verdict'] for r in rows} | set(CAUSES),
                       key=lambda v: (v not in CAUSES, CAUSES.index(v) if v in CAUSES else 0, v))
     print('| truth \\ verdict | ' + ' | '.join(verdicts) + ' |')
@@ -258,6 +259,28 @@ def summary(path):
     print(f'\nseconds per diagnosis: median {np.median([r["seconds"] for r in rows]):.0f}')
 
 
+def _rows(path):
+    # The results of a file, the first row of each plant (a resumed run may repeat one).
+    rows, seen = [], set()
+    for line in Path(path).read_text().splitlines():
+        if line and json.loads(line)['name'] not in seen:
+            rows.append(json.loads(line))
+            seen.add(rows[-1]['name'])
+    return rows
+
+
+def compare(path, other):
+    """Print the verdicts and gains of two results files on the plants both diagnosed."""
+    mine = {r['name']: r for r in _rows(path)}
+    theirs = {r['name']: r for r in _rows(other)}
+    print('| plant | core | verdict (this file) | gain | verdict (other) | gain |')
+    print('|---|---|---|---|---|---|')
+    for name in sorted(set(mine) & set(theirs), key=lambda n: (n.rsplit('-', 1)[1], n)):
+        a, b = mine[name], theirs[name]
+        print(f'| {name} | {a["values"]["core"]} | {a["verdict"]} | {a.get("gain", 0.0):.2f} |'
+              f' {b["verdict"]} | {b.get("gain", 0.0):.2f} |')
+
+
 def main(argv=None):
     """Write, diagnose or summarise (see the module docstring)."""
     p = argparse.ArgumentParser(description=__doc__.split('\n')[1])
@@ -266,6 +289,7 @@ def main(argv=None):
     p.add_argument('--out', type=Path, default=Path('diagnosis_wide.jsonl'))
     p.add_argument('--only', nargs='*', help='plant name prefixes to diagnose')
     p.add_argument('--summary', type=Path)
+    p.add_argument('--compare', type=Path, nargs=2, metavar=('THIS', 'OTHER'))
     args = p.parse_args(argv)
     if args.write:
         write(args.write)
@@ -273,6 +297,8 @@ def main(argv=None):
         read(args.read, args.out, args.only)
     if args.summary:
         summary(args.summary)
+    if args.compare:
+        compare(*args.compare)
     return 0
 
 
