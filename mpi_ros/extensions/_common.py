@@ -340,7 +340,8 @@ def fixed_held_out_error(simulations: list[FloatArray], displacement: FloatArray
 
 def choose_out_of_sample(error_of: Callable[[float], float], grid: FloatArray, *,
                          off_error: float = math.inf, refine: int = 4,
-                         bounds: tuple[bool, bool] = (True, True)) -> OutOfSampleChoice:
+                         bounds: tuple[bool, bool] = (True, True),
+                         refine_on: Callable[[float], float] | None = None) -> OutOfSampleChoice:
     """
     Choose a 1-D effect parameter by its held-out error: a grid, then a bounded refinement.
 
@@ -362,6 +363,12 @@ def choose_out_of_sample(error_of: Callable[[float], float], grid: FloatArray, *
     bounds : (bool, bool)
         Whether the grid's lower and upper end are bounds of the search (False for an end
         that is a physical limit, e.g. a dead time's smallest trial of one sample).
+    refine_on : callable float -> float, optional
+        The error the refinement minimises inside the bracket the held-out errors chose
+        (default ``error_of``).  The whole record's fit error sharpens a value the folds
+        located to within two grid steps: the held-out error is noisier than the fit's,
+        and on a lag of 4 ms its refinement landed at 3.4-3.7 ms against 4.9 ms in sample,
+        and the creep fitted behind the lag then lost 14 % of its gain.
 
     Returns
     -------
@@ -376,10 +383,17 @@ def choose_out_of_sample(error_of: Callable[[float], float], grid: FloatArray, *
              'upper' if i == grid.size - 1 and bounds[1] else None)
     if bound is None and refine > 0 and 0 < i < grid.size - 1:
         lo, hi = math.log(float(grid[i - 1])), math.log(float(grid[i + 1]))
-        res = minimize_scalar(lambda v: error_of(math.exp(v)), bounds=(lo, hi),
-                              method='bounded', options={'maxiter': refine, 'xatol': 1e-2})
-        if float(res.fun) < best_error:
-            best, best_error = float(math.exp(res.x)), float(res.fun)
+        if refine_on is None:
+            res = minimize_scalar(lambda v: error_of(math.exp(v)), bounds=(lo, hi),
+                                  method='bounded', options={'maxiter': refine, 'xatol': 1e-2})
+            if float(res.fun) < best_error:
+                best, best_error = float(math.exp(res.x)), float(res.fun)
+        else:
+            inside = refine_on
+            res = minimize_scalar(lambda v: inside(math.exp(v)), bounds=(lo, hi),
+                                  method='bounded', options={'maxiter': refine, 'xatol': 1e-2})
+            if float(res.fun) < inside(best):
+                best = float(math.exp(res.x))
     if not best_error < off_error:
         return OutOfSampleChoice(None, off_error, off_error, None, grid, errors)
     return OutOfSampleChoice(best, best_error, off_error, bound, grid, errors)

@@ -98,7 +98,9 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     predicted by the fit on the other two, over the samples determined for every trial
     (after the raw current's burn-in and the longest trial lag), with
     :func:`mpi_ros.identification.identify`'s design (operating point, sign, constant term).
-    The chosen lag is then fitted on the whole record and kept only when it fits the record
+    The held-out errors choose the bracket (two grid steps), the whole record's fit error
+    refines the lag inside it.  The chosen lag is then fitted on the whole record and kept
+    only when it fits the record
     better than no delay (``L = 0`` is Gamma).  A best lag at the longest trial is reported
     as not identified (``not_identified``); one sample is a resolvable delay, not a bound.
 
@@ -135,10 +137,14 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     def held_out(delayed: FloatArray) -> float:
         return held_out_error(lambda held: fold_fit(delayed, held), y, folds, scored,
                               nested=baseline)
+
+    def in_sample(v: float) -> float:
+        return fit_gamma(delay(t, x, v), y, n_l, epsilon, start=start)[1]
     choice = choose_out_of_sample(lambda v: held_out(delay(t, x, v)),
                                   np.geomspace(dt, longest, 8),
                                   off_error=fixed_held_out_error(baseline, y, folds, scored),
-                                  refine=2, bounds=(False, True))
+                                  refine=8, bounds=(False, True),
+                                  refine_on=in_sample)
     base, base_error = fit_gamma(x, y, n_l, epsilon, start=start)
     if choice.value is None:
         return DeadTimeModel(base, 0.0)
