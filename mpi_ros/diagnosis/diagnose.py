@@ -81,6 +81,7 @@ from ..extensions._common import rate_cross_correlation
 from ..extensions._signals import first_order_lag
 from ..extensions.composite import check_combination, composite_cause
 from ..extensions.dead_time import DEAD_TIME
+from ..extensions.effect import unidentified_parameters
 from ..identification import burn_in, identify, output_sign
 from ..identification.dynamics import return_point_drift, step_onset, StepOnset
 from ..identification.finding import DynamicsFinding, record_dynamics, \
@@ -426,11 +427,15 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         cause, model, gain = chosen.cause, chosen.model, float(chosen.gain)
         extended = {'cause': cause, 'rms_error': chosen.rms_error,
                     'nonlinearity_error': chosen.nonlinearity_error,
-                    'parameters': chosen.parameters}
+                    'parameters': chosen.parameters,
+                    'not_identified': dict(chosen.not_identified)}
     extended.setdefault('parameters', {})
+    extended.setdefault('not_identified', {})
     public = [c.public() for c in candidates]
     evidence = _evidence(cause, baseline, public, residual, sigma, yv[val], data)
     evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(yv[val])))
+    if extended['not_identified']:
+        evidence += ' ' + _unidentified_sentence(extended['not_identified'])
     if decision['ambiguous']:
         tied = '; '.join(f'{k} is tied ({v})' for k, v in decision['tie_reasons'].items())
         evidence += (f' Ambiguous: {tied} ({cause} ranks first by its validation gain;'
@@ -443,7 +448,9 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     warnings += [text for text in (drift.describe(), outside) if text]
     for text in warnings:
         say(f'warning: {text}')
-    say(f'verdict: {cause} (validation gain {100 * gain:.3g} %)')
+    unidentified = (f'; not identified: {", ".join(extended["not_identified"])}'
+                    if extended['not_identified'] else '')
+    say(f'verdict: {cause} (validation gain {100 * gain:.3g} %{unidentified})')
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,
@@ -476,7 +483,10 @@ class Candidate:
     parameter_count : int
         Free parameters of the effect(s).
     parameters : dict
-        The effect's parameters (Gamma's left out).
+        The effect's identified parameters (Gamma's left out, and those in
+        ``not_identified``: a value at a bound of its search range is no physical value).
+    not_identified : dict
+        Parameter key -> why the fit could not identify it (at a bound of its search range).
     signature : str
         ``present``, ``absent`` or ``unavailable`` (the physical signature).
     significant : bool
@@ -499,6 +509,7 @@ class Candidate:
     validation_output_offset: float
     parameter_count: int
     parameters: dict[str, Any]
+    not_identified: dict[str, str] = field(default_factory=dict)
     signature: str = 'unavailable'
     significant: bool = False
     parts: list[str] = field(default_factory=list)
@@ -550,17 +561,18 @@ class _Scorer:
         # A baseline without error leaves nothing to gain (and no ratio to form).
         gain = 1.0 - errs['rms_error'] / base if base > 0.0 else 0.0
         z, lags = _dm_statistic(self.r0, rc, self.bandwidth)
+        unknown = unidentified_parameters(model)
         params = {k: v for k, v in model.to_params().items()
                   if not k.startswith(('model.hysteresis', 'model.superposition',
                                        'record_start.hysteresis'))
-                  and k not in OPERATING_POINT_KEYS}
+                  and k not in OPERATING_POINT_KEYS and k not in unknown}
         tt, xt, yt = self.training
         keep = self.determined
         train = rms_range_error(model.response(tt, xt)[keep], yt[keep])
         self.say(f'  {cause}: validation RMS error {100 * errs["rms_error"]:.3g} % of the'
                  f' output range, gain {100 * gain:+.3g} %, z {z:.3g}')
         return Candidate(cause, model, errs['rms_error'], errs['nonlinearity_error'], gain, z,
-                         lags, train, shift, parameter_count, params)
+                         lags, train, shift, parameter_count, params, unknown)
 
 
 def _fit_candidates(scorer: _Scorer, causes: tuple[str, ...],
@@ -643,6 +655,13 @@ def _who_decided(chosen: Candidate | None) -> str:
     if chosen.signature == 'unavailable':
         return 'its signature is unavailable in this record: decided on the gain alone'
     return f'its physical signature is {chosen.signature}'
+
+
+def _unidentified_sentence(unknown: dict[str, str]) -> str:
+    # The parameters of the named effect its fit could not identify, and why.
+    return ('Not identified (the fitted value lies at a bound of its search range, so it is'
+            ' no physical value; the model keeps it to run): '
+            + '; '.join(f'{key} {why}' for key, why in unknown.items()) + '.')
 
 
 def _strength(decision: dict[str, Any], chosen: Candidate | None, baseline: dict[str, Any],

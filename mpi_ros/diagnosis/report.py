@@ -524,7 +524,9 @@ def _candidate_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> li
         lines.append(f'| {rank} | {c["cause"]}{mark} | {_percent(c["rms_error"])} |'
                      f' {_percent(c["nonlinearity_error"])} | {_signed_percent(c["gain"])} |'
                      f' {significant(c["z"])} | {z_wording(c["z"], zc)} |'
-                     f' {c.get("signature", "-")} | {_parameters(c.get("parameters", {}))} |')
+                     f' {c.get("signature", "-")} | {_parameters(c.get("parameters", {}))}'
+                     + ''.join(f'; {k} not identified (at a search bound)'
+                               for k in c.get('not_identified', {})) + ' |')
     lines += ['', f'Straight line fitted on the training data: {_percent(b["linear_rms_error"])}'
               f' RMS error on the validation data.']
     min_gain = decision.get('min_gain')

@@ -23,15 +23,18 @@ from ..identification.procedure import fit_record, prepare_record
 from ..metrics import rms_range_error
 from ..operators.model import MPIModel
 
-__all__ = ['AxisUnits', 'check_series', 'determined_start', 'fit_gamma', 'lag_search_limits',
-           'Order', 'rate_cross_correlation', 'resolve_order',
-           'scalar_parameter', 'search_fit', 'vector_parameter']
+__all__ = ['AxisUnits', 'bound_note', 'check_series', 'choose_out_of_sample', 'determined_start',
+           'fit_gamma', 'fixed_held_out_error', 'fold_simulations', 'held_out_error',
+           'lag_search_limits', 'Order', 'OutOfSampleChoice',
+           'rate_cross_correlation', 'resolve_order', 'scalar_parameter', 'search_fit',
+           'vector_parameter']
 
 FloatArray = npt.NDArray[np.float64]
 #: The ``order`` argument of the fits: ``(n, l)``, or ``'auto'`` (see :func:`resolve_order`).
 Order = tuple[int, int] | str
 #: The result of one trial fit in :func:`search_fit` (a model).
 ResultT = TypeVar('ResultT')
+BoolArray = npt.NDArray[np.bool_]
 
 
 def check_series(time: npt.ArrayLike, *signals: npt.ArrayLike) -> tuple[FloatArray, ...]:
@@ -199,7 +202,8 @@ def search_fit(fit: Callable[[float], tuple[ResultT, float]], grid: FloatArray, 
 
 
 def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, int],
-              epsilon: float, *, start: int = 0) -> tuple[MPIModel, float]:
+              epsilon: float, *, start: int = 0,
+              held: BoolArray | None = None) -> tuple[MPIModel, float]:
     """
     Identify Gamma on a (possibly transformed) current and return it with its error.
 
@@ -220,6 +224,8 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
         Bound of (8)/(19).
     start : int
         First sample of the fit and of the error (see :func:`determined_start`).
+    held : ndarray of bool, shape (N,), optional
+        Rows left out of the fit (a fold's held-out block, see :func:`held_out_error`).
 
     Returns
     -------
@@ -229,9 +235,194 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
     """
     n, l = order  # noqa: E741
     record = prepare_record(current, displacement, epsilon=epsilon)
-    fit = fit_record(record, n, l, burn_in=start or None)
+    fit = fit_record(record, n, l, burn_in=start or None, held=held)
     keep = slice(max(start, fit.burn_in), None)
     return fit.model, rms_range_error(fit.model.simulate(current)[keep], displacement[keep])
+
+
+def held_out_error(fold_simulation: Callable[[BoolArray], FloatArray], displacement: FloatArray,
+                   folds: list[BoolArray], scored: BoolArray,
+                   nested: list[FloatArray] | None = None) -> float:
+    """
+    Return the pooled error of fits on the blocks they did not see (blocked folds).
+
+    Parameters
+    ----------
+    fold_simulation : callable
+        ``fold_simulation(held)`` -> the simulation over the whole record [m] of a model
+        fitted without the rows ``held`` (the plays and the effect's states follow the
+        input, so the held-out block is simulated from the states the record leaves).
+    displacement : ndarray of float, shape (N,)
+        Measured output [m].
+    folds : list of ndarray of bool, shape (N,)
+        Held-out rows of each fold (:func:`mpi_ros.identification.folds.blocked_folds`).
+    scored : ndarray of bool, shape (N,)
+        Rows that count (the determined samples).
+    nested : list of ndarray of float, shape (N,), optional
+        Per fold, the simulation of the baseline (the effect off) fitted on the same rows.
+        Each fold then uses the effect's fit only where it fits the fold's own training
+        rows better than the baseline, as the whole fit does (so the held-out error judges
+        the procedure, nesting included): the fits minimise the generalised error, not the
+        output error, and on a fold they can land worse than the baseline on their own rows.
+
+    Returns
+    -------
+    float
+        RMS of every fold's error on its own block, over the output range of the scored
+        samples (inf when a fit fails to give a finite simulation).
+
+    """
+    total, count = 0.0, 0
+    for k, held in enumerate(folds):
+        rows = held & scored
+        sim = fold_simulation(held)
+        if nested is not None:
+            fitted = ~held & scored
+            if not (np.mean((sim[fitted] - displacement[fitted]) ** 2)
+                    < np.mean((nested[k][fitted] - displacement[fitted]) ** 2)):
+                sim = nested[k]
+        error = float(np.sum((sim[rows] - displacement[rows]) ** 2))
+        if not math.isfinite(error):
+            return math.inf
+        total += error
+        count += int(rows.sum())
+    span = float(np.ptp(displacement[scored])) if scored.any() else 0.0
+    if count == 0 or span <= 0.0:
+        return math.inf
+    return math.sqrt(total / count) / span
+
+
+@dataclass(frozen=True)
+class OutOfSampleChoice:
+    """
+    An effect parameter chosen on held-out blocks (:func:`choose_out_of_sample`).
+
+    Attributes
+    ----------
+    value : float or None
+        The chosen value; None when the effect switched off predicts the held-out blocks
+        at least as well (the effect is not there, as far as the record shows).
+    error : float
+        Its held-out error (the off error for None).
+    off_error : float
+        The held-out error of the effect switched off (inf when not tried).
+    bound : str or None
+        ``'lower'`` or ``'upper'`` when the best grid value is the first or the last one of
+        the searched range (the minimum is not bracketed: the parameter is *not
+        identified*, only known to lie beyond that bound); None otherwise.
+    grid : ndarray of float
+        The searched values.
+    errors : ndarray of float
+        Their held-out errors.
+
+    """
+
+    value: float | None
+    error: float
+    off_error: float
+    bound: str | None
+    grid: FloatArray
+    errors: FloatArray
+
+
+def fold_simulations(fold_simulation: Callable[[BoolArray], FloatArray],
+                     folds: list[BoolArray]) -> list[FloatArray]:
+    """Return each fold's simulation (e.g. the baseline's, for ``held_out_error(nested=)``)."""
+    return [fold_simulation(held) for held in folds]
+
+
+def fixed_held_out_error(simulations: list[FloatArray], displacement: FloatArray,
+                         folds: list[BoolArray], scored: BoolArray) -> float:
+    """Return :func:`held_out_error` of simulations computed already (one per fold)."""
+    by_fold = {id(held): sim for held, sim in zip(folds, simulations)}
+    return held_out_error(lambda held: by_fold[id(held)], displacement, folds, scored)
+
+
+def choose_out_of_sample(error_of: Callable[[float], float], grid: FloatArray, *,
+                         off_error: float = math.inf, refine: int = 4,
+                         bounds: tuple[bool, bool] = (True, True),
+                         refine_on: Callable[[float], float] | None = None) -> OutOfSampleChoice:
+    """
+    Choose a 1-D effect parameter by its held-out error: a grid, then a bounded refinement.
+
+    The effect switched off (``off_error``) competes with every trial, so an effect that
+    does not predict unseen blocks better than the baseline is not chosen.  A grid
+    minimum at either end of the grid is not refined: the parameter is reported as at a
+    bound (not identified).
+
+    Parameters
+    ----------
+    error_of : callable float -> float
+        Held-out error of a trial value (e.g. :func:`held_out_error` of its fits).
+    grid : ndarray of float, shape (k,)
+        Ascending trial values > 0 (the refinement runs in log scale).
+    off_error : float
+        Held-out error with the effect off (inf: the effect cannot be off here).
+    refine : int
+        Evaluations of the refinement between the winner's neighbours (0: grid only).
+    bounds : (bool, bool)
+        Whether the grid's lower and upper end are bounds of the search (False for an end
+        that is a physical limit, e.g. a dead time's smallest trial of one sample).
+    refine_on : callable float -> float, optional
+        The error the refinement minimises inside the bracket the held-out errors chose
+        (default ``error_of``).  The whole record's fit error sharpens a value the folds
+        located to within two grid steps: the held-out error is noisier than the fit's,
+        and on a lag of 4 ms its refinement landed at 3.4-3.7 ms against 4.9 ms in sample,
+        and the creep fitted behind the lag then lost 14 % of its gain.
+
+    Returns
+    -------
+    OutOfSampleChoice
+        The choice.
+
+    """
+    errors = np.array([error_of(float(g)) for g in grid])
+    i = int(np.argmin(errors))
+    best, best_error = float(grid[i]), float(errors[i])
+    bound = ('lower' if i == 0 and bounds[0] else
+             'upper' if i == grid.size - 1 and bounds[1] else None)
+    if bound is None and refine > 0 and 0 < i < grid.size - 1:
+        lo, hi = math.log(float(grid[i - 1])), math.log(float(grid[i + 1]))
+        if refine_on is None:
+            res = minimize_scalar(lambda v: error_of(math.exp(v)), bounds=(lo, hi),
+                                  method='bounded', options={'maxiter': refine, 'xatol': 1e-2})
+            if float(res.fun) < best_error:
+                best, best_error = float(math.exp(res.x)), float(res.fun)
+        else:
+            inside = refine_on
+            res = minimize_scalar(lambda v: inside(math.exp(v)), bounds=(lo, hi),
+                                  method='bounded', options={'maxiter': refine, 'xatol': 1e-2})
+            if float(res.fun) < inside(best):
+                best = float(math.exp(res.x))
+    if not best_error < off_error:
+        return OutOfSampleChoice(None, off_error, off_error, None, grid, errors)
+    return OutOfSampleChoice(best, best_error, off_error, bound, grid, errors)
+
+
+def bound_note(choice: OutOfSampleChoice, unit: str = 's') -> str:
+    """
+    Say why a parameter at a bound of its search range is not identified.
+
+    Parameters
+    ----------
+    choice : OutOfSampleChoice
+        A choice with ``bound`` set.
+    unit : str
+        The parameter's unit.
+
+    Returns
+    -------
+    str
+        E.g. ``'not identified: at the upper bound 300 s of the search range 3-300 s (the
+        record cannot tell a larger value from this one)'``.
+
+    """
+    side = choice.bound or 'lower'
+    edge = float(choice.grid[0] if side == 'lower' else choice.grid[-1])
+    beyond = 'smaller' if side == 'lower' else 'larger'
+    return (f'not identified: at the {side} bound {edge:.3g} {unit} of the search range'
+            f' {float(choice.grid[0]):.3g}-{float(choice.grid[-1]):.3g} {unit} (the record'
+            f' cannot tell a {beyond} value from this one)')
 
 
 def determined_start(time: FloatArray, current: FloatArray, displacement: FloatArray,

@@ -43,7 +43,8 @@ from ..operators.model import MPIModel
 __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFFECTS',
            'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values',
            'effects_present', 'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT', 'PlantChunk', 'PlantEffect',
-           'PlantParameter', 'PLANT_STAGES', 'EFFECT_STAGES', 'plant_effects', 'plant_switch']
+           'PlantParameter', 'PLANT_STAGES', 'EFFECT_STAGES', 'plant_effects', 'plant_switch',
+           'unidentified_parameters']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -502,6 +503,34 @@ def plant_switch(name: str) -> str:
                ' register the effect with plant=PlantEffect(...)')
         raise ModelError(msg)
     return effect.plant.switch.name
+
+
+def unidentified_parameters(model: Any) -> dict[str, str]:
+    """
+    Return the parameters of a fitted model that its fit could not identify.
+
+    A fit whose best value of a parameter lies at a bound of its search range (a time
+    constant at the longest or shortest trial) has not found the parameter, only that it lies
+    beyond that bound; the model keeps the bound's value to run, but reports must say "not
+    identified" instead of stating it as physics.  An effect's model holds them in its
+    ``not_identified`` field (key -> the reason); a composite model gathers its parts'.
+
+    Parameters
+    ----------
+    model : object
+        A fitted extended model (or a plain Gamma, which has none).
+
+    Returns
+    -------
+    dict of str to str
+        Parameter key -> why it is not identified (empty when every one is).
+
+    """
+    out: dict[str, str] = {}
+    for part in getattr(model, 'parts', ()) or ():
+        out.update(unidentified_parameters(part))
+    out.update(dict(getattr(model, 'not_identified', None) or {}))
+    return out
 
 
 def _is_off(value: Any) -> bool:

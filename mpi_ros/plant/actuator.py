@@ -421,6 +421,13 @@ class MagnetostrictiveActuator:
     seed : int or None, optional
         Seed of the sensor-noise generator (:func:`numpy.random.default_rng`).  ``None``
         draws fresh entropy, as numpy does.  Only used when ``noise_std_m > 0``.
+    core : object, optional
+        Another hysteresis core in place of the built-in Preisach kernel (steps 2-4), e.g. a
+        :class:`mpi_ros.plant.preisach.DiscretePreisachCore`: ``core.start()`` gives its
+        state at rest, ``core.run(state, current)`` advances it in place over the current
+        the material sees and returns the displacement [m].  The effects' steps and the
+        sensor wrap it as they wrap the built-in core; the config's core parameters are
+        then unused.
 
     Examples
     --------
@@ -432,7 +439,8 @@ class MagnetostrictiveActuator:
     """
 
     def __init__(self, config: ActuatorConfig | None = None, *,
-                 seed: int | None = None) -> None:
+                 seed: int | None = None, core: Any = None) -> None:
+        self._other_core = core
         self._config = ActuatorConfig() if config is None else config
         if not isinstance(self._config, ActuatorConfig):
             msg = f'config must be an ActuatorConfig; found {type(config).__name__}'
@@ -594,10 +602,14 @@ class MagnetostrictiveActuator:
             'input': [plant.start(self._values) for plant in self._input_steps],
             'output': [plant.start(self._values) for plant in self._output_steps],
             'rng': np.random.default_rng(self._seed),
+            'core': None if self._other_core is None else self._other_core.start(),
         }
 
     def _material(self, state: dict[str, Any], current: FloatArray) -> FloatArray:
         """Return the hysteresis core's displacement for the current the material sees."""
+        if self._other_core is not None:
+            other: FloatArray = self._other_core.run(state['core'], current)
+            return other
         out: FloatArray = _kernel(current, *self._core, state['scalars'], state['maxima'],
                                   state['minima'])
         return out

@@ -1,0 +1,306 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""
+The wide, random diagnosis sweep (issue 24, item 5): 10 seeds per cause, two cores.
+
+For each cause (none, creep, rate dependence, thermal drift, dead time, creep + rate
+dependence) and each of the ten seeds fixed below (chosen before any result was seen), one
+plant is drawn:
+
+- **core**: odd seeds a discrete Preisach core with a random relay-weight density
+  (:func:`mpi_ros.plant.preisach.random_preisach_core`, 300 relays); even seeds the built-in
+  smooth-density Preisach actuator with its coercive centre (0.2-0.4 A), coercive spread
+  (0.06-0.15 A), interaction spread (0.3-0.6 A), reversible fraction (0.05-0.2) and map knee
+  (0.45-0.7) drawn.
+- **effect strength**, wider than :mod:`eval_diagnosis` (log-uniform where a scale spans
+  decades):
+
+  - creep: fraction 0.02-0.15 of a displacement change (piezo and magnetostrictive stacks
+    creep 1-20 %), lags from 0.02-1 s to 10-1000 s, 3-9 of them;
+  - rate dependence: eddy-current lag 1-20 ms (a solid Terfenol-D rod at these sizes is
+    a few ms; laminated faster, bulk cores slower);
+  - thermal drift: 0.3-3 um/A^2 (0.4-4 um at the mean heating of the excitation, 1-12 % of
+    the stroke) with a thermal time constant of 5-200 s (a coil on a rod heats over tens of
+    seconds to minutes; 200 s is three times the training record);
+  - dead time: 1-30 ms (amplifier, sensor filters, a slow bus);
+  - sensor noise 0.01-0.05 um.
+- **records**: training is the 60 s identification excitation (1 kHz, holds of 5 s, 40 Hz
+  bursts) as in :mod:`eval_diagnosis`; validation is a separate experiment with its own
+  sensor zero (+7 um): the diagnostic excitation (holds and bursts at 5-40 Hz), then a 1 s
+  ramp into 20 s of a smooth two-sine trajectory inside 15-85 % of the current range
+  (0.1-0.5 Hz and 0.7-2 Hz, random phases), unlike the training input.
+
+Per plant it writes one JSON line: the truth, the drawn parameters, the verdict, the gain,
+every candidate (gain, z, signature, the parameters at a search bound where the code reports
+them) and the gains of the true and the named effect on the smooth-sine part alone.
+
+The plants' records are written once (``--write DIR``) and diagnosed from there (``--read
+DIR``), so that two versions of the code see the same plants.  ``--summary FILE`` prints
+the confusion matrix and the acceptance counts of a results file.
+
+Run: ``python benchmarks/eval_diagnosis_wide.py --write /tmp/plants``, then
+``nice python benchmarks/eval_diagnosis_wide.py --read /tmp/plants --out results.jsonl``,
+then ``python benchmarks/eval_diagnosis_wide.py --summary results.jsonl`` (``--compare A B``:
+two results files side by side on the plants both hold).
+"""
+
+import argparse
+import json
+import math
+import os
+from pathlib import Path
+import platform
+import sys
+import time
+
+import numpy as np
+
+CAUSES = ('none', 'creep', 'rate_dependence', 'thermal_drift', 'dead_time',
+          'creep + rate_dependence')
+#: Fixed before any result was looked at.
+SEEDS = (101, 102, 103, 104, 105, 106, 107, 108, 109, 110)
+RATE = 1000.0
+DURATION = 60.0
+EXCITATION = {'sample_rate': RATE, 'burst_frequency': 40.0, 'hold_duration': 5.0}
+VALIDATION_OFFSET = 7e-6
+ZERO_PEAK, ZERO_CURRENT = 1.8, 0.2
+SINE_SECONDS = 20.0
+
+
+def log_uniform(rng, lo, hi):
+    """Return a log-uniform draw in [lo, hi]."""
+    return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+
+
+def draw(cause, seed):
+    """Return the plant's drawn parameters (a dict of actuator fields plus 'core')."""
+    rng = np.random.default_rng([CAUSES.index(cause), seed])
+    values = {'core': 'discrete_preisach' if seed % 2 else 'builtin',
+              'noise_std_m': log_uniform(rng, 1e-8, 5e-8)}
+    if values['core'] == 'builtin':
+        values.update(coercive_current_a=rng.uniform(0.2, 0.4),
+                      coercive_spread_a=rng.uniform(0.06, 0.15),
+                      interaction_spread_a=rng.uniform(0.3, 0.6),
+                      reversible_fraction=rng.uniform(0.05, 0.2),
+                      map_knee=rng.uniform(0.45, 0.7))
+    for part in cause.split(' + '):
+        if part == 'creep':
+            values.update(creep_gain=rng.uniform(0.02, 0.15),
+                          creep_time_constant_min_s=log_uniform(rng, 0.02, 1.0),
+                          creep_time_constant_max_s=log_uniform(rng, 10.0, 1000.0),
+                          creep_lag_count=int(rng.integers(3, 10)))
+        elif part == 'rate_dependence':
+            values['eddy_time_constant_s'] = log_uniform(rng, 1e-3, 20e-3)
+        elif part == 'thermal_drift':
+            values.update(thermal_gain_m_per_a2=log_uniform(rng, 0.3e-6, 3e-6),
+                          thermal_time_constant_s=log_uniform(rng, 5.0, 200.0))
+        elif part == 'dead_time':
+            values['dead_time_s'] = log_uniform(rng, 1e-3, 30e-3)
+    return values
+
+
+def validation_input(seed):
+    """Return the validation input and the first sample of its smooth-sine part."""
+    from mpi_ros.plant.excitation import diagnostic_excitation
+    t, x = diagnostic_excitation(sample_rate=RATE, seed=seed + 10)
+    rng = np.random.default_rng(seed + 20)
+    f1, f2 = rng.uniform(0.1, 0.5), rng.uniform(0.7, 2.0)
+    p1, p2 = rng.uniform(0, 2 * np.pi, 2)
+    ts = np.arange(int(SINE_SECONDS * RATE)) / RATE
+    # 1 A +- 0.56 A at most: inside 15-85 % of the 0.2-1.8 A range.
+    sine = 1.0 + 0.32 * np.sin(2 * np.pi * f1 * ts + p1) + 0.24 * np.sin(2 * np.pi * f2 * ts + p2)
+    ramp = np.linspace(x[-1], sine[0], int(RATE) + 1)[1:]
+    xv = np.concatenate([x, ramp, sine])
+    tv = np.arange(xv.size) / RATE
+    return tv, xv, x.size + ramp.size
+
+
+def plant(values, seed):
+    """Return a function (time, current, noise seed) -> displacement of the drawn plant."""
+    from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+    from mpi_ros.plant.preisach import random_preisach_core
+    fields = {k: v for k, v in values.items() if k != 'core'}
+    core = random_preisach_core(seed) if values['core'] == 'discrete_preisach' else None
+    cfg = ActuatorConfig(**fields)
+    clean = ActuatorConfig(**{k: v for k, v in fields.items()
+                              if k in ('coercive_current_a', 'coercive_spread_a',
+                                       'interaction_spread_a', 'reversible_fraction',
+                                       'map_knee')})
+    path = np.array([0.0, ZERO_PEAK, ZERO_CURRENT])
+    zero = float(MagnetostrictiveActuator(clean, core=core).simulate(np.arange(3.0), path)[-1])
+
+    def run(t, x, noise_seed):
+        return MagnetostrictiveActuator(cfg, seed=noise_seed, core=core).simulate(t, x) - zero
+    return run
+
+
+def write(folder):
+    """Write every plant's training and validation record to ``folder`` (npz + json)."""
+    from mpi_ros.plant.excitation import identification_excitation
+    folder.mkdir(parents=True, exist_ok=True)
+    for cause in CAUSES:
+        for seed in SEEDS:
+            values = draw(cause, seed)
+            run = plant(values, seed)
+            t, x = identification_excitation(DURATION, seed=seed, **EXCITATION)
+            tv, xv, sine_start = validation_input(seed)
+            y = run(t, x, seed + 100)
+            yv = run(tv, xv, seed + 101) + VALIDATION_OFFSET
+            name = f'{cause.replace(" + ", "+")}-{seed}'
+            np.savez_compressed(folder / f'{name}.npz', t=t, x=x, y=y, tv=tv, xv=xv, yv=yv)
+            (folder / f'{name}.json').write_text(json.dumps(
+                {'cause': cause, 'seed': seed, 'values': values, 'sine_start': sine_start}))
+            print(name, flush=True)
+
+
+def sine_gain(r, cause, start):
+    """Return the gain of a candidate's validation simulation on the smooth-sine part."""
+    sims = r.series.get('candidates', {})
+    if cause not in sims:
+        return None
+    yv = np.asarray(r.series['displacement'])
+    base = np.asarray(r.series['baseline'])
+    b = float(np.sqrt(np.mean((yv[start:] - base[start:]) ** 2)))
+    c = float(np.sqrt(np.mean((yv[start:] - np.asarray(sims[cause])[start:]) ** 2)))
+    return 1.0 - c / b if b > 0 else 0.0
+
+
+def read(folder, out, only=None):
+    """Diagnose every plant in ``folder``; append one JSON line per plant to ``out``."""
+    import mpi_ros
+    from mpi_ros.diagnosis import diagnose
+    from mpi_ros.recordings import Recording
+    print(f'# {platform.node()}, {os.cpu_count()} CPUs, Python {sys.version.split()[0]},'
+          f' mpi_ros from {Path(mpi_ros.__file__).parent.parent.name}', flush=True)
+    done = set()
+    if out.exists():
+        done = {json.loads(line)['name'] for line in out.read_text().splitlines() if line}
+    # Seed by seed, every cause of a seed together: a partial run covers every cause.
+    paths = sorted(folder.glob('*.json'), key=lambda q: (q.stem.rsplit('-', 1)[1], q.stem))
+    for meta_path in paths:
+        name = meta_path.stem
+        if name in done or (only and not any(name.startswith(o) for o in only)):
+            continue
+        meta = json.loads(meta_path.read_text())
+        d = np.load(folder / f'{name}.npz')
+        train = Recording(d['t'], d['x'], d['y'], source=f'{name}-train')
+        val = Recording(d['tv'], d['xv'], d['yv'], source=f'{name}-validation')
+        started = time.perf_counter()
+        try:
+            r = diagnose(train, validation=val)
+        except Exception as err:  # noqa: B902 - a refusal is a result of the sweep
+            row = {'name': name, **meta, 'verdict': 'refused', 'error': str(err)[:300],
+                   'seconds': time.perf_counter() - started}
+        else:
+            truth_parts = meta['cause'].split(' + ')
+            cands = [{'cause': c['cause'], 'gain': c['gain'], 'z': c['z'],
+                      'signature': c['signature'], 'significant': c['significant'],
+                      'parameters': c.get('parameters', {}),
+                      'not_identified': c.get('not_identified', {}),
+                      'sine_gain': sine_gain(r, c['cause'], meta['sine_start'])}
+                     for c in r.candidates]
+            row = {'name': name, **meta, 'verdict': r.cause, 'gain': r.gain,
+                   'ambiguous': r.decision.get('ambiguous'),
+                   'tied_with': r.decision.get('tied_with'),
+                   'baseline_rms': r.baseline['rms_error'], 'candidates': cands,
+                   'truth_parts': truth_parts, 'seconds': time.perf_counter() - started}
+        with out.open('a') as f:
+            f.write(json.dumps(row, default=float) + '\n')
+        print(name, row['verdict'], f'{row.get("gain", 0.0):.3f}', f'{row["seconds"]:.0f} s',
+              flush=True)
+
+
+def summary(path):
+    """Print the confusion matrix, the gains and the acceptance counts of a results file."""
+    rows = _rows(path)
+    verdicts = sorted({r['verdict'] for r in rows} | set(CAUSES),
+                      key=lambda v: (v not in CAUSES, CAUSES.index(v) if v in CAUSES else 0, v))
+    print('| truth \\ verdict | ' + ' | '.join(verdicts) + ' |')
+    print('|---' * (len(verdicts) + 1) + '|')
+    for cause in CAUSES:
+        mine = [r for r in rows if r['cause'] == cause]
+        print(f'| {cause} | ' + ' | '.join(str(sum(r['verdict'] == v for r in mine))
+                                           for v in verdicts) + ' |')
+    right = sum(r['verdict'] == r['cause'] for r in rows)
+    effect_rows = [r for r in rows if r['cause'] != 'none']
+    none_rows = [r for r in rows if r['cause'] == 'none']
+    print(f'\nnamed right: {right}/{len(rows)} ({100 * right / len(rows):.0f} %); effects'
+          f' {sum(r["verdict"] == r["cause"] for r in effect_rows)}/{len(effect_rows)};'
+          f' none on effect-free plants {sum(r["verdict"] == "none" for r in none_rows)}'
+          f'/{len(none_rows)}')
+    named = [r for r in rows
+             if r['verdict'] not in ('none', 'refused', 'outside_invertible_class')]
+    weak = [r for r in named if r['gain'] < 0.2]
+    print(f'named effects with validation gain < 0.2: {len(weak)}/{len(named)}'
+          + (' (' + ', '.join(f'{r["name"]} {r["verdict"]} {r["gain"]:.2f}' for r in weak) + ')'
+             if weak else ''))
+    worse = []
+    for r in rows:
+        for c in r.get('candidates', []):
+            if c['signature'] == 'present' and c['gain'] < 0.0:
+                worse.append(f'{r["name"]} {c["cause"]} {c["gain"]:+.2f}')
+    print(f'candidates with their signature present but worse than the baseline on'
+          f' validation: {len(worse)}' + (f' ({", ".join(worse)})' if worse else ''))
+    bounds = [f'{r["name"]} {c["cause"]}' for r in rows for c in r.get('candidates', [])
+              if c.get('not_identified') and c['cause'] == r['verdict']]
+    print(f'named effects with a parameter reported not identified: {len(bounds)}'
+          + (f' ({", ".join(bounds)})' if bounds else ''))
+    print('\n| truth | gains of the true effect on validation (whole; smooth sines) |')
+    print('|---|---|')
+    for cause in CAUSES[1:]:
+        parts = []
+        for r in rows:
+            if r['cause'] != cause:
+                continue
+            c = next((c for c in r.get('candidates', []) if c['cause'] == cause), None)
+            parts.append('-' if c is None else
+                         f'{c["gain"]:+.2f}; {c["sine_gain"]:+.2f}' if c['sine_gain'] is not None
+                         else f'{c["gain"]:+.2f}; -')
+        print(f'| {cause} | ' + ' / '.join(parts) + ' |')
+    print(f'\nseconds per diagnosis: median {np.median([r["seconds"] for r in rows]):.0f}')
+
+
+def _rows(path):
+    # The results of a file, the first row of each plant (a resumed run may repeat one).
+    rows, seen = [], set()
+    for line in Path(path).read_text().splitlines():
+        if line and json.loads(line)['name'] not in seen:
+            rows.append(json.loads(line))
+            seen.add(rows[-1]['name'])
+    return rows
+
+
+def compare(path, other):
+    """Print the verdicts and gains of two results files on the plants both diagnosed."""
+    mine = {r['name']: r for r in _rows(path)}
+    theirs = {r['name']: r for r in _rows(other)}
+    print('| plant | core | verdict (this file) | gain | verdict (other) | gain |')
+    print('|---|---|---|---|---|---|')
+    for name in sorted(set(mine) & set(theirs), key=lambda n: (n.rsplit('-', 1)[1], n)):
+        a, b = mine[name], theirs[name]
+        print(f'| {name} | {a["values"]["core"]} | {a["verdict"]} | {a.get("gain", 0.0):.2f} |'
+              f' {b["verdict"]} | {b.get("gain", 0.0):.2f} |')
+
+
+def main(argv=None):
+    """Write, diagnose or summarise (see the module docstring)."""
+    p = argparse.ArgumentParser(description=__doc__.split('\n')[1])
+    p.add_argument('--write', type=Path)
+    p.add_argument('--read', type=Path)
+    p.add_argument('--out', type=Path, default=Path('diagnosis_wide.jsonl'))
+    p.add_argument('--only', nargs='*', help='plant name prefixes to diagnose')
+    p.add_argument('--summary', type=Path)
+    p.add_argument('--compare', type=Path, nargs=2, metavar=('THIS', 'OTHER'))
+    args = p.parse_args(argv)
+    if args.write:
+        write(args.write)
+    if args.read:
+        read(args.read, args.out, args.only)
+    if args.summary:
+        summary(args.summary)
+    if args.compare:
+        compare(*args.compare)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

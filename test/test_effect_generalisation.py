@@ -1,0 +1,187 @@
+# Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
+"""Effect fits that generalise (issue 24 item 4, issue 26): nesting, folds, bounds."""
+
+from mpi_ros.diagnosis import diagnose
+from mpi_ros.errors import DataError
+from mpi_ros.extensions import CreepModel, DeadTimeModel, fit_creep, fit_dead_time, \
+    fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
+from mpi_ros.extensions._common import determined_start, fit_gamma, lag_search_limits
+from mpi_ros.extensions.creep import CREEP_TIME_CONSTANTS, creep_time_constants
+from mpi_ros.extensions.dead_time import DEAD_TIME
+from mpi_ros.extensions.effect import unidentified_parameters
+from mpi_ros.extensions.rate_dependence import RATE_TIME_CONSTANT
+from mpi_ros.extensions.thermal_drift import THERMAL_TIME_CONSTANT
+from mpi_ros.identification import identify_weights
+from mpi_ros.identification.folds import blocked_folds
+from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+from mpi_ros.plant.excitation import identification_excitation
+from mpi_ros.plant.preisach import random_preisach_core
+from mpi_ros.recordings import Recording
+import numpy as np
+import pytest
+
+ORDER = (10, 5)
+RATE = 200.0
+DURATION = 30.0
+
+
+def _input():
+    return identification_excitation(DURATION, sample_rate=RATE, seed=3,
+                                     burst_frequency=5.0, hold_duration=3.0)
+
+
+def _record(core=None, **effect):
+    t, x = _input()
+    plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8, **effect), seed=1,
+                                     core=core)
+    return t, x, plant.simulate(t, x)
+
+
+def _gamma():
+    t, x, y = _record()
+    design, w_h, w_s_inv, _, constant, _ = identify_weights(x, y, *ORDER)
+    return t, x, design.model(w_h, w_s_inv, constant)
+
+
+# -- folds -------------------------------------------------------------------------------
+
+def test_blocked_folds_are_disjoint_contiguous_blocks_covering_the_record():
+    masks = blocked_folds(1000, 3, start=100, blocks=30)
+    assert len(masks) == 3
+    total = np.sum(masks, axis=0)
+    assert np.all(total[:100] == 0) and np.all(total[100:] == 1)
+    for mask in masks:
+        starts = np.flatnonzero(np.diff(mask.astype(int)) == 1)
+        assert starts.size == 10          # ten contiguous blocks per fold, 30 blocks dealt
+        assert 250 <= mask.sum() <= 350
+
+
+def test_blocked_folds_refuse_too_few_samples_or_folds():
+    with pytest.raises(DataError, match='count >= 2'):
+        blocked_folds(100, 1)
+    with pytest.raises(DataError, match='too few samples'):
+        blocked_folds(10, 3, start=8)
+
+
+# -- nesting: the effect switched off is the baseline exactly ------------------------------
+
+def test_each_effect_switched_off_gives_gamma_exactly():
+    t, x, gamma = _gamma()
+    plain = gamma.simulate(x)
+    taus = creep_time_constants(t)
+    for model in (RateDependentModel(gamma, 0.0), DeadTimeModel(gamma, 0.0),
+                  ThermalDriftModel(gamma, 30.0, 0.0),
+                  CreepModel(gamma, taus, np.zeros(taus.size))):
+        assert np.array_equal(model.simulate(t, x), plain), model.cause
+
+
+# -- on the training data, never worse than the baseline ------------------------------------
+
+def _mse(sim, y, keep):
+    return float(np.mean((sim[keep] - y[keep]) ** 2))
+
+
+@pytest.fixture(scope='module')
+def hard_record():
+    # No effect, a discrete Preisach core with a rough random density: the baseline MPI
+    # misses it (a staircase), the effects' fits have room to chase that misfit.
+    return _record(core=random_preisach_core(7))
+
+
+@pytest.mark.parametrize('fit', [fit_rate_dependence, fit_dead_time])
+def test_input_stage_fits_are_never_worse_than_gamma_on_the_training_record(hard_record, fit):
+    t, x, y = hard_record
+    _, longest = lag_search_limits(t)
+    settle = 3.0 * longest if fit is fit_rate_dependence else longest
+    start = determined_start(t, x, y, ORDER, settle=settle)
+    base, _ = fit_gamma(x, y, ORDER, 1e-6, start=start)
+    model = fit(t, x, y, order=ORDER)
+    keep = np.arange(t.size) >= start
+    assert _mse(model.simulate(t, x), y, keep) <= _mse(base.simulate(x), y, keep)
+
+
+@pytest.mark.parametrize('fit', [fit_thermal_drift, fit_creep])
+def test_material_fits_are_never_worse_than_gamma_on_the_training_record(hard_record, fit):
+    t, x, y = hard_record
+    design, w_h, w_s_inv, _, constant, _ = identify_weights(x, y, *ORDER)
+    base = design.model(w_h, w_s_inv, constant)
+    model = fit(t, x, y, order=ORDER)
+    keep = np.arange(t.size) >= design.burn_in
+    assert _mse(model.simulate(t, x), y, keep) <= _mse(base.simulate(x), y, keep)
+
+
+# -- a parameter at a bound of its search range is not identified ---------------------------
+
+def test_a_lag_far_beyond_the_search_range_is_not_identified():
+    t, x, y = _record(eddy_time_constant_s=1.5)         # the longest trial is 1 s
+    model = fit_rate_dependence(t, x, y, order=ORDER)
+    _, longest = lag_search_limits(t)
+    assert model.time_constant == pytest.approx(longest)
+    assert 'upper bound' in model.not_identified[RATE_TIME_CONSTANT]
+
+
+def test_a_dead_time_far_beyond_the_search_range_is_not_identified():
+    t, x, y = _record(dead_time_s=3.0)                  # the longest trial is 1 s
+    model = fit_dead_time(t, x, y, order=ORDER)
+    _, longest = lag_search_limits(t)
+    assert model.dead_time == pytest.approx(longest)
+    assert 'upper bound' in model.not_identified[DEAD_TIME]
+
+
+def test_a_thermal_time_constant_far_beyond_the_search_range_is_not_identified():
+    # 5000 s on a 30 s record (the longest trial is five records, 150 s).
+    t, x, y = _record(thermal_gain_m_per_a2=3e-4, thermal_time_constant_s=5000.0)
+    model = fit_thermal_drift(t, x, y, order=ORDER)
+    assert model.weight != 0.0
+    assert model.time_constant == pytest.approx(5.0 * (t[-1] - t[0]))
+    assert 'upper bound' in model.not_identified[THERMAL_TIME_CONSTANT]
+
+
+def test_creep_far_slower_than_the_record_is_not_identified():
+    # Creep lags of 3000-10000 s on a 30 s record (the bank ends at 60 s).
+    t, x, y = _record(creep_gain=10.0, creep_time_constant_min_s=3000.0,
+                      creep_time_constant_max_s=1e4, creep_lag_count=2)
+    model = fit_creep(t, x, y, order=ORDER)
+    assert np.any(model.weights > 0.0)
+    assert 'not identified' in unidentified_parameters(model)[CREEP_TIME_CONSTANTS]
+
+
+def test_the_diagnosis_reports_a_bound_as_not_identified_never_as_a_value():
+    slow = {'thermal_gain_m_per_a2': 3e-4, 'thermal_time_constant_s': 5000.0}
+    t, x, y = _record(**slow)
+    tv, xv = identification_excitation(DURATION, sample_rate=RATE, seed=4, burst_frequency=5.0,
+                                       hold_duration=3.0)
+    plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8, **slow), seed=2)
+    yv = plant.simulate(tv, xv)
+    report = diagnose(Recording(t, x, y, source='slow thermal'), order=ORDER,
+                      validation=Recording(tv, xv, yv, source='validation'),
+                      causes=('thermal_drift',))
+    form = report.to_json()
+    candidate = form['candidates'][0]
+    assert THERMAL_TIME_CONSTANT in candidate['not_identified']
+    assert THERMAL_TIME_CONSTANT not in candidate['parameters']
+    if report.cause == 'thermal_drift':
+        assert THERMAL_TIME_CONSTANT in form['extended']['not_identified']
+        assert THERMAL_TIME_CONSTANT not in form['extended']['parameters']
+        assert f'{THERMAL_TIME_CONSTANT} not identified' in report.evidence
+
+
+# -- the discrete Preisach core -----------------------------------------------------------------
+
+def test_the_discrete_preisach_core_is_hysteretic_streams_and_starts_at_rest():
+    core = random_preisach_core(5)
+    t = np.arange(2000) / 100.0
+    x = 1.0 + 0.8 * np.sin(2 * np.pi * 0.25 * t) * np.minimum(t / 4.0, 1.0)
+    plant = MagnetostrictiveActuator(ActuatorConfig(creep_gain=0.05), core=core)
+    whole = plant.simulate(t, x)
+    plant.reset()
+    chunks = np.concatenate([plant.advance(t[:777], x[:777]), plant.advance(t[777:], x[777:])])
+    assert np.array_equal(whole, chunks)
+    assert not core.start().any()            # at rest every relay is down
+    # Rising and falling through 1 A on the last loop give different outputs (hysteresis).
+    last = slice(1600, 2000)
+    near = np.flatnonzero(np.abs(x[last] - 1.0) < 0.02)
+    rising = np.gradient(x[last])[near] > 0
+    assert rising.any() and (~rising).any()
+    gap = np.mean(whole[last][near][~rising]) - np.mean(whole[last][near][rising])
+    assert gap > 0.02 * np.ptp(whole)
