@@ -74,7 +74,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                   reliability: str = 'reliable', pin: bool = False,
                   node_kind: str = 'compensator',
                   receiver_kind: str = 'ordinary', axes: int = 1,
-                  chunk: int = 1, adaptation: bool = False) -> dict[str, Any]:
+                  chunk: int = 1, adaptation: bool = False,
+                  echo: bool = False) -> dict[str, Any]:
     """
     Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
@@ -120,6 +121,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         act as the actuator: it answers every command with the benchmark model's
         displacement on ``displacement`` (lock step), so the adaptation pairs, fits and
         solves a candidate every second while the command path is measured.
+    echo : bool
+        The receiver answers as the actuator even without ``adaptation`` (the same work
+        in the receiver for a fair comparison of adaptation on and off).
 
     Returns
     -------
@@ -185,7 +189,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         [sys.executable, __file__, '--role', 'receiver', '--out', out, '--count', str(count),
          '--duration', str(duration + 60.0), '--qos-depth', str(qos_depth),
          '--reliability', reliability, '--receiver', receiver_kind, '--axes', str(axes),
-         '--chunk', str(chunk), *(['--adaptation'] if adaptation else [])],
+         '--chunk', str(chunk), *(['--echo'] if adaptation or echo else [])],
         env=dict(os.environ))
     if pin:
         # Right after the start, before rclpy creates any thread: every later thread
@@ -401,13 +405,16 @@ def main() -> None:
     parser.add_argument('--adaptation', action='store_true',
                         help='online adaptation on, the receiver answering as the actuator '
                              '(single axis; use with --receiver raw)')
+    parser.add_argument('--echo', action='store_true',
+                        help='the receiver answers as the actuator on displacement (implied by '
+                             '--adaptation; alone: the same receiver load without adaptation)')
     parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
     parser.add_argument('--out', default='', help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.role == 'receiver':
         _receiver(args.out, args.count, args.duration, args.qos_depth, args.reliability,
-                  args.receiver, args.axes, args.chunk, echo=args.adaptation)
+                  args.receiver, args.axes, args.chunk, echo=args.echo)
         return
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
@@ -415,7 +422,7 @@ def main() -> None:
                                        reliability=args.reliability, pin=args.pin,
                                        node_kind=args.node, receiver_kind=args.receiver,
                                        axes=args.axes, chunk=args.chunk,
-                                       adaptation=args.adaptation)),
+                                       adaptation=args.adaptation, echo=args.echo)),
           flush=True)
 
 

@@ -232,6 +232,9 @@ class Adaptation:
         self._state = 'collecting readings'
         self._recent_error = math.nan
         self._reset(model)
+        # Compile the play kernel the worker uses now, not in the worker's first step:
+        # numba compiles holding the interpreter lock, which would stall the command path.
+        play_end_state(np.zeros(2), np.zeros(1))
 
     @property
     def model(self) -> MPIModel:
@@ -374,9 +377,8 @@ class Adaptation:
         self._determined: bool = False
         self._lo: float = math.inf
         self._hi: float = -math.inf
-        self._last_reading: float = math.nan
-        self._stuck_run: int = 0
-        self._stuck_span: tuple[float, float] = (math.inf, -math.inf)
+        self._stuck_x = np.empty(0)
+        self._stuck_y = np.empty(0)
         self._last_residual: float = math.nan
         # Play outputs on the raw input [A] (every model of the design shares the
         # thresholds; a model with input offset x0 has the states minus x0): at the
@@ -412,20 +414,10 @@ class Adaptation:
         previous = np.concatenate([[self._last_residual], residual[:-1]])
         jumps = np.abs(residual - previous) > s.jump * self._output_span
         # A stuck sensor: the same reading stuck_samples times while the commands of that
-        # run moved by 5 % of the input range (a hold of the command is no fault).
-        stuck = np.zeros(y.size, dtype=bool)
-        run, last = self._stuck_run, self._last_reading
-        low, high = self._stuck_span
-        moved = 0.05 * self._input_span
-        for k in range(y.size):          # short: one batch of readings
-            if y[k] == last:
-                run += 1
-                low, high = min(low, x[k]), max(high, x[k])
-            else:
-                run, low, high = 1, x[k], x[k]
-            last = y[k]
-            stuck[k] = run >= s.stuck_samples and high - low > moved
-        self._stuck_run, self._last_reading, self._stuck_span = run, last, (low, high)
+        # run moved by 5 % of the input range (a hold of the command is no fault).  Runs of
+        # equal readings, carried over from the previous batch (vectorised: this thread
+        # shares the interpreter with the command path).
+        stuck = self._stuck(x, y)
         self._last_residual = float(residual[-1]) if finite[-1] else math.nan
         bad = ~finite | jumps | stuck
         if np.any(bad):
@@ -446,6 +438,24 @@ class Adaptation:
             if self._frozen_left == 0:
                 self._set_state('adapting')
         return np.ones(y.size, dtype=bool)
+
+    def _stuck(self, x: FloatArray, y: FloatArray) -> npt.NDArray[np.bool_]:
+        s = self.settings
+        xs = np.concatenate([self._stuck_x, x])
+        ys = np.concatenate([self._stuck_y, y])
+        start = np.ones(ys.size, dtype=bool)
+        start[1:] = ys[1:] != ys[:-1]
+        run_id = np.cumsum(start) - 1
+        run_start = np.flatnonzero(start)
+        length = np.arange(ys.size) - run_start[run_id] + 1
+        low = np.minimum.reduceat(xs, run_start)[run_id]
+        high = np.maximum.reduceat(xs, run_start)[run_id]
+        flagged = (length >= s.stuck_samples) & (high - low > 0.05 * self._input_span)
+        # Keep the current run (at most stuck_samples of it) for the next batch.
+        tail = ys.size - int(run_start[-1]) if ys.size else 0
+        keep = min(tail, s.stuck_samples)
+        self._stuck_x, self._stuck_y = xs[xs.size - keep:], ys[ys.size - keep:]
+        return flagged[flagged.size - y.size:]
 
     def _buffer(self, x: FloatArray, y: FloatArray, ok: npt.NDArray[np.bool_]) -> None:
         s = self.settings

@@ -99,6 +99,7 @@ nobody asked for (with ``autostart: false`` it starts, and configure fails inste
 """
 
 import struct
+import sys
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
@@ -125,6 +126,9 @@ from ..operators.model import MPIModel
 from ..units import INPUT_QUANTITY_KEY
 
 __all__ = ['CompensatorNode', 'main', 'make_node']
+
+#: Longest time [s] the adaptation's worker holds the interpreter lock at a time.
+_SWITCH_INTERVAL = 5e-4
 
 #: Most messages served in one subscription callback (patched by tests).
 _DRAIN_LIMIT = DRAIN_LIMIT
@@ -388,6 +392,10 @@ class CompensatorNode(CompensatorNodeBase):
             values, self.get_parameter('sample_period').value)
         self._adaptation = Adaptation(model, settings)
         self._record = self._adaptation.record_command
+        # The worker thread shares the interpreter lock with the command path: let it hold
+        # the lock for at most 0.5 ms at a time (Python's default is 5 ms), so a step's
+        # Python code delays a command by no more than that.
+        sys.setswitchinterval(min(sys.getswitchinterval(), _SWITCH_INTERVAL))
         self._worker = AdaptationWorker(
             self._adaptation,
             on_error=lambda text: self.get_logger().error(f'adaptation step failed: {text}'))
