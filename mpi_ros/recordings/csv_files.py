@@ -251,7 +251,10 @@ def read_csv_table(
     notes: list[str] = []
     header = list(table.header)
     numeric = [_NUMBER.fullmatch(field) is not None for field in table.rows[0]]
-    chosen = set(select(header, numeric)) if select is not None else set(header)
+    # A first row without a single number (another delimiter, a second header line) is
+    # reported by the numeric check of every column, not by the selection.
+    chosen = (set(select(header, numeric)) if select is not None and any(numeric)
+              else set(header))
     indices = [index for index, name in enumerate(header) if name in chosen]
     columns, keep = _numeric_columns(table, indices, drop_nonfinite=drop_nonfinite,
                                      notes=notes, hint=nonfinite_hint)
