@@ -156,7 +156,7 @@ def test_colcon_build_installs_the_node_executables(tmp_path):
     command = [str(lib / 'compensator'), '--ros-args', '-r', '__node:=colcon_smoke',
                '--params-file', str(share / 'mpi_ros' / 'config' / 'compensator.yaml')]
     with NodeProcess(command, command=True, env=run_env, cwd=tmp_path) as node:
-        started = node.wait_for_output('unconfigured', timeout=60.0)
+        started = node.wait_for_output('no model given yet', timeout=60.0)
         status = node.stop()
     assert started, node.output
     assert status == 0, node.output

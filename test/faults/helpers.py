@@ -141,10 +141,10 @@ def get_parameters(driver, names, node='/compensator'):
     return values
 
 
-def mirror(params):
+def mirror(params, limits=LIMITS):
     """Return the core compensator the node builds from the same model and limits."""
     model = params if isinstance(params, MPIModel) else MPIModel.from_params(params)
-    return Compensator(model, output_min=LIMITS[0], output_max=LIMITS[1])
+    return Compensator(model, output_min=limits[0], output_max=limits[1])
 
 
 def desired_values(params, size, seed):

@@ -42,7 +42,7 @@ def _identifier(nodes, bag, *ros_args):
 def test_compensator_first_then_identifier_pushes_from_a_bag(nodes, driver, bags, tmp_path):
     bag_a, params_a, _ = bags['a']
     comp = nodes.compensator()
-    wait_for_log(comp, 'unconfigured')
+    wait_for_log(comp, 'no model given yet')
     driver.wait_for(lambda: driver.desired_pub.get_subscription_count() > 0, 'compensator',
                     60.0)
     # Unconfigured: nothing is published.
@@ -67,7 +67,9 @@ def test_compensator_first_then_identifier_pushes_from_a_bag(nodes, driver, bags
     assert wait_exit(ident, 60.0) == 0, log_text(ident)
     assert '/compensator accepted the model' in log_text(ident)
     assert get_parameters(driver, KEYS) == params_a
-    core = mirror(params_a)
+    # The identifier pushes the identified input range as the limits too (issue 27).
+    limits = get_parameters(driver, ('output.min', 'output.max'))
+    core = mirror(params_a, (limits['output.min'], limits['output.max']))
     values = desired_values(params_a, 150, seed=1)
     assert first_command(driver, values[0]) == pytest.approx(core.command(values[0]), abs=EXACT)
     commands = commands_for(driver, values[1:])

@@ -3,7 +3,7 @@
 Run nodes as separate processes in tests (the hook for the integration tests).
 
 >>> with NodeProcess(['compensator', '--ros-args', '-p', 'output.max:=1.8']) as node:
-...     node.wait_for_output('unconfigured')          # doctest: +SKIP
+...     node.wait_for_output('no model given yet')    # doctest: +SKIP
 
 A :class:`NodeProcess` starts ``python -m mpi_ros.app.cli <node> ...`` (or any command) with
 :func:`ros_env.ros_environment`, collects its merged stdout/stderr in a thread, and on exit

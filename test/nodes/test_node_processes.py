@@ -11,7 +11,7 @@ def test_mpi_ros_compensator_runs_and_stops_on_sigint():
     args = ['compensator', '--ros-args', '-r', '__node:=process_smoke',
             '-p', 'output.min:=0.2', '-p', 'output.max:=1.8']
     with NodeProcess(args) as node:
-        assert node.wait_for_output('unconfigured', timeout=60.0), node.output
+        assert node.wait_for_output('no model given yet', timeout=60.0), node.output
         status = node.stop()
     assert status == 0, node.output
 
