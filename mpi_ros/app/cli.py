@@ -30,6 +30,7 @@ import hashlib
 import json
 import math
 from pathlib import Path
+import re
 import sys
 
 from typing import Any
@@ -213,6 +214,10 @@ def _refuse_unknown_keys(path: str, parameters: dict[str, Any]) -> None:
     unknown = unknown_keys(parameters, known, prefixes=('qos_overrides.',))
     if not unknown:
         return
+    if any(re.match(r'axis[0-9]+\.', name) for name in unknown):
+        msg = (f'parameter file {path} holds a multi-axis model (axis<k>.* keys); this command'
+               ' takes the single-axis file of one axis, as mpi-ros identify writes it')
+        raise MPIError(msg)
     hints = []
     for name in unknown[:5]:
         near = closest_key(name, known)

@@ -290,13 +290,18 @@ def test_launched_loop_runs_in_its_namespace_and_stops_on_ctrl_c(
     try:
         for name in ('compensator', 'plant_simulator', 'identifier'):
             group.start(name, commands[name])
+            if name == 'compensator':
+                # It got config/compensator.yaml (keyed /**/compensator) in the namespace:
+                # its output limits are the file's, not the defaults (0 and 2 A).
+                assert _get_parameters(driver, '/launch_test/compensator',
+                                       ['output.min', 'output.max']) == [0.2, 1.8]
         # The identifier fits, pushes into /launch_test/compensator and exits 0.
         assert group.wait('identifier', timeout=120.0) == 0, group.output('identifier')
         assert '/launch_test/compensator accepted the model' in group.output('identifier')
-        # The compensator got config/compensator.yaml (keyed /**/compensator) in the
-        # namespace: its output limits are the file's, not the defaults (0 and 2 A).
+        # It pushed what identify writes, the limits included: the identified input range.
         assert _get_parameters(driver, '/launch_test/compensator',
-                               ['output.min', 'output.max']) == [0.2, 1.8]
+                               ['output.min', 'output.max']) == pytest.approx(
+                                   [float(current.min()), float(current.max())], rel=1e-12)
         # The loop answers under the namespace: desired -> compensator -> plant.
         displacement = driver.handshake(driver.desired_pub, 2.0e-5)
         assert 0.0 < displacement < 1.0e-4

@@ -142,9 +142,11 @@ def test_diagnose_delivers_the_extension_it_names_clearly(ros_context, compensat
                                                           tmp_path):
     """``diagnose: true``: the extension the diagnosis names with a clear gain is pushed."""
     t, current = identification_excitation(10.0, sample_rate=RATE, seed=1)
-    config = ActuatorConfig(noise_std_m=2e-8, thermal_gain_m_per_a2=1.2e-6)
+    # Creep (10 % of each change): the effect fits chosen out of sample (issue 24) no longer
+    # name a 30 s thermal drift in a 10 s record, as they should not.
+    config = ActuatorConfig(noise_std_m=2e-8, creep_gain=0.1)
     displacement = MagnetostrictiveActuator(config, seed=1).simulate(t, current)
-    bag = tmp_path / 'drift'
+    bag = tmp_path / 'creep'
     write_bag_signals(bag, t, current, displacement)
     node = IdentifierNode(context=ros_context, parameter_overrides=[
         Parameter('bag', value=str(bag)), Parameter('order', value='6,3'),

@@ -71,7 +71,7 @@ def test_merge_axes_refuses_one_file_and_a_multi_axis_file(merged, tmp_path, cap
     assert main(['merge-axes', str(files[0]), '-o', str(tmp_path / 'x.yaml')]) == 1
     assert 'at least two parameter sets; found 1' in capsys.readouterr().err
     assert main(['merge-axes', str(path), str(files[0]), '-o', str(tmp_path / 'x.yaml')]) == 1
-    assert 'axis 0 has no model' in capsys.readouterr().err
+    assert 'holds a multi-axis model (axis<k>.* keys)' in capsys.readouterr().err
     assert not (tmp_path / 'x.yaml').exists()
 
 
