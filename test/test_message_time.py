@@ -198,10 +198,11 @@ def test_lagged_extended_compensator_wins_in_a_jittered_loop():
     rms = []
     for model in (plain, extended):
         params = model.to_params()
+        # A fresh plant starts where the identification record started (issue 24, item 2).
         comp = Compensator(extended_model_from_params(params), output_min=0.2,
-                           output_max=1.8, sample_period=PERIOD)
+                           output_max=1.8, sample_period=PERIOD, start='record')
         nominal = Compensator(extended_model_from_params(params), output_min=0.2,
-                              output_max=1.8, sample_period=PERIOD)
+                              output_max=1.8, sample_period=PERIOD, start='record')
         clock = MessageClock()
         plant = MagnetostrictiveActuator(cfg, seed=3)
         measured = np.empty(desired.size)

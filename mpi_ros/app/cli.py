@@ -122,10 +122,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     if result.findings:
         _progress(f'found: {result.findings}')
     from ..diagnosis.time_base import implausible_dynamics, time_base_warning
-    warning = time_base_warning(implausible_dynamics(result.dynamics_estimate),
-                                [('record', recording.time)], command='identify')
-    if warning is not None:
-        _progress(f'warning: {warning}')
+    time_warning = time_base_warning(implausible_dynamics(result.dynamics_estimate),
+                                     [('record', recording.time)], command='identify')
+    if time_warning is not None:
+        _progress(f'warning: {time_warning}')
     for note in result.notes:
         _progress(f'note: {note}')
     summary = dict(result.summary(), source=str(args.data))

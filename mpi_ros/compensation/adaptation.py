@@ -231,6 +231,15 @@ class Adaptation:
         self._counts = _Counts()
         self._state = 'collecting readings'
         self._recent_error = math.nan
+        # The state _reset sets (declared here, where the type checker meets it first).
+        self._in_gram: int = 0
+        self._since_solve: int = 0
+        self._frozen_left: int = 0
+        self._skip: int = 0
+        self._determined: bool = False
+        self._lo: float = math.inf
+        self._hi: float = -math.inf
+        self._last_residual: float = math.nan
         self._reset(model)
         # Compile the play kernel the worker uses now, not in the worker's first step:
         # numba compiles holding the interpreter lock, which would stall the command path.
@@ -370,16 +379,16 @@ class Adaptation:
         self._bx = np.empty(0)
         self._by = np.empty(0)
         self._bok = np.empty(0, dtype=bool)
-        self._in_gram: int = 0
-        self._since_solve: int = 0
-        self._frozen_left: int = 0
-        self._skip: int = s.delay
-        self._determined: bool = False
-        self._lo: float = math.inf
-        self._hi: float = -math.inf
+        self._in_gram = 0
+        self._since_solve = 0
+        self._frozen_left = 0
+        self._skip = s.delay
+        self._determined = False
+        self._lo = math.inf
+        self._hi = -math.inf
         self._stuck_x = np.empty(0)
         self._stuck_y = np.empty(0)
-        self._last_residual: float = math.nan
+        self._last_residual = math.nan
         # Play outputs on the raw input [A] (every model of the design shares the
         # thresholds; a model with input offset x0 has the states minus x0): at the
         # newest reading screened, and at the first pair of the recent window.
@@ -455,7 +464,8 @@ class Adaptation:
         tail = ys.size - int(run_start[-1]) if ys.size else 0
         keep = min(tail, s.stuck_samples)
         self._stuck_x, self._stuck_y = xs[xs.size - keep:], ys[ys.size - keep:]
-        return flagged[flagged.size - y.size:]
+        result: npt.NDArray[np.bool_] = flagged[flagged.size - y.size:]
+        return result
 
     def _buffer(self, x: FloatArray, y: FloatArray, ok: npt.NDArray[np.bool_]) -> None:
         s = self.settings
