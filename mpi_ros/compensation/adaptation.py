@@ -494,11 +494,6 @@ class Adaptation:
             self._in_gram = end
         window = s.samples(s.holdout) + s.samples(min(s.forgetting_time, 2 * s.holdout))
         start = max(0, self._bx.size - window) if ok else self._bx.size
-        if not ok and self._in_gram < start:
-            part = slice(self._in_gram, start)
-            self._fit.advance(self._bx[part], np.zeros(start - self._in_gram),
-                              use=np.zeros(start - self._in_gram, dtype=bool))
-            self._in_gram = start
         if start and self._plays_window is not None:
             self._plays_window = play_end_state(self._bx[:start], self._thresholds,
                                                 self._plays_window)
@@ -523,9 +518,13 @@ class Adaptation:
             self._determined = True
         return mask
 
+    def _commands_span(self) -> float:
+        # How far the commands of the recent window move [A].
+        return float(np.ptp(self._bx)) if self._bx.size else 0.0
+
     def _excited(self) -> bool:
         s = self.settings
-        span = float(np.ptp(self._bx)) if self._bx.size else 0.0
+        span = self._commands_span()
         if span < s.min_excitation * self._input_span:
             self._counts.paused += 1
             self._set_state(f'paused: the commands span {100 * span / self._input_span:.3g}'
@@ -535,9 +534,7 @@ class Adaptation:
         return True
 
     def _excitation_mask(self) -> bool:
-        s = self.settings
-        span = float(np.ptp(self._bx)) if self._bx.size else 0.0
-        return span >= s.min_excitation * self._input_span
+        return self._commands_span() >= self.settings.min_excitation * self._input_span
 
     def _candidate(self, model: MPIModel, point: WeightPoint,
                    solution: WeightPoint) -> Candidate | None:
