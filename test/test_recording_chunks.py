@@ -14,7 +14,7 @@ from mpi_ros.params import read_params_yaml
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import DataOptions, read_bag_signals, read_recording, read_signals
-from mpi_ros.recordings.bag_reader import Float64MultiArrayReader, Selection, SelectionError
+from mpi_ros.recordings.messages import Float64MultiArrayReader, Selection, SelectionError
 import numpy as np
 import pytest
 

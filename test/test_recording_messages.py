@@ -5,7 +5,7 @@ from mpi_ros.errors import DataError
 from mpi_ros.recordings import (
     DATA_OPTIONS, DataOptions, MESSAGE_READERS, MessageReader, read_bag_signals,
     read_recording, read_signals, write_bag_signals, write_csv_columns)
-from mpi_ros.recordings.bag_reader import supported_types
+from mpi_ros.recordings.messages import supported_types
 import numpy as np
 import pytest
 

@@ -10,8 +10,9 @@ file writes every command-line output goes through.
 
 Modules: :mod:`.recording` (the :class:`Recording`), :mod:`.options` (the
 :class:`DataOptions` shared by the command line, the identifier node and the
-diagnosis), :mod:`.bag_reader` (with one reader per message type, in a
-registry), :mod:`.bag_writer`, :mod:`.csv_files`, :mod:`.reading`
+diagnosis), :mod:`.bag_reader` (pairs the two topics of a bag), :mod:`.messages` (one reader
+per message type, in the registry :data:`MESSAGE_READERS`), :mod:`.bag_storage`
+(finding and checking a bag's storage files), :mod:`.bag_writer`, :mod:`.csv_files`, :mod:`.reading`
 (:func:`read_recording`: bag or CSV by the path) and :mod:`.files` (atomic
 writes).
 
@@ -23,11 +24,11 @@ with a message naming the file, the topic or column, what was found and what to
 do about it.
 """
 
-from .bag_reader import MESSAGE_READERS, MessageReader, read_bag_signals, Selection, \
-    SelectionError
+from .bag_reader import read_bag_signals
 from .bag_writer import BagRecorder, write_bag_signals
 from .csv_files import read_csv_signals, read_csv_table, write_csv_columns
 from .files import atomic_write, atomic_writes, same_file, write_target
+from .messages import MESSAGE_READERS, MessageReader, Selection, SelectionError
 from .options import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS
 from .reading import read_recording, read_signals
 from .recording import join_recordings, MIN_SAMPLES, Recording

@@ -3,76 +3,34 @@
 Read the actuator input and output of a rosbag2 bag (sqlite3 or mcap) as paired samples.
 
 Each topic's messages become samples through the reader registered for the
-topic's type (:data:`MESSAGE_READERS`, below): one sample per message, or the
-K samples of one axis of a chunked ``std_msgs/msg/Float64MultiArray``
-(``layout.dim`` = samples x axes, the multi-axis nodes' layout). Every sample
-gets a time (a message's log time belongs to its last sample); each output
-sample is paired with the input held at its time.
-
-Message readers: the selected samples of each bag message, chosen by the topic's message
-type.  A recording needs the samples of the actuator input x [A] or output s [m]
-each message of a topic carries: one number for most types, a chunk of K
-samples for a chunked ``std_msgs/msg/Float64MultiArray``. A
-:class:`MessageReader` takes them from a decoded message; which number is
-described by a :class:`Selection` (a joint and field of a
-``sensor_msgs/msg/JointState``, an element or axis of a
-``Float64MultiArray``). The bag reader picks the reader by the topic's type
-as stored in the bag, through :data:`MESSAGE_READERS`.
-
-Chunked arrays (the multi-axis nodes' layout, :mod:`mpi_ros.array_layout`)
-    A ``Float64MultiArray`` whose ``layout.dim`` has two entries is a block of
-    ``dim[0].size`` = K samples x ``dim[1].size`` = N axes, row-major from
-    ``layout.data_offset`` with the row stride ``dim[1].stride`` (N when it is
-    smaller). The selected index is the axis (column, < N); the reader returns
-    the K samples of that column, oldest first. A message without ``dim``, or
-    with one or more than two entries, is one sample whose elements are
-    indexed as before (element k after ``data_offset``); so is a block with
-    K = 1. With :attr:`Selection.axes` = N (the data option ``array_axes``,
-    set by the identifier for ``axes`` > 1) such a message is read as the
-    nodes read it: its values after ``data_offset`` are K x N samples x axes.
-    When the samples were taken is the bag reader's business
-    (:func:`mpi_ros.recordings.read_bag_signals`).
-
-Adding a message type is one class and one registry line (the type must be in
-rosbags' ROS 2 Jazzy typestore)::
-
-    class PointXReader(MessageReader):
-        msgtype = 'geometry_msgs/msg/Point'
-
-        def value(self, msg, selection):
-            return float(msg.x)
-
-    MESSAGE_READERS = {..., PointXReader.msgtype: PointXReader()}
-
-A type whose messages carry several samples also overrides :meth:`MessageReader.values`.
+topic's type (:data:`mpi_ros.recordings.messages.MESSAGE_READERS`, one module per
+message type): one sample per message, or the K samples of one axis of a chunked
+``std_msgs/msg/Float64MultiArray`` (``layout.dim`` = samples x axes, the
+multi-axis nodes' layout). Every sample gets a time (a message's log time
+belongs to its last sample); each output sample is paired with the input held
+at its time. The storage files are found and checked by
+:mod:`mpi_ros.recordings.bag_storage`.
 """
 
 from __future__ import annotations
 
-import abc
 import contextlib
-import dataclasses
-from dataclasses import dataclass
-import functools
 from pathlib import Path
-from typing import Any, ClassVar, Mapping
 
 import numpy as np
 import numpy.typing as npt
 from rosbags.rosbag2 import Reader
-from rosbags.typesys import get_typestore, Stores
 
+from .bag_storage import check_message_counts, check_sqlite_file, corrupt_bag, \
+    finish_unfinished_mcap, locate_bag
+from .messages import MESSAGE_READERS, MessageReader, Selection, SelectionError, \
+    supported_types, typestore
 from .options import DataOptions
 from .recording import check_magnitudes, FloatArray, in_si, MIN_SAMPLES, PathLike, Recording
-from ..array_layout import chunk_layout, consecutive_layout
 from ..errors import DataError
 
-__all__ = ['BAG_SUFFIXES', 'Float64MultiArrayReader', 'Float64Reader', 'JointStateReader',
-           'MESSAGE_READERS', 'MessageReader', 'Selection', 'SelectionError', 'TIME_SOURCES',
-           'read_bag', 'read_bag_signals', 'supported_types', 'typestore']
+__all__ = ['TIME_SOURCES', 'read_bag', 'read_bag_signals']
 
-#: Suffixes of rosbag2 storage files.
-BAG_SUFFIXES = ('.db3', '.mcap')
 #: Sources of the sample times: the bag's log (receive) time.
 TIME_SOURCES = ('receive',)
 
@@ -104,7 +62,7 @@ def read_bag_signals(
     Each topic may carry ``std_msgs/msg/Float64``, ``sensor_msgs/msg/JointState``
     (one joint's position, velocity or effort) or
     ``std_msgs/msg/Float64MultiArray`` (one element, or one axis of a chunk
-    of samples x axes), see the message readers below. Each output
+    of samples x axes), see :mod:`mpi_ros.recordings.messages`. Each output
     sample is paired with the most recent input sample timed at or before it
     (zero-order hold): the displacement measured at time t responds to the
     last command sent before t. Output samples timed before the first input
@@ -246,12 +204,12 @@ def read_bag(path: PathLike, options: DataOptions, *, time_source: str = 'receiv
                'available')
         raise DataError(msg)
     selections = _selections(options)
-    storage_path, notes = _locate_bag(bag)
+    storage_path, notes = locate_bag(bag)
     with contextlib.ExitStack() as stack:
         if storage_path.suffix.lower() == '.mcap' and storage_path.is_file():
             # A recorder that was killed leaves an mcap without its summary and footer
             # (and no metadata.yaml): read the chunks it finished.
-            repaired = _finish_unfinished_mcap(bag, storage_path, stack)
+            repaired = finish_unfinished_mcap(bag, storage_path, stack)
             if repaired is not None:
                 storage_path, note = repaired
                 notes.append(note)
@@ -303,135 +261,6 @@ def _selections(options: DataOptions) -> tuple[Selection, Selection]:
                'one topic')
         raise DataError(msg)
     return pair[0], pair[1]
-
-
-def _locate_bag(bag: Path) -> tuple[Path, list[str]]:
-    """Return the path to hand to rosbags' Reader and initial notes."""
-    if not bag.exists():
-        msg = (f'bag {bag} does not exist; check the path (a rosbag2 bag is a directory '
-               'holding metadata.yaml and a .db3 or .mcap file)')
-        raise DataError(msg)
-    if bag.is_file() and bag.name == 'metadata.yaml':
-        return bag.parent, []
-    if bag.is_file():
-        if bag.suffix.lower() in BAG_SUFFIXES:
-            return bag, []
-        msg = (f'{bag} is not a rosbag2 bag: expected a bag directory or a .db3/.mcap file, '
-               f'found a {bag.suffix or "suffix-less"} file; use read_csv_signals for CSV')
-        raise DataError(msg)
-    if (bag / 'metadata.yaml').is_file():
-        return bag, []
-    files = sorted(p for p in bag.iterdir() if p.suffix.lower() in BAG_SUFFIXES)
-    if len(files) == 1:
-        note = (f'{bag} has no metadata.yaml (the recording was probably interrupted); '
-                f'read the storage file {files[0].name} directly')
-        return files[0], [note]
-    if not files:
-        msg = (f'{bag} is not a rosbag2 bag: it holds no metadata.yaml and no .db3/.mcap '
-               'file; pass the bag directory that `ros2 bag record` created')
-        raise DataError(msg)
-    msg = (f'{bag} has no metadata.yaml and {len(files)} storage files; run '
-           f'`ros2 bag reindex {bag}` or pass one of {[p.name for p in files]}')
-    raise DataError(msg)
-
-
-def _corrupt(bag: Path, err: BaseException) -> DataError:
-    msg = (f'cannot read bag {bag}: {type(err).__name__}: {err}; the bag is truncated or '
-           'corrupt (e.g. the recorder was killed); re-record it, or repair it '
-           '(`sqlite3 in.db3 .recover | sqlite3 out.db3`, `mcap recover`) and retry')
-    return DataError(msg)
-
-
-#: The magic that starts and ends an mcap file.
-_MCAP_MAGIC = b'\x89MCAP0\r\n'
-
-
-def _finish_unfinished_mcap(bag: Path, path: Path,
-                            stack: contextlib.ExitStack) -> tuple[Path, str] | None:
-    """
-    Return a finished copy of an mcap a killed recorder left, and a note; None if finished.
-
-    The copy ends after the last complete record (the chunks the recorder finished) with a
-    data-end record and a footer without a summary, which the reader scans; each chunk's
-    CRC is still checked as it is read.
-    """
-    import struct
-    import tempfile
-    try:
-        data = path.read_bytes()
-    except OSError as err:
-        raise _corrupt(bag, err) from err
-    if not data.startswith(_MCAP_MAGIC) or data.endswith(_MCAP_MAGIC):
-        return None
-    end = position = len(_MCAP_MAGIC)
-    chunks = 0
-    while position + 9 <= len(data):
-        op, length = data[position], struct.unpack_from('<Q', data, position + 1)[0]
-        if op == 0 or op > 0x10 or position + 9 + length > len(data):
-            break                                   # zeros or a record cut short
-        if op == 0x0F:                              # data end: the summary follows
-            break
-        position += 9 + length
-        end = position
-        chunks += op == 0x06
-    footer = (b'\x0f' + struct.pack('<QI', 4, 0) + b'\x02' + struct.pack('<QQQI', 20, 0, 0, 0)
-              + _MCAP_MAGIC)
-    folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix='mpi_ros_mcap_')))
-    copy = folder / path.name
-    copy.write_bytes(data[:end] + footer)
-    note = (f'{path.name} was not finished (the recorder was killed or is still running): '
-            f'read its {chunks} complete chunk(s), {len(data) - end} byte(s) after them '
-            'dropped')
-    return copy, note
-
-
-def _check_sqlite_file(bag: Path, path: Path) -> None:
-    """
-    Refuse a sqlite3 storage file that is cut short or fails SQLite's ``quick_check``.
-
-    SQLite reads the missing end of a truncated file as zeros, so a bag cut by one byte
-    reads without an error and with a changed sample; its size is then no longer a whole
-    number of pages, or smaller than the page count its header records.
-    """
-    import sqlite3
-    try:
-        size = path.stat().st_size
-        with path.open('rb') as f:
-            header = f.read(100)
-    except OSError as err:
-        raise _corrupt(bag, err) from err
-    if len(header) < 100 or not header.startswith(b'SQLite format 3\x00'):
-        raise _corrupt(bag, ValueError(f'{path.name} is not an SQLite database'))
-    page_size = int.from_bytes(header[16:18], 'big')
-    page_size = 65536 if page_size == 1 else page_size
-    pages = int.from_bytes(header[28:32], 'big')
-    header_valid = header[24:28] == header[92:96]       # the page count is kept up to date
-    if page_size < 512 or size % page_size or (header_valid and pages * page_size > size):
-        problem = (f'{path.name} holds {size} bytes, not the whole {page_size}-byte pages its '
-                   f'header records ({pages} pages)')
-        raise _corrupt(bag, ValueError(problem))
-    try:
-        connection = sqlite3.connect(f'{path.resolve().as_uri()}?mode=ro', uri=True)
-        try:
-            rows = connection.execute('PRAGMA quick_check').fetchmany(3)
-        finally:
-            connection.close()
-    except sqlite3.Error as err:
-        raise _corrupt(bag, err) from err
-    if rows != [('ok',)]:
-        found = '; '.join(str(row[0]) for row in rows)
-        raise _corrupt(bag, ValueError(f'{path.name} fails the SQLite quick_check: {found}'))
-
-
-def _check_counts(bag: Path, connections: list[Any], counts: dict[str, int]) -> None:
-    """Refuse a bag with fewer messages on a topic than its metadata.yaml records."""
-    for topic, count in counts.items():
-        recorded = sum(int(getattr(conn, 'msgcount', 0) or 0) for conn in connections
-                       if conn.topic == topic)
-        if count < recorded:
-            problem = (f'topic {topic} has {count} messages, its metadata.yaml records '
-                       f'{recorded}')
-            raise _corrupt(bag, ValueError(problem))
 
 
 def _sort_dedupe(
@@ -491,12 +320,12 @@ def _read_bag_topics(
         reader = Reader(storage_path)
         reader.open()
     except Exception as err:
-        raise _corrupt(bag, err) from err
+        raise corrupt_bag(bag, err) from err
     try:
         files = [storage_path] if storage_path.is_file() else sorted(storage_path.iterdir())
         for path in files:
             if path.suffix.lower() == '.db3':
-                _check_sqlite_file(bag, path)
+                check_sqlite_file(bag, path)
         connections = list(reader.connections)
         present = {conn.topic: conn.msgtype for conn in connections}
         readers = {}
@@ -536,8 +365,10 @@ def _read_bag_topics(
                            f'decoded as {conn.msgtype} ({type(err).__name__}: {err}); the bag '
                            'is corrupt; re-record it')
                     raise DataError(msg) from err
-                if number == 0 and conn.msgtype == Float64MultiArrayReader.msgtype:
-                    layouts[conn.topic] = _layout_of(decoded)
+                if number == 0:
+                    shape = readers[conn.topic].shape(decoded)
+                    if shape is not None:
+                        layouts[conn.topic] = shape
                 for role, selection in by_topic[conn.topic]:
                     try:
                         samples = readers[conn.topic].values(decoded, selection)
@@ -550,8 +381,8 @@ def _read_bag_topics(
         except DataError:
             raise
         except Exception as err:
-            raise _corrupt(bag, err) from err
-        _check_counts(bag, wanted, counts)
+            raise corrupt_bag(bag, err) from err
+        check_message_counts(bag, wanted, counts)
     finally:
         with contextlib.suppress(Exception):
             reader.close()
@@ -560,16 +391,6 @@ def _read_bag_topics(
                    np.concatenate(values[role]) if values[role] else np.empty(0),
                    np.array([chunk.size for chunk in values[role]], dtype=np.int64))
             for role in roles}
-
-
-def _layout_of(msg: Any) -> tuple[str, int]:
-    """Return ('chunk', axes) for a samples x axes block, ('flat', values) without dim."""
-    dims = msg.layout.dim
-    if len(dims) == 2:
-        return 'chunk', int(dims[1].size)
-    if not dims:
-        return 'flat', len(msg.data) - int(msg.layout.data_offset)
-    return 'other', 0
 
 
 def _check_layouts(bag: Path, selections: tuple[Selection, Selection],
@@ -699,305 +520,3 @@ def _clean_topic(
 def _sizes(counts: npt.NDArray[np.int64]) -> str:
     low, high = int(counts.min()), int(counts.max())
     return f'{low}' if low == high else f'{low} to {high}'
-
-
-class SelectionError(DataError):
-    """A message does not hold the selected number (joint, field or index)."""
-
-
-@dataclass(frozen=True)
-class Selection:
-    """
-    Which number to take from each message of one topic.
-
-    Attributes
-    ----------
-    topic : str
-        Topic name in the bag.
-    joint : str or None
-        Joint name in a ``JointState``; None takes the message's only joint.
-    joint_field : {'position', 'velocity', 'effort'}
-        Field of the joint in a ``JointState``.
-    index : int or None
-        Element of a ``Float64MultiArray`` after ``layout.data_offset``, or
-        the axis (column) of a chunked one (``layout.dim`` = samples x axes);
-        None takes the array's only element (the only axis of a chunk).
-    axes : int or None
-        Number of axes N of a ``Float64MultiArray`` without ``layout.dim``:
-        its values are then K x N samples x axes (row-major, K >= 1), as the
-        multi-axis nodes accept them; None reads such a message as one
-        sample (element `index`). A two-entry ``layout.dim`` must agree with
-        it. Other types ignore it.
-    names : Mapping[str, str]
-        How the user writes the options behind ``topic``, ``joint``,
-        ``joint_field``, ``index`` and ``axes`` (e.g. ``'--input-joint'``),
-        for messages.
-
-    """
-
-    topic: str
-    joint: str | None = None
-    joint_field: str = 'position'
-    index: int | None = None
-    axes: int | None = None
-    names: Mapping[str, str] = dataclasses.field(default_factory=dict, compare=False)
-
-    def name(self, attribute: str) -> str:
-        """Return how the user writes the option behind `attribute`."""
-        return self.names.get(attribute, attribute)
-
-    @property
-    def label(self) -> str:
-        """Topic, with the joint, field or index when one is selected."""
-        parts = [part for part in (self.joint, None if self.joint is None else self.joint_field,
-                                   None if self.index is None else f'[{self.index}]') if part]
-        return f'{self.topic} {" ".join(parts)}' if parts else self.topic
-
-
-class MessageReader(abc.ABC):
-    """
-    Take the selected number(s) from one decoded message of one type.
-
-    Subclasses set :attr:`msgtype` and :attr:`selectors` and implement
-    :meth:`value`; one line in :data:`MESSAGE_READERS` registers them. A type
-    whose messages carry several samples of the signal (a chunk) also
-    overrides :meth:`values`, which the bag reader calls.
-    """
-
-    #: Message type the reader decodes, as stored in the bag.
-    msgtype: ClassVar[str]
-    #: Attributes of :class:`Selection` the type uses (``joint``, ``joint_field``,
-    #: ``index``); setting another one for a topic of this type is an error.
-    selectors: ClassVar[tuple[str, ...]] = ()
-
-    @abc.abstractmethod
-    def value(self, msg: Any, selection: Selection) -> float:
-        """
-        Return the selected number of one message.
-
-        Parameters
-        ----------
-        msg : object
-            The message, decoded by rosbags.
-        selection : Selection
-            What to take from it.
-
-        Returns
-        -------
-        float
-            The number, in the unit it was published in.
-
-        Raises
-        ------
-        SelectionError
-            If the message does not hold it; the message says what it holds.
-
-        """
-
-    def values(self, msg: Any, selection: Selection) -> npt.NDArray[np.float64]:
-        """
-        Return the selected samples of one message, oldest first.
-
-        Parameters
-        ----------
-        msg : object
-            The message, decoded by rosbags.
-        selection : Selection
-            What to take from it.
-
-        Returns
-        -------
-        ndarray of float, shape (K,)
-            The K >= 1 samples, in the unit they were published in; by
-            default the one number of :meth:`value`.
-
-        Raises
-        ------
-        SelectionError
-            If the message does not hold them; the message says what it holds.
-
-        """
-        return np.array([self.value(msg, selection)], dtype=np.float64)
-
-
-class Float64Reader(MessageReader):
-    """``std_msgs/msg/Float64``: the number is ``data``."""
-
-    msgtype = 'std_msgs/msg/Float64'
-
-    def value(self, msg: Any, selection: Selection) -> float:
-        """Return ``msg.data``."""
-        return float(msg.data)
-
-
-class JointStateReader(MessageReader):
-    """``sensor_msgs/msg/JointState``: one field (position, velocity, effort) of one joint."""
-
-    msgtype = 'sensor_msgs/msg/JointState'
-    selectors = ('joint', 'joint_field')
-
-    def value(self, msg: Any, selection: Selection) -> float:
-        """Return ``msg.<joint_field>[i]`` where ``msg.name[i]`` is the selected joint."""
-        names = [str(name) for name in msg.name]
-        joint_option = selection.name('joint')
-        if selection.joint is None:
-            if len(names) != 1:
-                msg_text = (f'it holds {len(names)} joints ({_listing(names)}) and '
-                            f'{joint_option} is not set; set {joint_option} to one of them')
-                raise SelectionError(msg_text)
-            position = 0
-        elif selection.joint in names:
-            position = names.index(selection.joint)
-        else:
-            msg_text = (f'it has no joint {selection.joint!r} ({joint_option}); joints found: '
-                        f'{_listing(names)}; set {joint_option} to one of them')
-            raise SelectionError(msg_text)
-        values = getattr(msg, selection.joint_field)
-        if position >= len(values):
-            field_option = selection.name('joint_field')
-            others = [name for name in ('position', 'velocity', 'effort')
-                      if name != selection.joint_field and len(getattr(msg, name)) > position]
-            msg_text = (f'it has no {selection.joint_field} for joint {names[position]!r}: '
-                        f'{selection.joint_field} holds {len(values)} value(s) for '
-                        f'{len(names)} joint(s) (its publisher does not fill it); set '
-                        f'{field_option} to a filled field '
-                        f'({", ".join(others) or "none is filled"})')
-            raise SelectionError(msg_text)
-        return float(values[position])
-
-
-class Float64MultiArrayReader(MessageReader):
-    """
-    ``std_msgs/msg/Float64MultiArray``: one element of ``data``, or one axis of a chunk.
-
-    A message whose ``layout.dim`` has two entries is a chunk of samples x axes
-    (module docstring); any other message is one sample.
-    """
-
-    msgtype = 'std_msgs/msg/Float64MultiArray'
-    selectors = ('index',)
-
-    def value(self, msg: Any, selection: Selection) -> float:
-        """Return ``msg.data[layout.data_offset + index]`` (a one-sample chunk's element)."""
-        if len(msg.layout.dim) == 2 or selection.axes is not None:
-            samples = self.values(msg, selection)
-            if samples.size != 1:
-                msg_text = (f'it holds a chunk of {samples.size} samples (samples x axes), '
-                            'not one number; read it with values()')
-                raise SelectionError(msg_text)
-            return float(samples[0])
-        return self._element(msg, selection)
-
-    def values(self, msg: Any, selection: Selection) -> npt.NDArray[np.float64]:
-        """Return the selected axis of a chunk (K samples), or ``[value]`` for one sample."""
-        dims = msg.layout.dim
-        offset = int(msg.layout.data_offset)
-        size = len(msg.data)
-        option = selection.name('index')
-        axes_option = selection.name('axes')
-        layout = chunk_layout([(int(d.size), int(d.stride)) for d in dims], offset)
-        if layout is not None:
-            samples, axes, row = layout.samples, layout.axes, layout.row
-            stride = f', row stride {row}' if row != axes else ''
-            shape = (f'{samples} sample(s) x {axes} axes (layout.dim = samples x axes{stride}'
-                     f'{_offset_note(offset, ", ")})')
-            if samples < 1 or axes < 1:
-                msg_text = (f'its layout announces {shape}: a chunk needs at least one sample '
-                            'and one axis; fix layout.dim in the publisher (dim[0] = samples, '
-                            'dim[1] = axes) or leave dim empty for one sample per message')
-                raise SelectionError(msg_text)
-            if not layout.fits(size):
-                msg_text = (f'its layout announces {shape}, which needs {layout.needed} values,'
-                            f' but data holds {size}; fix layout.dim in the publisher (dim[0] = '
-                            'samples, dim[1] = axes) to match the data')
-                raise SelectionError(msg_text)
-            if selection.axes is not None and axes != selection.axes:
-                msg_text = (f'it holds chunks of {shape}, but {axes_option} is '
-                            f'{selection.axes}; set {axes_option} to {axes} (one column per '
-                            'axis) or record the topic of the other actuators')
-                raise SelectionError(msg_text)
-        elif selection.axes is not None:
-            axes = selection.axes
-            layout = consecutive_layout(size, offset, axes)
-            if layout is None:
-                msg_text = (f'it holds {max(size - offset, 0)} value(s){_offset_note(offset)}'
-                            f' and no layout.dim, not whole samples of {axes_option} {axes}'
-                            ' axes (samples x axes, row-major); publish K x N values or set '
-                            f'layout.dim, or set {axes_option} to the number of axes')
-                raise SelectionError(msg_text)
-            samples = layout.samples
-            shape = (f'{samples} sample(s) x {axes} axes ({axes_option} {axes}, no '
-                     f'layout.dim{_offset_note(offset, ", ")})')
-        else:
-            return np.array([self._element(msg, selection)], dtype=np.float64)
-        if selection.index is None:
-            if axes != 1:
-                msg_text = (f'it holds chunks of {shape} and {option} is not set; set '
-                            f'{option} to the axis, one of 0 to {axes - 1}')
-                raise SelectionError(msg_text)
-            index = 0
-        else:
-            index = selection.index
-        if index >= axes:
-            msg_text = (f'{option} {index} is out of range: the message holds {shape}; set '
-                        f'{option} to an axis, one of 0 to {axes - 1}')
-            raise SelectionError(msg_text)
-        return layout.column(msg.data, index)
-
-    @staticmethod
-    def _element(msg: Any, selection: Selection) -> float:
-        """Return ``msg.data[layout.data_offset + index]`` of a one-sample message."""
-        offset = int(msg.layout.data_offset)
-        size = len(msg.data) - offset
-        option = selection.name('index')
-        if selection.index is None:
-            if size != 1:
-                msg_text = (f'it holds {size} elements and {option} is not set; set {option} '
-                            f'to one of 0 to {size - 1}')
-                raise SelectionError(msg_text)
-            index = 0
-        else:
-            index = selection.index
-        if not 0 <= index < size:
-            fix = (f'set {option} to one of 0 to {size - 1}' if size > 0
-                   else 'record a topic whose arrays hold the signal')
-            msg_text = (f'{option} {index} is out of range: the array holds {max(size, 0)} '
-                        f'element(s){_offset_note(offset)}; {fix}')
-            raise SelectionError(msg_text)
-        return float(msg.data[offset + index])
-
-
-#: Message type -> reader. A new type is one class above and one line here.
-MESSAGE_READERS: dict[str, MessageReader] = {
-    Float64Reader.msgtype: Float64Reader(),
-    JointStateReader.msgtype: JointStateReader(),
-    Float64MultiArrayReader.msgtype: Float64MultiArrayReader(),
-}
-
-
-def supported_types() -> str:
-    """
-    List the message types :data:`MESSAGE_READERS` reads, for messages.
-
-    Returns
-    -------
-    str
-        E.g. ``'std_msgs/msg/Float64, sensor_msgs/msg/JointState or ...'``.
-
-    """
-    names = list(MESSAGE_READERS)
-    return names[0] if len(names) == 1 else f'{", ".join(names[:-1])} or {names[-1]}'
-
-
-@functools.lru_cache(maxsize=1)
-def typestore() -> Any:
-    """Build rosbags' ROS 2 Jazzy typestore once and return it."""
-    return get_typestore(Stores.ROS2_JAZZY)
-
-
-def _listing(names: list[str]) -> str:
-    return ', '.join(repr(name) for name in names) or 'none'
-
-
-def _offset_note(offset: int, lead: str = ' after ') -> str:
-    return f'{lead}layout.data_offset {offset}' if offset else ''

@@ -22,9 +22,9 @@ import numpy as np
 import numpy.typing as npt
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from .bag_reader import Float64Reader, typestore
 from .files import _check_target, _equal_length_arrays, _install, _make_tmpdir, \
     write_target
+from .messages import Float64Reader, typestore
 from .options import show_value
 from .recording import FloatArray, PathLike
 from ..errors import DataError
@@ -133,11 +133,6 @@ class BagRecorder:
     def path(self) -> Path:
         """Target bag directory."""
         return self._path
-
-    @property
-    def is_open(self) -> bool:
-        """Whether the recorder accepts messages."""
-        return self._writer is not None
 
     @property
     def counts(self) -> dict[str, int]:

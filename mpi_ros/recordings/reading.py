@@ -12,7 +12,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from .bag_reader import BAG_SUFFIXES, read_bag, read_bag_signals
+from .bag_reader import read_bag, read_bag_signals
+from .bag_storage import BAG_SUFFIXES
 from .csv_files import read_csv, read_csv_signals
 from .options import DataOptions
 from .recording import PathLike, Recording
