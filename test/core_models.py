@@ -1,10 +1,27 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
-"""Random valid MPI models and signals shared by the core tests."""
+"""Random valid MPI models, one hand-written model and signals shared by the tests."""
 
 from mpi_ros.operators.hysteresis import PIHysteresisOperator
 from mpi_ros.operators.model import MPIModel
 from mpi_ros.operators.superposition import PISuperpositionOperator
 import numpy as np
+
+
+def hand_model():
+    """
+    Return the parameter form of the small hand-written Gamma many tests use, a new dict.
+
+    Four plays (n = 3) and three dead zones, one negative weight (l = 2 split 0 + 2); its
+    S thresholds are not spaced as (29)-(31), so it tells no identified range.
+
+    """
+    return {
+        'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
+        'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
+        'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
+        'model.superposition.thresholds': [0.0, 0.5, 1.0],
+        'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
+    }
 
 
 def random_model(rng, *, n=None, l=None,  # noqa: E741 - the paper's symbol

@@ -9,15 +9,9 @@ from mpi_ros.operators.memory import TurningPointMemory
 import numpy as np
 import pytest
 
-from .core_models import random_model
+from .core_models import hand_model, random_model
 
-PARAMS = {
-    'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
-    'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
-    'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
-    'model.superposition.thresholds': [0.0, 0.5, 1.0],
-    'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
-}
+PARAMS = hand_model()
 
 
 def _path(rng, size=600, lo=0.2, hi=1.8):

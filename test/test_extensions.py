@@ -20,7 +20,7 @@ from mpi_ros.plant.excitation import identification_excitation, tracking_traject
 import numpy as np
 import pytest
 
-from .core_models import random_model
+from .core_models import hand_model, random_model
 
 EXACT = 1e-9          # [A] inverse round trip of creep and rate dependence
 THERMAL = 1e-3        # [A] thermal drift: the h / tau_T term of the state update is dropped
@@ -217,11 +217,7 @@ def test_closed_loop_control_error_extended_beats_plain(effect, fit):
 
 def test_extended_compensator_survives_extreme_finite_input():
     params = {
-        'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
-        'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
-        'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
-        'model.superposition.thresholds': [0.0, 0.5, 1.0],
-        'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
+        **hand_model(),
         'model.creep.time_constants': [0.1, 1.0, 10.0],
         'model.creep.weights': [0.02, 0.02, 0.02],
     }

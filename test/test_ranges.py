@@ -21,14 +21,10 @@ from mpi_ros.recordings import read_csv_table, write_csv_columns
 import numpy as np
 import pytest
 
+from .core_models import hand_model
+
 # A hand-written Gamma (not identified: its S thresholds are not spaced as (29)-(31)).
-HAND = {
-    'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
-    'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
-    'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
-    'model.superposition.thresholds': [0.0, 0.5, 1.0],
-    'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
-}
+HAND = hand_model()
 
 #: The identified current range against the recorded one, as a fraction of its span:
 #: measured 2026-11 at most 1.03 % over the synthetic kinds below at (8, 4) and (14, 7).

@@ -36,13 +36,9 @@ from mpi_ros.plant.simulator import build_truth, ExcitationRun, plant_parameters
 import numpy as np
 import pytest
 
-GAMMA = {
-    'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
-    'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
-    'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
-    'model.superposition.thresholds': [0.0, 0.5, 1.0],
-    'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
-}
+from .core_models import hand_model
+
+GAMMA = hand_model()
 CREEP = {'model.creep.time_constants': [0.01, 0.1, 1.0],
          'model.creep.weights': [0.05, 0.05, 0.1]}
 LIMITS = {'output.min': 0.0, 'output.max': 2.0}

@@ -13,13 +13,9 @@ from mpi_ros.operators.model import MODEL_KEYS, MPIModel
 import numpy as np
 import pytest
 
-GAMMA = {
-    'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
-    'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
-    'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
-    'model.superposition.thresholds': [0.0, 0.5, 1.0],
-    'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
-}
+from .core_models import hand_model
+
+GAMMA = hand_model()
 OTHER = dict(GAMMA, **{'model.hysteresis.weights': [1.2, 0.2, 0.2, 0.1]})
 CREEP = {'model.creep.time_constants': [0.01, 0.1, 1.0],
          'model.creep.weights': [0.05, 0.05, 0.1]}

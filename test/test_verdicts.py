@@ -16,13 +16,9 @@ from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import read_csv_table, write_csv_columns
 import numpy as np
 
-PARAMS = {
-    'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
-    'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
-    'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
-    'model.superposition.thresholds': [0.0, 0.5, 1.0],
-    'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
-}
+from .core_models import hand_model
+
+PARAMS = hand_model()
 
 
 def test_diagnose_json_into_a_missing_folder_fails_before_reading(tmp_path, capsys):

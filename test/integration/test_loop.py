@@ -19,6 +19,8 @@ import numpy as np
 import pytest
 import rclpy
 
+from ..core_models import hand_model
+
 RATE = 200.0
 LIMITS = (0.2, 1.8)
 
@@ -118,13 +120,7 @@ def test_closed_loop_reaches_the_papers_control_error(loop, plant_args):
 
 def test_push_reject_and_bumpless_swap(loop):
     driver, start = loop
-    params = {
-        'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
-        'model.hysteresis.weights': [1.0, 0.3, 0.2, 0.1],
-        'model.hysteresis.initial_states': [0.0, 0.0, 0.0, 0.0],
-        'model.superposition.thresholds': [0.0, 0.5, 1.0],
-        'model.superposition.weights': [2e-5, -0.5e-5, 0.3e-5],
-    }
+    params = hand_model()
     old = MPIModel.from_params(params)
     new = MPIModel.from_params(dict(params, **{
         'model.hysteresis.weights': [1.1, 0.25, 0.25, 0.05]}))
