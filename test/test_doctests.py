@@ -13,7 +13,8 @@ MODULES = ['mpi_ros.operators.play', 'mpi_ros.operators.deadzone', 'mpi_ros.oper
            'mpi_ros.plant.actuator', 'mpi_ros.plant.excitation', 'mpi_ros.array_layout',
            'mpi_ros.compensation.loss', 'mpi_ros.compensation.message_time',
            'mpi_ros.compensation.multi_axis',
-           'mpi_ros.compensation.parameters', 'mpi_ros.compensation.screening',
+           'mpi_ros.node_parameters.spec', 'mpi_ros.node_parameters.compensator',
+           'mpi_ros.compensation.screening',
            'mpi_ros.compensation.status', 'mpi_ros.compensation.updates',
            'mpi_ros.plant.simulator', 'mpi_ros.stop_signals']
 

@@ -5,20 +5,22 @@ import subprocess
 import sys
 
 from mpi_ros.compensation.multi_axis import JointOrder
-from mpi_ros.compensation.parameters import (
-    axis_limit_parameters, axis_parameters, check_value, check_values, compensator_parameters,
-    is_null, MODEL_PARAMETERS, normalized, specs_by_name,
-)
 from mpi_ros.compensation.status import (
     lifecycle_status, loss_problems, multi_axis_status, multi_axis_values, OK,
     single_axis_status, single_axis_values, status_values, WARN,
 )
 from mpi_ros.errors import DataError, MPIError, ParameterRejected
+from mpi_ros.node_parameters import check_value, check_values, is_null, normalized, \
+    specs_by_name
+from mpi_ros.node_parameters.compensator import (
+    axis_limit_parameters, axis_parameters, compensator_parameters, MODEL_PARAMETERS,
+)
+from mpi_ros.node_parameters.identifier import check_identifier_value
+from mpi_ros.node_parameters.identifier import PARAMETERS as IDENTIFIER_PARAMETERS
+from mpi_ros.node_parameters.plant_simulator import PARAMETERS as PLANT_PARAMETERS
 from mpi_ros.operators.model import INPUT_OFFSET, MODEL_KEYS, OUTPUT_SIGN
-from mpi_ros.pipeline import check_identifier_value, identify_bag as identify
-from mpi_ros.pipeline import PARAMETERS as IDENTIFIER_PARAMETERS
+from mpi_ros.pipeline import identify_bag as identify
 from mpi_ros.plant.simulator import build_truth, describe_truth, excitation_schedule
-from mpi_ros.plant.simulator import PARAMETERS as PLANT_PARAMETERS
 import numpy as np
 import pytest
 
@@ -28,8 +30,9 @@ LOSSLESS = {'messages_lost': 0, 'incompatible_qos': 0}
 
 
 def test_the_moved_modules_import_no_ros():
-    code = ('import sys, mpi_ros.compensation.parameters, mpi_ros.compensation.status, '
-            'mpi_ros.plant.simulator, mpi_ros.pipeline, mpi_ros.array_layout; '
+    code = ('import sys, mpi_ros.node_parameters.compensator, mpi_ros.compensation.status, '
+            'mpi_ros.plant.simulator, mpi_ros.pipeline, mpi_ros.array_layout, '
+            'mpi_ros.node_parameters.identifier, mpi_ros.node_parameters.plant_simulator; '
             "sys.exit(any(m.split('.')[0] in ('rclpy', 'rcl_interfaces', 'std_msgs', "
             "'diagnostic_msgs') for m in sys.modules))")
     assert subprocess.run([sys.executable, '-c', code], check=False).returncode == 0

@@ -21,9 +21,6 @@ from mpi_ros.compensation.multi_axis import (
     AxisModels, InputCounts, joint_input, REPORTED_COUNTERS,
     reported_counters,
 )
-from mpi_ros.compensation.parameters import (
-    AxisKeys, request_steps, typed_value, wants_multi_axis,
-)
 from mpi_ros.compensation.screening import FAULT_LOG_PERIOD_S, FaultLog
 from mpi_ros.compensation.status import RateWindow, state_after
 from mpi_ros.compensation.updates import (
@@ -31,8 +28,11 @@ from mpi_ros.compensation.updates import (
 )
 from mpi_ros.errors import ParameterPushError, ParameterRejected
 from mpi_ros.extensions import extended_model_from_params
+from mpi_ros.node_parameters import request_steps, typed_value
+from mpi_ros.node_parameters.compensator import AxisKeys, wants_multi_axis
+from mpi_ros.node_parameters.plant_simulator import plant_parameters
 from mpi_ros.operators.model import MPIModel
-from mpi_ros.plant.simulator import build_truth, ExcitationRun, plant_parameters, SimulatedPlants
+from mpi_ros.plant.simulator import build_truth, ExcitationRun, SimulatedPlants
 import numpy as np
 import pytest
 
@@ -57,7 +57,8 @@ def node_values(prefixes, models=None, **extra):
 
 def test_the_moved_logic_imports_no_ros():
     code = ('import sys, mpi_ros.compensation.loss, mpi_ros.compensation.multi_axis, '
-            'mpi_ros.compensation.parameters, mpi_ros.compensation.updates, '
+            'mpi_ros.node_parameters.compensator, mpi_ros.compensation.updates, '
+            'mpi_ros.node_parameters.plant_simulator, '
             'mpi_ros.plant.simulator, mpi_ros.stop_signals; '
             "sys.exit(any(m.split('.')[0] in ('rclpy', 'rcl_interfaces', 'std_msgs', "
             "'diagnostic_msgs') for m in sys.modules))")

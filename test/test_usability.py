@@ -13,9 +13,10 @@ import math
 
 from hypothesis import given, HealthCheck, seed, settings, strategies as st
 from mpi_ros.compensation import Compensator
-from mpi_ros.compensation.parameters import check_values, compensator_parameters, specs_by_name
 from mpi_ros.compensation.updates import apply, complete, model_keys, prepare, usable
 from mpi_ros.errors import ModelError, MPIError
+from mpi_ros.node_parameters import check_values, specs_by_name
+from mpi_ros.node_parameters.compensator import compensator_parameters
 from mpi_ros.operators.model import MODEL_KEYS, MPIModel, RECORD_START_STATES
 from mpi_ros.operators.usability import check_usable, ROUND_TRIP, usability_sweep
 import numpy as np

@@ -208,7 +208,8 @@ def _refuse_unknown_keys(path: str, parameters: dict[str, Any]) -> None:
     # An error, not a warning: simulate and compensate read only the compensator's keys, so
     # a key they do not know is a typo (model.output_ofset) or a file for another node, and
     # either would silently give another result than the user meant.
-    from ..compensation.parameters import compensator_parameters, RCLPY_PARAMETERS
+    from ..node_parameters import RCLPY_PARAMETERS
+    from ..node_parameters.compensator import compensator_parameters
     from ..params import closest_key, unknown_keys
     known = [spec.name for spec in compensator_parameters()] + list(RCLPY_PARAMETERS)
     unknown = unknown_keys(parameters, known, prefixes=('qos_overrides.',))
@@ -495,7 +496,7 @@ def _cmd_compensate(args: argparse.Namespace) -> int:
 
 def _cmd_merge_axes(args: argparse.Namespace) -> int:
     # One identified file per axis -> one multi-axis compensator file (issue 27).
-    from ..compensation.parameters import merge_axes
+    from ..node_parameters.compensator import merge_axes
     from ..errors import ParameterRejected
     from ..params import write_params_yaml
     _check_output(args.output, '--output')

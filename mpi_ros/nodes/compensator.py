@@ -117,11 +117,12 @@ from ..compensation import Compensator
 from ..compensation.adaptation import Adaptation, AdaptationSettings, AdaptationWorker
 from ..compensation.message_time import MessageClock
 from ..compensation.multi_axis import InputCounts
-from ..compensation.parameters import compensator_parameters, specs_by_name, wants_multi_axis
 from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
+from ..node_parameters import specs_by_name
+from ..node_parameters.compensator import compensator_parameters, wants_multi_axis
 from ..operators.model import MPIModel
 from ..units import INPUT_QUANTITY_KEY
 

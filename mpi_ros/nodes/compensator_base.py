@@ -70,11 +70,11 @@ from .parameters import (
 )
 from .qos import loop_qos
 from ..compensation.limits import limits_shortfall
-from ..compensation.parameters import ParameterSpec, plain_value
 from ..compensation.screening import FaultLog
 from ..compensation.status import lifecycle_status, RateWindow, state_after, status_values
 from ..compensation.updates import Prepared, uncompensated, UpdateRule
 from ..errors import MPIError, ParameterRejected
+from ..node_parameters import ParameterSpec, plain_value
 from ..units import INPUT_QUANTITY_KEY, input_unit_of
 
 __all__ = ['CompensatorNodeBase', 'DRAIN_LIMIT']

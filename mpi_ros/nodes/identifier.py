@@ -70,10 +70,11 @@ from rclpy.signals import SignalHandlerOptions
 
 from .parameters import check_parameters, declare_parameters, harden_parameter_services
 from .spinning import shutdown
-from ..compensation.parameters import specs_by_name, typed_value
 from ..errors import MPIError, ParameterPushError, ParameterRejected
-from ..pipeline import BagFit, check_identifier_value, DATA_PARAMETERS, fit_bag, fit_bag_axes, \
-    identify_bag, PARAMETERS, parse_order
+from ..node_parameters import specs_by_name, typed_value
+from ..node_parameters.identifier import check_identifier_value, DATA_PARAMETERS, PARAMETERS, \
+    parse_order
+from ..pipeline import BagFit, fit_bag, fit_bag_axes, identify_bag
 from ..stop_signals import StopSignals
 
 __all__ = [

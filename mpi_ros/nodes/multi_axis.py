@@ -111,13 +111,14 @@ from ..compensation.multi_axis import (
     AxisModels, InputCounts, joint_input, joint_names, JointOrder,
     reported_counters,
 )
-from ..compensation.parameters import (
-    AXES, axis_limit_parameters, axis_parameters, AxisKeys, INPUT_MESSAGE, JOINTS,
-    multi_axis_parameters, OUTPUT_LAYOUT, single_axis_keys, specs_by_name, WIRING,
-)
 from ..compensation.status import multi_axis_status, multi_axis_values
 from ..compensation.updates import apply, axis_key, load_axes, Prepared, refusal
 from ..errors import ParameterRejected
+from ..node_parameters import specs_by_name
+from ..node_parameters.compensator import (
+    AXES, axis_limit_parameters, axis_parameters, AxisKeys, INPUT_MESSAGE, JOINTS,
+    multi_axis_parameters, OUTPUT_LAYOUT, single_axis_keys, WIRING,
+)
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'joint_names']

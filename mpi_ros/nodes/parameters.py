@@ -3,7 +3,7 @@
 The ROS side of the node parameters: descriptors, declaration, grouped set_parameters.
 
 The specs and the checks are plain data and plain Python in
-:mod:`mpi_ros.compensation.parameters`; this module turns a spec into rclpy's
+:mod:`mpi_ros.node_parameters`; this module turns a spec into rclpy's
 ``ParameterDescriptor`` (:func:`descriptor`), declares specs on a node, hands rclpy's
 ``Parameter`` objects to the checks as (type name, value), and serves ``set_parameters``
 with coupled keys kept together.
@@ -17,8 +17,8 @@ from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from ..compensation import parameters as core
-from ..compensation.parameters import ParameterSpec, plain_value, request_steps
+from .. import node_parameters as core
+from ..node_parameters import ParameterSpec, plain_value, request_steps
 
 __all__ = [
     'check_parameter',
@@ -130,7 +130,7 @@ def normalized(spec: ParameterSpec, parameter: Parameter) -> Parameter:
     -------
     rclpy.parameter.Parameter
         The same parameter, or one of ``spec.type_`` with the value
-        :func:`mpi_ros.compensation.parameters.normalized` restored.
+        :func:`mpi_ros.node_parameters.normalized` restored.
 
     """
     found = parameter.type_.name.lower()
@@ -143,7 +143,7 @@ def normalized(spec: ParameterSpec, parameter: Parameter) -> Parameter:
 def check_parameter(spec: ParameterSpec, parameter: Parameter, *,
                     allow_unset: bool = False) -> None:
     """
-    Check one incoming parameter (:func:`mpi_ros.compensation.parameters.check_value`).
+    Check one incoming parameter (:func:`mpi_ros.node_parameters.check_value`).
 
     Parameters
     ----------
@@ -160,7 +160,7 @@ def check_parameter(spec: ParameterSpec, parameter: Parameter, *,
 def check_parameters(specs: Mapping[str, ParameterSpec], parameters: Iterable[Parameter], *,
                      allow_unset: bool = False) -> None:
     """
-    Check incoming parameters (:func:`mpi_ros.compensation.parameters.check_values`).
+    Check incoming parameters (:func:`mpi_ros.node_parameters.check_values`).
 
     Parameters
     ----------

@@ -73,10 +73,11 @@ from .parameters import (
 from .qos import loop_qos
 from .spinning import run_node_main
 from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray, float64_of
-from ..compensation.parameters import specs_by_name
 from ..errors import ParameterRejected
+from ..node_parameters import specs_by_name
+from ..node_parameters.plant_simulator import plant_parameters
 from ..plant.simulator import (
-    describe_truth, excitation_schedule, ExcitationRun, plant_parameters, SimulatedPlants,
+    describe_truth, excitation_schedule, ExcitationRun, SimulatedPlants,
 )
 from ..recordings import BagRecorder
 

@@ -10,11 +10,11 @@ file writes every command-line output goes through.
 
 Modules: :mod:`.recording` (the :class:`Recording`), :mod:`.options` (the
 :class:`DataOptions` shared by the command line, the identifier node and the
-diagnosis), :mod:`.bag_reader` (pairs the two topics of a bag), :mod:`.messages` (one reader
-per message type, in the registry :data:`MESSAGE_READERS`), :mod:`.bag_storage`
-(finding and checking a bag's storage files), :mod:`.bag_writer`, :mod:`.csv_files`, :mod:`.reading`
-(:func:`read_recording`: bag or CSV by the path) and :mod:`.files` (atomic
-writes).
+diagnosis), :mod:`.bag_reader` (pairs the two topics of a bag), :mod:`.messages`
+(one reader per message type, in the registry :data:`MESSAGE_READERS`),
+:mod:`.bag_storage` (finding and checking a bag's storage files), :mod:`.bag_writer`,
+:mod:`.csv_files`, :mod:`.reading` (:func:`read_recording`: bag or CSV by the path) and
+:mod:`.files` (atomic writes).
 
 The package is ROS-free: it uses the pure-Python ``rosbags`` library and never
 imports ``rclpy``, so bags can be read and written on machines without ROS.

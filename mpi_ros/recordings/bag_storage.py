@@ -69,7 +69,7 @@ _MCAP_MAGIC = b'\x89MCAP0\r\n'
 
 
 def finish_unfinished_mcap(bag: Path, path: Path,
-                            stack: contextlib.ExitStack) -> tuple[Path, str] | None:
+                           stack: contextlib.ExitStack) -> tuple[Path, str] | None:
     """
     Return a finished copy of an mcap a killed recorder left, and a note; None if finished.
 

@@ -11,7 +11,8 @@ after every push the node's commands are finite and inside its limits.
 import math
 
 from hypothesis import given, HealthCheck, seed, settings, strategies as st
-from mpi_ros.compensation.parameters import compensator_parameters, specs_by_name
+from mpi_ros.node_parameters import specs_by_name
+from mpi_ros.node_parameters.compensator import compensator_parameters
 from mpi_ros.nodes.compensator import CompensatorNode
 import numpy as np
 from rclpy.parameter import Parameter

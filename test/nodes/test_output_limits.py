@@ -10,7 +10,7 @@ no warning, and the commands stay inside that range.
 """
 
 from mpi_ros.compensation.limits import limits_shortfall
-from mpi_ros.compensation.parameters import LIMIT_PARAMETERS
+from mpi_ros.node_parameters.compensator import LIMIT_PARAMETERS
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.multi_axis import MultiAxisCompensatorNode
 from mpi_ros.pipeline import fit_recording, identified_parameters

@@ -1,8 +1,8 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """The shared parameter helpers: the forms `ros2 param load/set` and a dump send (issue 11)."""
 
-from mpi_ros.compensation.parameters import specs_by_name
 from mpi_ros.errors import ParameterRejected
+from mpi_ros.node_parameters import specs_by_name
 from mpi_ros.nodes.compensator import PARAMETERS
 from mpi_ros.nodes.parameters import check_parameter, descriptor, is_null, normalized
 from mpi_ros.operators.model import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_SIGN
