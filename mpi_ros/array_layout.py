@@ -382,19 +382,8 @@ def _fast_block(data: bytes, axes: int) -> Optional[npt.NDArray[np.float64]]:
     the block is the first ``K * axes`` doubles, from byte 60: exactly what
     :func:`_general_block` returns.  Anything else (big-endian, other labels, a data
     offset, padded rows, errors) returns None for the general parser to read or refuse.
-
-    Parameters
-    ----------
-    data : bytes
-        The serialized message.
-    axes : int
-        Number of axes (columns) expected.
-
-    Returns
-    -------
-    ndarray of float, shape (K, axes), or None
-        A read-only view of ``data``, or None when the general parser must decide.
-
+    `data` and `axes` are those of :func:`block_of`; the block returned is a read-only view
+    of ``data``.
     """
     if len(data) < _FAST_START or data[1] != 1:
         return None
@@ -411,23 +400,7 @@ def _general_block(data: bytes, axes: int) -> npt.NDArray[np.float64]:
     """
     Return the block :func:`block_of` returns, from the fully parsed message.
 
-    Parameters
-    ----------
-    data : bytes
-        The serialized message.
-    axes : int
-        Number of axes (columns) expected.
-
-    Returns
-    -------
-    ndarray of float, shape (K, axes)
-        The block.
-
-    Raises
-    ------
-    ArrayLayoutError
-        As :func:`block_of`.
-
+    `data` and `axes` and the :class:`ArrayLayoutError` are those of :func:`block_of`.
     """
     dims, offset, values = decode_float64_multiarray(data)
     layout = chunk_layout([(size, stride) for _, size, stride in dims], offset)

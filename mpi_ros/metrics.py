@@ -49,7 +49,7 @@ def nonlinearity_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> 
     Returns
     -------
     float
-        The error as a fraction.
+        (37) as a fraction (0.05 is 5 %).
 
     Examples
     --------
@@ -75,7 +75,7 @@ def control_error(desired: npt.ArrayLike, measured: npt.ArrayLike) -> float:
     Returns
     -------
     float
-        The error as a fraction.
+        (38) as a fraction.
 
     """
     c, s = _pair(desired, measured, ('desired', 'measured'))
@@ -88,15 +88,13 @@ def relative_rms_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> 
 
     Parameters
     ----------
-    model_output : array_like of float, shape (N,)
-        Simulated output [m].
-    measured : array_like of float, shape (N,)
-        Measured output [m].
+    model_output, measured : array_like of float, shape (N,)
+        Simulated and measured output [m]; `measured` not all 0.
 
     Returns
     -------
     float
-        The error as a fraction.
+        A fraction of the RMS of `measured`.
 
     """
     g, s = _pair(model_output, measured, ('model_output', 'measured'))
@@ -120,15 +118,13 @@ def range_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> float:
 
     Parameters
     ----------
-    model_output : array_like of float, shape (N,)
-        Simulated output [m].
-    measured : array_like of float, shape (N,)
-        Measured output [m].
+    model_output, measured : array_like of float, shape (N,)
+        Simulated and measured output [m].
 
     Returns
     -------
     float
-        The error as a fraction.
+        A fraction of the measured range.
 
     Examples
     --------
@@ -146,15 +142,13 @@ def rms_range_error(model_output: npt.ArrayLike, measured: npt.ArrayLike) -> flo
 
     Parameters
     ----------
-    model_output : array_like of float, shape (N,)
-        Simulated output [m].
-    measured : array_like of float, shape (N,)
-        Measured output [m].
+    model_output, measured : array_like of float, shape (N,)
+        Simulated and measured output [m]; `measured` not constant.
 
     Returns
     -------
     float
-        The error as a fraction; independent of the sensor's zero and sign.
+        A fraction of the measured range, independent of the sensor's zero and sign.
 
     """
     g, s = _pair(model_output, measured, ('model_output', 'measured'))

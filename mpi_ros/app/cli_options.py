@@ -149,12 +149,7 @@ def add_order_option(parser: argparse.ArgumentParser, default: str) -> None:
 
 def order_option(args: argparse.Namespace) -> Order:
     """
-    Parse the ``--order`` words of parsed arguments.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Arguments of a parser given :func:`add_order_option`.
+    Parse the ``--order`` words of `args`, parsed by a parser given :func:`add_order_option`.
 
     Returns
     -------

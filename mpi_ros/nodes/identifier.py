@@ -68,7 +68,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
 
-from .parameters import check_parameters, declare_parameters, harden_parameter_services
+from .parameters import answer_request, check_parameters, declare_parameters, \
+    harden_parameter_services
 from .spinning import shutdown
 from ..errors import MPIError, ParameterPushError, ParameterRejected
 from ..node_parameters import specs_by_name, typed_value
@@ -105,17 +106,11 @@ class IdentifierNode(Node):
         harden_parameter_services(self, specs=_SPECS)
 
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
-        try:
+        def check() -> None:
             check_parameters(_SPECS, parameters)
             for parameter in parameters:
                 check_identifier_value(parameter.name, parameter.value)
-        except (ParameterRejected, MPIError) as err:
-            return SetParametersResult(successful=False, reason=str(err))
-        except Exception as err:  # noqa: B902 - no exception may end the node: a refusal
-            return SetParametersResult(
-                successful=False,
-                reason=f'the request could not be checked ({type(err).__name__}: {err})')
-        return SetParametersResult(successful=True)
+        return answer_request(check)
 
     def run(self) -> 'BagFit | List[BagFit]':
         """

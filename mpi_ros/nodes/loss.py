@@ -62,10 +62,8 @@ class LossMonitor(LossCounter):
 
         Parameters
         ----------
-        now : float
-            Steady time [s].
-        what : str
-            What the messages carry, e.g. ``desired displacements``.
+        now, what
+            As for :meth:`mpi_ros.compensation.loss.LossCounter.report`.
 
         Returns
         -------

@@ -9,7 +9,7 @@ The specs and the checks are plain data and plain Python in
 with coupled keys kept together.
 """
 
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
@@ -18,9 +18,11 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from .. import node_parameters as core
+from ..errors import MPIError
 from ..node_parameters import ParameterSpec, plain_value, request_steps
 
 __all__ = [
+    'answer_request',
     'check_parameter',
     'check_parameters',
     'declare_parameters',
@@ -174,6 +176,33 @@ def check_parameters(specs: Mapping[str, ParameterSpec], parameters: Iterable[Pa
     """
     core.check_values(specs, ((p.name, p.type_.name.lower(), p.value) for p in parameters),
                       allow_unset=allow_unset)
+
+
+def answer_request(check: Callable[[], Any]) -> SetParametersResult:
+    """
+    Answer an on-set-parameters request: successful unless `check` raises.
+
+    Parameters
+    ----------
+    check : callable
+        Checks the request; raises :class:`~mpi_ros.errors.MPIError` (a refusal, its text
+        the reason) or anything else (the reason names it: no exception may end the node).
+
+    Returns
+    -------
+    rcl_interfaces.msg.SetParametersResult
+        Successful, or not with the reason.
+
+    """
+    try:
+        check()
+    except MPIError as err:
+        return SetParametersResult(successful=False, reason=str(err))
+    except Exception as err:  # noqa: B902 - no exception may end the node: a refusal
+        return SetParametersResult(
+            successful=False,
+            reason=f'the request could not be checked ({type(err).__name__}: {err})')
+    return SetParametersResult(successful=True)
 
 
 def parameter_values(node: Node, names: Sequence[str],

@@ -68,12 +68,12 @@ from rclpy.task import Future
 from std_msgs.msg import Float64, Float64MultiArray
 
 from .parameters import (
-    check_parameters, declare_parameters, harden_parameter_services, parameter_values,
+    answer_request, check_parameters, declare_parameters, harden_parameter_services,
+    parameter_values,
 )
 from .qos import loop_qos
 from .spinning import run_node_main
 from ..array_layout import ArrayLayoutError, block_of, encode_float64_multiarray, float64_of
-from ..errors import ParameterRejected
 from ..node_parameters import specs_by_name
 from ..node_parameters.plant_simulator import plant_parameters
 from ..plant.simulator import (
@@ -291,15 +291,8 @@ class PlantSimulatorNode(Node):
 
     # -- parameters --------------------------------------------------------------------
     def _validate_parameters(self, parameters: List[Parameter]) -> SetParametersResult:
-        try:
-            check_parameters(self._specs, parameters, allow_unset=True)
-        except ParameterRejected as err:
-            return SetParametersResult(successful=False, reason=str(err))
-        except Exception as err:  # noqa: B902 - no exception may end the node: a refusal
-            return SetParametersResult(
-                successful=False,
-                reason=f'the request could not be checked ({type(err).__name__}: {err})')
-        return SetParametersResult(successful=True)
+        return answer_request(
+            lambda: check_parameters(self._specs, parameters, allow_unset=True))
 
 
 def main(args: Optional[List[str]] = None) -> int:

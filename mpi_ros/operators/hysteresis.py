@@ -143,10 +143,8 @@ class PIHysteresisOperator:
 
         Parameters
         ----------
-        x : array_like of float, shape (N,)
-            Input [A].
-        state : array_like of float, shape (n+1,), optional
-            Play outputs before the first sample; the initial states by default.
+        x, state
+            As for :meth:`play_outputs`: input [A], play outputs before it.
 
         Returns
         -------

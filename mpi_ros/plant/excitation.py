@@ -178,10 +178,9 @@ def tracking_trajectory(duration: float, *, sample_rate: float, low: float, high
 
     Parameters
     ----------
-    duration : float
-        Length of the trajectory [s].
-    sample_rate : float
-        Samples per second [Hz]; at least 20 per period of the fastest sinusoid.
+    duration, sample_rate : float
+        Length [s] and samples per second [Hz] (at least 20 per period of the fastest
+        sinusoid).
     low, high : float
         Range of the desired displacement [m], ``low < high``; the trajectory starts at
         ``low``.

@@ -197,20 +197,9 @@ class BagRecorder:
 
     def write_output(self, t: float, value: float) -> None:
         """
-        Record one output sample.
+        Record one output sample: actuator output s [m] at log time `t` [s].
 
-        Parameters
-        ----------
-        t : float
-            Log (receive) time [s], at least 0.
-        value : float
-            Actuator output s [m].
-
-        Raises
-        ------
-        DataError
-            If the recorder is not open or `t` is negative or not finite.
-
+        As :meth:`write_input`, on the output topic.
         """
         self._write(self._topics[1], _seconds_to_ns(t, what='write_output time t'), value)
 

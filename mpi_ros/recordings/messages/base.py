@@ -122,25 +122,16 @@ class MessageReader(abc.ABC):
 
     def values(self, msg: Any, selection: Selection) -> npt.NDArray[np.float64]:
         """
-        Return the selected samples of one message, oldest first.
+        Return the selected samples of one message, oldest first: K >= 1 numbers.
 
-        Parameters
-        ----------
-        msg : object
-            The message, decoded by rosbags.
-        selection : Selection
-            What to take from it.
+        `msg` and `selection` are those of :meth:`value`, and so is the
+        :class:`SelectionError` when the message does not hold them. The default
+        is the one number of :meth:`value`.
 
         Returns
         -------
         ndarray of float, shape (K,)
-            The K >= 1 samples, in the unit they were published in; by
-            default the one number of :meth:`value`.
-
-        Raises
-        ------
-        SelectionError
-            If the message does not hold them; the message says what it holds.
+            The samples, in the unit they were published in.
 
         """
         return np.array([self.value(msg, selection)], dtype=np.float64)

@@ -94,14 +94,7 @@ class Float64MultiArrayReader(MessageReader):
                      f'layout.dim{_offset_note(offset, ", ")})')
         else:
             return np.array([self._element(msg, selection)], dtype=np.float64)
-        if selection.index is None:
-            if axes != 1:
-                msg_text = (f'it holds chunks of {shape} and {option} is not set; set '
-                            f'{option} to the axis, one of 0 to {axes - 1}')
-                raise SelectionError(msg_text)
-            index = 0
-        else:
-            index = selection.index
+        index = _index(selection, axes, f'chunks of {shape}', 'the axis, ')
         if index >= axes:
             msg_text = (f'{option} {index} is out of range: the message holds {shape}; set '
                         f'{option} to an axis, one of 0 to {axes - 1}')
@@ -123,14 +116,7 @@ class Float64MultiArrayReader(MessageReader):
         offset = int(msg.layout.data_offset)
         size = len(msg.data) - offset
         option = selection.name('index')
-        if selection.index is None:
-            if size != 1:
-                msg_text = (f'it holds {size} elements and {option} is not set; set {option} '
-                            f'to one of 0 to {size - 1}')
-                raise SelectionError(msg_text)
-            index = 0
-        else:
-            index = selection.index
+        index = _index(selection, size, f'{size} elements', '')
         if not 0 <= index < size:
             fix = (f'set {option} to one of 0 to {size - 1}' if size > 0
                    else 'record a topic whose arrays hold the signal')
@@ -138,6 +124,18 @@ class Float64MultiArrayReader(MessageReader):
                         f'element(s){_offset_note(offset)}; {fix}')
             raise SelectionError(msg_text)
         return float(msg.data[offset + index])
+
+
+def _index(selection: Selection, count: int, holds: str, what: str) -> int:
+    """Return the selected index; with none selected, 0 when `count` is 1, else refuse."""
+    if selection.index is not None:
+        return selection.index
+    if count != 1:
+        option = selection.name('index')
+        msg_text = (f'it holds {holds} and {option} is not set; set {option} to {what}one of '
+                    f'0 to {count - 1}')
+        raise SelectionError(msg_text)
+    return 0
 
 
 def _offset_note(offset: int, lead: str = ' after ') -> str:
