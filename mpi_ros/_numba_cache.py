@@ -18,8 +18,7 @@ that cannot be created or written, ``<tempdir>/mpi_ros-numba-<uid>/sources-<dige
 Why the digest: numba checks a cached kernel against its own source file only, not the
 files of the kernels it calls.  After ``play.py`` or ``inverse.py`` changes (an update of
 a source checkout or a ``--symlink-install``), the cached compensator kernels would go on
-running the old play rule or law (14) -- this happened: a cached step kept an allocation
-that had been removed, 4.5 times slower.  The digest covers the size and modification
+running the old play rule or law (14).  The digest covers the size and modification
 time of every source file of the package, so any change starts a fresh cache directory;
 directories of other sources that were not used for 30 days are removed.
 """

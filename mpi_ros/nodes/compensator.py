@@ -27,8 +27,8 @@ Managed node (lifecycle)
     activates at start-up; ``/diagnostics`` reports ``lifecycle_state``.
 
 Model life cycle
-    The node has no model (its log and diagnostics call it *unconfigured*, apart from the
-    lifecycle state) unless the four ``model.*`` keys of Gamma are given (e.g.
+    The node has no model (its log says *no model given yet*, its diagnostics *no model:
+    unconfigured*, apart from the lifecycle state) unless the four ``model.*`` keys of Gamma are given (e.g.
     ``--params-file params.yaml`` written by ``mpi-ros identify``). Without a model it
     publishes nothing: there is no safe command, and the current source keeps its last
     value. Its diagnostics say so (WARN).

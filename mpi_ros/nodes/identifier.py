@@ -2,9 +2,6 @@
 """
 Identifier node: fit an MPI model (28)-(36) from a rosbag2 bag and push it atomically.
 
-(Slightly over 500 lines: single- and multi-axis fitting, the push with its bounded
-waits and the shutdown handling of one node.)
-
 One run: read the bag (sqlite3 or mcap; a ``.csv`` file works too) with
 :func:`mpi_ros.pipeline.fit_recording` (the CLI's pipeline), pairing ``input_topic``
 (current [A]) with ``output_topic`` (displacement [m]); the data parameters

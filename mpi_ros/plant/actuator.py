@@ -2,9 +2,6 @@
 """
 Simulated magnetostrictive actuator: the "truth" plant for tests, demos and the simulator node.
 
-(Over 500 lines on purpose: one simulator - its configuration, its compiled Preisach kernel
-and the sensor model - that only makes sense read together.)
-
 This is deliberately *not* a modified Prandtl-Ishlinskii model, so that identifying an MPI
 model on its data is a fair test.  The coil current ``i`` [A] drives
 
