@@ -42,7 +42,7 @@ __all__ = ['IdentifiedRange', 'LimitsShortfall', 'UNREACHABLE_TOLERANCE', 'ident
 
 #: Smallest unreachable fraction of the identified displacement range that is reported: the
 #: identified input range is the recorded one to about 1 % of its span at orders (8, 4) and
-#: up, 4 % at (2, 1) (synthetic records, docs/design.md), so smaller cuts are not news.
+#: up, 4 % at (2, 1) (synthetic records, docs/benchmarks.md), so smaller cuts are not news.
 UNREACHABLE_TOLERANCE = 0.05
 
 

@@ -17,7 +17,7 @@ from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from .. import node_parameters as core
+from ..node_parameters import spec as core
 from ..errors import MPIError
 from ..node_parameters import ParameterSpec, plain_value, request_steps
 
