@@ -495,7 +495,7 @@ def _cmd_compensate(args: argparse.Namespace) -> int:
 
 
 def _cmd_merge_axes(args: argparse.Namespace) -> int:
-    # One identified file per axis -> one multi-axis compensator file (issue 27).
+    # One identified file per axis -> one multi-axis compensator file.
     from ..node_parameters.compensator import merge_axes
     from ..errors import ParameterRejected
     from ..params import write_params_yaml

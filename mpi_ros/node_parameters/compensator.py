@@ -74,7 +74,7 @@ MODEL_PARAMETERS = (
 )
 
 
-#: What the actuator input is (issue 27): it names the unit of the commands in messages.
+#: What the actuator input is: it names the unit of the commands in messages.
 INPUT_QUANTITY = ParameterSpec(
     INPUT_QUANTITY_KEY, 'string', 'current',
     'The actuator input the model maps to displacement: current (commands in A, a coil) or '

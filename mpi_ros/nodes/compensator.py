@@ -28,10 +28,10 @@ Managed node (lifecycle)
 
 Model life cycle
     The node has no model (its log says *no model given yet*, its diagnostics *no model:
-    unconfigured*, apart from the lifecycle state) unless the four ``model.*`` keys of Gamma are given (e.g.
-    ``--params-file params.yaml`` written by ``mpi-ros identify``). Without a model it
-    publishes nothing: there is no safe command, and the current source keeps its last
-    value. Its diagnostics say so (WARN).
+    unconfigured*, apart from the lifecycle state) unless the four ``model.*`` keys of
+    Gamma are given (e.g. ``--params-file params.yaml`` written by ``mpi-ros identify``).
+    Without a model it publishes nothing: there is no safe command, and the current
+    source keeps its last value. Its diagnostics say so (WARN).
     The model is every ``model.*`` key: Gamma's four arrays, the operating point
     (``model.input_offset`` [A], ``model.output_offset`` [m], ``model.output_sign``
     +1/-1, defaults 0, 0, +1: ``y = y0 + sign * S[H[x - x0]]``) and the extension keys.

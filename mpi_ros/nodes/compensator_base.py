@@ -135,7 +135,7 @@ class CompensatorNodeBase(LifecycleNode):
         self._what = 'desired displacements'
         self._window = RateWindow(time.monotonic())
         self._fault_log = FaultLog()
-        # What the output limits cut of each model's identified range (issue 27), by label.
+        # What the output limits cut of each model's identified range, by label.
         self._limits_notes: Dict[str, str] = {}
         # Validator first: rclpy runs it once per key while declaring (a bad
         # --params-file override is rejected there), then once per request.

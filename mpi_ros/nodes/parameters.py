@@ -17,9 +17,9 @@ from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from ..node_parameters import spec as core
 from ..errors import MPIError
 from ..node_parameters import ParameterSpec, plain_value, request_steps
+from ..node_parameters import spec as core
 
 __all__ = [
     'answer_request',

@@ -12,7 +12,7 @@ dynamics are the registered effects' plant steps (:func:`~mpi_ros.extensions.eff
 the eddy-current lag, the dead time and the mechanical resonance
 (:mod:`mpi_ros.extensions.resonance`, natural frequency 500-1000 Hz, envelope decay 13 ms).
 
-The kinds (:data:`SYNTHETIC_KINDS`) are the plants of issue 17: lag 0.5-5 ms at 1-10 kHz,
+The kinds (:data:`SYNTHETIC_KINDS`): lag 0.5-5 ms at 1-10 kHz,
 dead time of 1-10 samples, 500-1000 Hz ringing after steps, starts at rest, virgin and
 mid-history, rising-amplitude sines, and one quasi-static loop of 300 samples.
 """

@@ -15,6 +15,7 @@ import pytest
 import rclpy
 
 from .helpers import B_SCALE, Nodes, ORDER
+from ..process_signals import ProcessGroup
 
 
 @pytest.fixture
@@ -27,6 +28,16 @@ def nodes(ros_env, tmp_path):
         started.stop_all()
         alive = [p.pid for p in started.started if p.proc.poll() is None]
         assert not alive, f'processes left running: {alive}'
+
+
+@pytest.fixture
+def group(ros_env, tmp_path):
+    """Yield a ProcessGroup; afterwards none of its processes runs."""
+    processes = ProcessGroup(tmp_path)
+    try:
+        yield processes
+    finally:
+        processes.close()
 
 
 @pytest.fixture

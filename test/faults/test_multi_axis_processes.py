@@ -24,19 +24,10 @@ from rclpy.executors import SingleThreadedExecutor
 from std_msgs.msg import Float64MultiArray
 
 from .helpers import LIMITS
-from ..process_signals import bad_output, node_command, ProcessGroup
+from ..process_signals import bad_output, node_command
 
 AXES = 4
 TIMEOUT = 60.0
-
-
-@pytest.fixture
-def group(ros_env, tmp_path):
-    processes = ProcessGroup(tmp_path)
-    try:
-        yield processes
-    finally:
-        processes.close()
 
 
 @pytest.mark.slow

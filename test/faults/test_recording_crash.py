@@ -17,20 +17,10 @@ import numpy as np
 import pytest
 
 from .helpers import LIMITS
-from ..process_signals import node_command, ProcessGroup
+from ..process_signals import node_command
 
 #: Samples exchanged before the pause.
 SAMPLES = 200
-
-
-@pytest.fixture
-def group(ros_env, tmp_path):
-    """Yield a ProcessGroup; afterwards none of its processes runs."""
-    processes = ProcessGroup(tmp_path)
-    try:
-        yield processes
-    finally:
-        processes.close()
 
 
 @pytest.mark.slow

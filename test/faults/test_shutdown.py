@@ -19,7 +19,7 @@ import pytest
 from std_msgs.msg import Float64
 
 from .helpers import desired_values, first_command, LIMITS
-from ..process_signals import bad_output, node_command, ProcessGroup
+from ..process_signals import bad_output, node_command
 
 #: Seconds between the two signals.
 GAP = 0.05
@@ -45,16 +45,6 @@ def flooding(publisher, values):
     finally:
         stop.set()
         thread.join(timeout=10.0)
-
-
-@pytest.fixture
-def group(ros_env, tmp_path):
-    """Yield a ProcessGroup; afterwards none of its processes runs."""
-    processes = ProcessGroup(tmp_path)
-    try:
-        yield processes
-    finally:
-        processes.close()
 
 
 def send(group, label, names):
