@@ -1,6 +1,7 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """The nodes' logic that needs no ROS: specs, value checks, diagnostics, plant, identifier."""
 
+from dataclasses import replace
 import subprocess
 import sys
 
@@ -36,6 +37,20 @@ def test_the_moved_modules_import_no_ros():
             "sys.exit(any(m.split('.')[0] in ('rclpy', 'rcl_interfaces', 'std_msgs', "
             "'diagnostic_msgs') for m in sys.modules))")
     assert subprocess.run([sys.executable, '-c', code], check=False).returncode == 0
+
+
+def test_a_spec_checks_the_form_of_its_value_naming_the_key():
+    # start_state's form is its spec's check (StartState.parse), not a name test in check_value.
+    check_value(SPECS['start_state'], 'string', 'rest_high')
+    check_value(SPECS['start_state'], 'string', '0.1, 0.2')
+    with pytest.raises(ParameterRejected, match=r'start_state must be one of rest_low, rest_high, '
+                                                r".*found 'sideways'"):
+        check_value(SPECS['start_state'], 'string', 'sideways')
+    # The check is no part of a spec's identity; a renamed spec keeps it.
+    assert replace(SPECS['start_state'], check=None) == SPECS['start_state']
+    renamed = replace(SPECS['start_state'], name='axis0.start_state')
+    with pytest.raises(ParameterRejected, match=r'^axis0.start_state must be one of'):
+        check_value(renamed, 'string', 'sideways')
 
 
 def test_values_are_checked_as_plain_python_naming_the_key():

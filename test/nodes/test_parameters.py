@@ -1,10 +1,11 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """The shared parameter helpers: the forms `ros2 param load/set` and a dump send (issue 11)."""
 
-from mpi_ros.errors import ParameterRejected
+from mpi_ros.errors import ModelError, ParameterRejected
 from mpi_ros.node_parameters import specs_by_name
 from mpi_ros.nodes.compensator import PARAMETERS
-from mpi_ros.nodes.parameters import check_parameter, descriptor, is_null, normalized
+from mpi_ros.nodes.parameters import answer_request, check_parameter, descriptor, is_null, \
+    normalized
 from mpi_ros.operators.model import INPUT_OFFSET, OPERATING_POINT_DEFAULTS, OUTPUT_SIGN
 import pytest
 from rcl_interfaces.msg import Parameter as ParameterMsg
@@ -81,3 +82,19 @@ def test_operating_point_specs():
     assert '[A]' in descriptor(SPECS[INPUT_OFFSET]).description
     assert '[m]' in descriptor(SPECS['model.output_offset']).description
     assert '1 or -1' in descriptor(SPECS[OUTPUT_SIGN]).additional_constraints
+
+
+def test_a_request_is_answered_with_the_refusal_or_the_error_named():
+    def raising(err):
+        def check():
+            raise err
+        return check
+
+    assert answer_request(lambda: None).successful
+    refused = answer_request(raising(ParameterRejected('order must be auto')))
+    assert not refused.successful and refused.reason == 'order must be auto'
+    model = answer_request(raising(ModelError('model.x must be finite')))
+    assert not model.successful and model.reason == 'model.x must be finite'
+    other = answer_request(raising(KeyError('axes')))
+    assert not other.successful
+    assert other.reason == "the request could not be checked (KeyError: 'axes')"
