@@ -6,9 +6,10 @@ A message whose ``layout.dim`` has two entries holds ``dim[0].size`` = K samples
 ``dim[1].size`` = N axes, row-major, from ``layout.data_offset``, one row every
 ``dim[1].stride`` values (the ROS convention: ``dim[1].stride`` is the row stride,
 ``dim[0].stride`` the total; a stride below N is read as N).  The multi-axis nodes'
-decoder (:func:`block_of`) and the bag reader
-(:mod:`mpi_ros.recordings.bag_reader`) both read blocks through :func:`chunk_layout`, and a
-message without ``dim`` of a known axis count through :func:`consecutive_layout`; each
+decoder (:func:`block_of`) and the bag reader's array reader
+(:mod:`mpi_ros.recordings.messages.multi_array`) both read blocks through
+:func:`chunk_layout`, and a message without ``dim`` of a known axis count through
+:func:`consecutive_layout`; each
 phrases its own errors (what the user has to change differs).
 
 The multi-axis nodes take and publish their array topics serialized (rclpy's raw
