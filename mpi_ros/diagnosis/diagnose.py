@@ -78,7 +78,6 @@ from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError
 from ..extensions import EFFECTS, fit_composite
 from ..extensions._common import rate_cross_correlation
-from ..extensions._signals import first_order_lag
 from ..extensions.composite import check_combination, composite_cause
 from ..extensions.dead_time import DEAD_TIME
 from ..extensions.effect import unidentified_parameters
@@ -89,6 +88,7 @@ from ..identification.finding import DynamicsFinding, record_dynamics, \
 from ..identification.procedure import estimate_start_state, prepare_record, \
     refuse_if_unmodellable
 from ..metrics import range_error, rms_range_error
+from ..operators.filters import first_order_lag
 from ..operators.model import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 

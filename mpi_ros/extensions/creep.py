@@ -5,7 +5,7 @@ Creep extension: a share of every displacement change that creeps in afterwards.
 The extended operator is ``s = y0 + sign (G + sum_j w_Cj C_j[G])`` with ``G = S[H[x - x0]]``
 (Gamma's displacement relative to its operating point ``x0``, ``y0``, ``sign``), where each
 creep operator ``C_j`` is a first-order lag ``tau_j dc_j/dt = G - c_j`` (see
-:mod:`mpi_ros.extensions._signals`) and the time constants ``tau_j`` are spaced
+:mod:`mpi_ros.operators.filters`) and the time constants ``tau_j`` are spaced
 logarithmically over the record's time scales.  After a step of the displacement by ``D``
 the output jumps by ``D`` and creeps on by ``w_Cj D`` with each ``tau_j``: the ``log t`` law
 of piezoelectric and magnetostrictive actuators (creep proportional to the displacement
@@ -20,7 +20,7 @@ its compensator tracked worse than the plain one (docs/diagnosis.md).
 
 Fit (:func:`fit_creep`): the generalised error (33) needs ``S'[G]`` with the creep-free
 output ``G = F^-1[v]`` (``F = 1 + sum_j w_Cj C_j``, undone exactly by
-:func:`~mpi_ros.extensions._signals.lag_feedback_inverse`); to first order in the creep,
+:func:`~mpi_ros.operators.filters.lag_feedback_inverse`); to first order in the creep,
 ``S'[G] = S'[v] - S'_slope(v) sum_j w_Cj C_j[G]``, so with the slope and ``G`` taken from
 the round before, ``E = w_H^T H[u] + sum_j w_Cj S'_slope(v) C_j[G] - w'_S^T S'[v] + c`` is
 linear in ``w_H``, ``w_C >= 0`` and ``w'_S``: one convex QP (34)-(36) per round, a few
@@ -47,13 +47,13 @@ import numpy.typing as npt
 
 from ._common import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
     held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
-from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
 from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
 from ..identification.folds import blocked_folds
+from ..operators.filters import lag_bank, lag_coefficients, lag_feedback_inverse
 from ..operators.model import _superposition_value, MPIModel
 
 __all__ = ['CreepModel', 'CreepInverse', 'creep_time_constants', 'fit_creep',

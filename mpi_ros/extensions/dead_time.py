@@ -23,12 +23,12 @@ from ._common import AxisUnits, bound_note, burst_evidence, burst_verdict, check
     choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
     fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
     scalar_parameter
-from ._signals import delay
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
 from .plant_steps import delay_state, delay_stream
 from ..identification import select_order
 from ..identification.folds import blocked_folds
+from ..operators.filters import delay
 from ..operators.model import MPIModel
 
 __all__ = ['DeadTimeModel', 'fit_dead_time', 'DEAD_TIME']

@@ -25,13 +25,13 @@ from ._common import AxisUnits, bound_note, burst_evidence, burst_verdict, check
     choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
     fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
     scalar_parameter
-from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
 from .plant_steps import lag_state, lag_stream
 from ..errors import ModelError
 from ..identification import select_order
 from ..identification.folds import blocked_folds
+from ..operators.filters import first_order_lag, lag_coefficients
 from ..operators.model import MPIModel
 
 __all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',

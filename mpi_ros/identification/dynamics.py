@@ -670,7 +670,7 @@ def _explain(t: FloatArray, x: FloatArray, v: FloatArray, keep: npt.NDArray[np.b
              span_y: float) -> tuple[str, float, float, tuple[int, int]]:
     # The shortest explanation: the delay (output shifted back) or first-order lag of the
     # input, up to `limit`, that leaves the smallest counter-movement.
-    from ..extensions._signals import first_order_lag
+    from ..operators.filters import first_order_lag
     n = x.size
     dt = float(np.median(np.diff(t)))
     best = ('unexplained', 0.0, math.inf, (0, 0))

@@ -527,7 +527,7 @@ class InputDynamics:
 
     def apply(self, time: FloatArray, current: FloatArray) -> FloatArray:
         """Return the input the hysteresis sees: delayed, then lagged."""
-        from ..extensions._signals import delay, first_order_lag
+        from ..operators.filters import delay, first_order_lag
         x = delay(time, current, self.dead_time) if self.dead_time > 0.0 else current
         if self.lag_time_constant > 0.0:
             x = first_order_lag(time, x, self.lag_time_constant)
