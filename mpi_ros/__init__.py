@@ -14,7 +14,7 @@ state of the sources), never in the package: see :mod:`mpi_ros._numba_cache`.
 # First: sets numba's cache directory before any @numba.njit(cache=True) is decorated.
 from . import _numba_cache  # noqa: F401
 from .errors import DataError, IdentificationError, ModelError, MPIError, MPIWarning
-from .identification import IdentificationResult, identify
+from .model_fit import IdentificationResult, identify
 from .operators.model import MPIModel
 
 __all__ = ['MPIModel', 'identify', 'IdentificationResult', 'MPIError', 'ModelError',

@@ -4,7 +4,7 @@ The one identification pipeline: recording + data options + order -> fitted mode
 
 ``mpi-ros identify``, the identifier node and the diagnosis' reading all go through
 :func:`mpi_ros.recordings.read_recording` with one :class:`~mpi_ros.recordings.DataOptions`;
-:func:`fit_recording` adds the fit with :func:`mpi_ros.identification.identify` (its design,
+:func:`fit_recording` adds the fit with :func:`mpi_ros.model_fit.identify` (its design,
 refusals and order selection), so a bag or CSV gives the same model whichever tool reads it.
 
 :func:`fit_bag` is the identifier node's fit of one actuator (the model as parameters,
@@ -32,7 +32,7 @@ import numpy as np
 from .compensation.parameters import AXES, ParameterSpec
 from .compensation.updates import axis_key, LIMIT_KEYS
 from .errors import DataError, IdentificationError, MPIError, ParameterRejected
-from .identification import IdentificationResult, identify
+from .model_fit import IdentificationResult, identify
 from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS, RECORD_START_STATES
 from .order import format_order, Order, parse_order as parse_order_text
 from .params import write_params_yaml
@@ -80,7 +80,7 @@ class BagFit:
 
     Attributes
     ----------
-    result : mpi_ros.identification.IdentificationResult
+    result : mpi_ros.model_fit.IdentificationResult
         The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
         ``.samples``, solver status.
     parameters : dict of str to list of float, float or int
@@ -139,9 +139,9 @@ def fit_recording(source: 'str | os.PathLike[str] | Recording',
     order : 'auto' or (int, int)
         Model orders, or the automatic selection.
     anchor : {'operating_point', 'origin'}
-        See :func:`mpi_ros.identification.identify`.
+        See :func:`mpi_ros.model_fit.identify`.
     **identify_options
-        Further keywords of :func:`~mpi_ros.identification.identify` (``epsilon``,
+        Further keywords of :func:`~mpi_ros.model_fit.identify` (``epsilon``,
         ``holdout``, ``dynamics``, ``periodic``; ``time`` defaults to the recording's).
 
     Returns

@@ -10,7 +10,7 @@ from mpi_ros.errors import DataError, ModelError
 from mpi_ros.extensions import CompositeModel, CreepModel, DeadTimeModel, EFFECTS, \
     extended_model_from_params, fit_composite, fit_creep, fit_dead_time, \
     fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
-from mpi_ros.identification import identify
+from mpi_ros.model_fit import identify
 from mpi_ros.metrics import control_error, rms_range_error
 from mpi_ros.operators.filters import delay, first_order_lag, lag_bank, \
     lag_feedback_inverse

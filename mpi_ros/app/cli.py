@@ -162,7 +162,7 @@ def order_table_lines(table: list[dict[str, Any]]) -> list[str]:
     Parameters
     ----------
     table : list of dict
-        :attr:`mpi_ros.identification.IdentificationResult.order_table`.
+        :attr:`mpi_ros.model_fit.IdentificationResult.order_table`.
 
     Returns
     -------

@@ -2,7 +2,7 @@
 """
 Helpers shared by the model extensions: argument checks, parameter reading, 1-D search.
 
-Every extension is fitted with :func:`mpi_ros.identification.identify`'s design: input and
+Every extension is fitted with :func:`mpi_ros.model_fit.identify`'s design: input and
 output centred on the record's operating point, the output's sign detected, a constant term
 in the generalised error, and only the samples after the burn-in (the plays' and the
 actuator's states are determined by the data) in the fit and in the trial errors.
@@ -207,7 +207,7 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
     """
     Identify Gamma on a (possibly transformed) current and return it with its error.
 
-    The fit is :func:`mpi_ros.identification.identify`'s (operating point, detected sign,
+    The fit is :func:`mpi_ros.model_fit.identify`'s (operating point, detected sign,
     constant term, the start state estimated, ringing left out); the generalised error and
     the returned error cover the samples from ``start`` on (see :func:`determined_start`),
     so trials on differently transformed inputs are compared on the same samples.

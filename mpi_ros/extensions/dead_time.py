@@ -97,7 +97,7 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     blocks of the record (:func:`~mpi_ros.identification.folds.blocked_folds`), each
     predicted by the fit on the other two, over the samples determined for every trial
     (after the raw current's burn-in and the longest trial lag), with
-    :func:`mpi_ros.identification.identify`'s design (operating point, sign, constant term).
+    :func:`mpi_ros.model_fit.identify`'s design (operating point, sign, constant term).
     The held-out errors choose the bracket (two grid steps), the whole record's fit error
     refines the lag inside it.  The chosen lag is then fitted on the whole record and kept
     only when it fits the record

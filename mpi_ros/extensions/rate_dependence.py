@@ -230,7 +230,7 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     judged out of sample: on three contiguous blocks of the record
     (:func:`~mpi_ros.identification.folds.blocked_folds`), each predicted by the fit on the
     other two, over the samples determined for every trial (after the raw current's burn-in
-    and three of the longest trial lags), with :func:`mpi_ros.identification.identify`'s
+    and three of the longest trial lags), with :func:`mpi_ros.model_fit.identify`'s
     design (operating point, sign, constant term).  The held-out errors choose the lag's
     bracket (two grid steps); inside it the whole record's fit error refines it (the held-out
     error is noisier: on a 4 ms lag it refined to 3.4-3.7 ms, in sample 4.9 ms, and the creep

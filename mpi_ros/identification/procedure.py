@@ -18,7 +18,7 @@ Steps (documented in docs/design.md, "Identification on real records"):
    first-order lag of the input, one QP each, scored on held-out blocks by the output's
    RMS error; kept when it beats the static model on them clearly.
 5. **Order** (``order='auto'``): raised until the held-out error saturates
-   (:mod:`.api`).
+   (:mod:`.order_selection`).
 6. **Judgement**: the model, simulated over the whole record from its start state, against
    the best straight line on the same samples; never a model worse than the line.
 
@@ -68,8 +68,8 @@ import numpy as np
 import numpy.typing as npt
 
 from .dynamics import analyse_dynamics, DynamicsAnalysis
-from .qp import _IDLE_PLAY, burn_in, fit_generalized_error, FloatArray, GramParts, output_sign, \
-    regressor_gram, scaled_design, ScaledDesign
+from .qp import burn_in, fit_generalized_error, FloatArray, GramParts, IDLE_PLAY, \
+    output_sign, regressor_gram, scaled_design, ScaledDesign
 from ..errors import DataError, IdentificationError
 from ..operators.deadzone import dead_zone_operator
 from ..operators.model import MPIModel
@@ -1302,7 +1302,7 @@ class _Fitter:
         if self.design.constant:
             gram = gram - np.outer(mean, mean)
             variance = np.diag(gram)[:n1]
-            idle = np.flatnonzero(variance <= _IDLE_PLAY ** 2 * variance[0])
+            idle = np.flatnonzero(variance <= IDLE_PLAY ** 2 * variance[0])
         w_h, w_s, _, info = fit_generalized_error(
             gram, 1.0 - self.r_h, n_hysteresis=n1, n_superposition=self.r_s.size,
             superposition_center=self.design.center, epsilon=self.epsilon, fixed_zero=idle,
