@@ -87,15 +87,17 @@ from .errors import DataError, IdentificationError, MPIWarning
 from .extensions import CompositeModel, DeadTimeModel, RateDependentModel
 from .extensions.resonance import estimate_resonance, ResonanceEstimate, ResonanceModel, \
     with_mode
-from .identification.dynamics import return_point_drift
+from .identification.dynamics import InputDynamics, return_point_drift
+from .identification.dynamics_grid import DynamicsEstimate
 from .identification.finding import DynamicsFinding, estimate_record_dynamics, finding_of, \
     reference_order
+from .identification.fitter import fit_record, fold_line_errors
+from .identification.folds import fold_index, FoldErrors, held_out_rows, RECORD_FOLDS
 from .identification.order_selection import ORDER_WINDOW, select_record_order
-from .identification.procedure import DynamicsEstimate, fit_record, fold_index, \
-    fold_line_errors, FoldErrors, FOLDS, held_out_rows, InputDynamics, prepare_record, \
-    refuse_if_unmodellable, Segment, StartState
 from .identification.qp import ANCHORS, check_excitation, check_quality, check_signals, \
     FloatArray, output_sign
+from .identification.record import prepare_record, refuse_if_unmodellable, Segment
+from .identification.start_states import StartState
 from .operators.model import MPIModel
 
 __all__ = ['IdentificationResult', 'identify', 'model_with_dynamics', 'model_with_resonance']
@@ -138,7 +140,7 @@ class IdentificationResult:
     burn_in : int
         Samples at the start left out of the fit because no start state explains them
         (0 when the start state is determined; see
-        :mod:`mpi_ros.identification.procedure`, "Start states").
+        :mod:`mpi_ros.identification.start_states`).
     whole_record_rms_error : float
         RMS error of the model simulated over the whole record from its first sample
         (ringing and burn-in included), over the output's range.
@@ -168,7 +170,7 @@ class IdentificationResult:
         What the identification changed or noticed (lowered order, burn-in, ...).
     held_out_error : float
         RMS output error of the fit's procedure on the record's held-out blocks (blocked
-        cross-validation: :data:`~mpi_ros.identification.procedure.FOLDS` contiguous folds of
+        cross-validation: :data:`~mpi_ros.identification.folds.RECORD_FOLDS` contiguous folds of
         the record's first 100000 samples, each held out once), over the output's range.
     held_out_errors : list of float
         The same per fold, in the record's order.
@@ -279,9 +281,9 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     Identify a modified Prandtl-Ishlinskii model from measured input/output data.
 
     The whole record is used from its first sample: the start state is estimated (see
-    :mod:`mpi_ros.identification.procedure`, "Start states"), ringing after steps is left
+    :mod:`mpi_ros.identification.start_states`), ringing after steps is left
     out, lag and dead time are measured and, with a time base, modelled (see
-    :mod:`mpi_ros.identification.procedure`); with a time base, ringing after steps is then
+    :mod:`mpi_ros.identification.fitter`); with a time base, ringing after steps is then
     modelled as a lightly damped output mode when that lowers the whole-record error clearly
     (see "The output mode" in :mod:`mpi_ros.extensions.resonance`;
     :attr:`IdentificationResult.full_model` carries it).  The record may have any
@@ -528,8 +530,8 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
         worse = sum(1 for m, b in pairs if m > b + _FAR_ABSOLUTE)
         if 2 * worse > len(held_out.per_fold):
             msg = (f'the identified model (n={n}, l={l}) is no better than a straight line on'
-                   f" the record's held-out blocks ({FOLDS} contiguous folds, each fitted on"
-                   f' the others): RMS {100 * held_out.error:.3g} % of the output range vs'
+                   f" the record's held-out blocks ({RECORD_FOLDS} contiguous folds, each fitted"
+                   f' on the others): RMS {100 * held_out.error:.3g} % of the output range vs'
                    f' {100 * line.error:.3g} % for the line (per fold {folds} % vs {lines} %;'
                    f' {where}); in sample it is {100 * rms:.3g} %: the fit does not carry over'
                    ' within its own record (drift or leakage, switching, or a part of the'
@@ -563,7 +565,7 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
                      f" {100 * row['rms_error']:.3g} %) and the chosen model's held-out error"
                      f' ({100 * held_out.error:.3g} %) differ: the table holds out 30 short'
                      f' blocks of {scope} (every kind of excitation on both sides), the'
-                     f' model {FOLDS} long contiguous folds of the record ({where})')
+                     f' model {RECORD_FOLDS} long contiguous folds of the record ({where})')
     return notes
 
 
@@ -657,7 +659,6 @@ def _check_one_period(x: npt.NDArray[Any], order: Any) -> None:
         raise DataError(msg)
 
 
-
 def model_with_resonance(model: Any, estimate: ResonanceEstimate) -> Any:
     """
     Return a model with the output mode after it (the model itself when none is modelled).
@@ -684,12 +685,9 @@ def model_with_resonance(model: Any, estimate: ResonanceEstimate) -> Any:
     return CompositeModel(gamma, (model, mode))
 
 
-
 def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
-
 def _rms(sim: FloatArray, y: FloatArray, span: float) -> float:
     return float(np.sqrt(np.mean((sim - y) ** 2)) / span)
-

@@ -85,8 +85,8 @@ from ..identification import burn_in, output_sign
 from ..identification.dynamics import return_point_drift, step_onset, StepOnset
 from ..identification.finding import DynamicsFinding, record_dynamics, \
     SEPARATE_LAG_AND_DEAD_TIME
-from ..identification.procedure import estimate_start_state, prepare_record, \
-    refuse_if_unmodellable
+from ..identification.record import prepare_record, refuse_if_unmodellable
+from ..identification.start_states import estimate_start_state
 from ..metrics import range_error, rms_range_error
 from ..model_fit import identify
 from ..operators.filters import first_order_lag

@@ -19,7 +19,8 @@ from scipy.optimize import minimize_scalar
 
 from ..errors import DataError, ModelError
 from ..identification import select_order
-from ..identification.procedure import fit_record, prepare_record
+from ..identification.fitter import fit_record
+from ..identification.record import prepare_record
 from ..metrics import rms_range_error
 from ..operators.model import MPIModel
 
@@ -431,7 +432,7 @@ def determined_start(time: FloatArray, current: FloatArray, displacement: FloatA
     Return the first sample the data determine, for the raw current and its transforms.
 
     The samples no start state explains in a fit of the raw current (usually none: the
-    start state is estimated, see :mod:`mpi_ros.identification.procedure`), plus
+    start state is estimated, see :mod:`mpi_ros.identification.fitter`), plus
     ``settle`` seconds for a delayed or lagged version of it to have forgotten its own
     start.
 

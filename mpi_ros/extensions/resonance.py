@@ -84,8 +84,9 @@ from ._common import AxisUnits, check_series, Order, resolve_order, scalar_param
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
 from ..errors import DataError, IdentificationError, ModelError
-from ..identification.procedure import fit_record, InputDynamics, prepare_record, \
-    PreparedRecord, RecordFit
+from ..identification.dynamics import InputDynamics
+from ..identification.fitter import fit_record, RecordFit
+from ..identification.record import prepare_record, PreparedRecord
 from ..operators.model import MPIModel
 
 __all__ = ['ResonanceModel', 'ModeFit', 'fit_mode', 'fit_resonance', 'output_mode',

@@ -15,9 +15,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .procedure import fit_record, held_out_rows, InputDynamics, prepare_record, \
-    PreparedRecord, Segment
+from .dynamics import InputDynamics
+from .fitter import fit_record
+from .folds import held_out_rows
 from .qp import check_signals, DEFAULT_ORDERS, range_errors
+from .record import prepare_record, PreparedRecord, Segment
 from ..errors import DataError, IdentificationError
 
 __all__ = ['DEFAULT_ORDERS', 'ORDER_WINDOW', 'select_order', 'select_record_order']
@@ -137,7 +139,7 @@ def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
         Called with a line of text before each order is fitted (a progress display).
     rule : {'joint', 'determined'}
         Where each order's weights come from (the reference fit's rule, see
-        :func:`~mpi_ros.identification.procedure.fit_record`).
+        :func:`~mpi_ros.identification.fitter.fit_record`).
 
     Returns
     -------
