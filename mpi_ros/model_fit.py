@@ -11,7 +11,28 @@ refusals), the input dynamics it finds (modelled as :mod:`mpi_ros.extensions.dea
 (:func:`mpi_ros.extensions.resonance.estimate_resonance`); it returns an
 :class:`IdentificationResult`.
 
-Identification of the MPI operator from measured data, section 4.2 of Kuhnen's paper.
+Section 4.2 of Kuhnen's paper, on real records.  Steps (documented in docs/design.md,
+"Identification on real records"):
+
+1. **What moves the output against the input** (:mod:`mpi_ros.identification.dynamics`): a
+   butterfly loop, switching transients or an output unrelated to the input are refused,
+   naming the cause; ringing after steps is left out of the fit; lag and dead time are
+   measured.
+2. **Segments**: a record stitched from several experiments (time gaps, time running back,
+   output jumps the input does not explain) is cut at the joins; each segment gets its own
+   start state (:mod:`mpi_ros.identification.record`).
+3. **Start state** (:mod:`mpi_ros.identification.start_states`): one QP per candidate
+   history; the best is the record's start state, written into the model, so that the model
+   simulated from the first sample reproduces the record.  A burn-in is kept only where no
+   candidate explains the start (reported).
+4. **Dynamics** (with a time base): a grid over the dead time and the time constant of a
+   first-order lag of the input, one QP each, scored on held-out blocks by the output's
+   RMS error; kept when it beats the static model on them clearly
+   (:mod:`mpi_ros.identification.dynamics_grid`).
+5. **Order** (``order='auto'``): raised until the held-out error saturates
+   (:mod:`mpi_ros.identification.order_selection`).
+6. **Judgement**: the model, simulated over the whole record from its start state, against
+   the best straight line on the same samples; never a model worse than the line.
 
 Three parts, as in the paper:
 

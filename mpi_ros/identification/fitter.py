@@ -2,25 +2,11 @@
 """
 Fit Gamma on a prepared record: start states, weights, burn-in, cross-validation.
 
-Steps (documented in docs/design.md, "Identification on real records"):
-
-1. **What moves the output against the input** (:mod:`.dynamics`): a butterfly loop,
-   switching transients or an output unrelated to the input are refused, naming the cause;
-   ringing after steps is left out of the fit; lag and dead time are measured.
-2. **Segments**: a record stitched from several experiments (time gaps, time running back,
-   output jumps the input does not explain) is cut at the joins; each segment gets its own
-   start state.
-3. **Start state** (below, "Start states"): one QP per candidate history; the best is the
-   record's start state, written into the model, so that the model simulated from the
-   first sample reproduces the record.  A burn-in is kept only where no candidate explains
-   the start (reported).
-4. **Dynamics** (with a time base): a grid over the dead time and the time constant of a
-   first-order lag of the input, one QP each, scored on held-out blocks by the output's
-   RMS error; kept when it beats the static model on them clearly.
-5. **Order** (``order='auto'``): raised until the held-out error saturates
-   (:mod:`.order_selection`).
-6. **Judgement**: the model, simulated over the whole record from its start state, against
-   the best straight line on the same samples; never a model worse than the line.
+:func:`fit_record` fits Gamma on the samples a :class:`~.record.PreparedRecord` keeps, each
+segment from the start state chosen for it (:mod:`.start_states`: one QP per candidate
+history on Gram matrices accumulated once per segment and start state), with the input
+dynamics given, a burn-in where no start state explains the record's start, and the weights'
+rule chosen by blocked cross-validation on the record's own folds (:mod:`.folds`).
 """
 
 from dataclasses import dataclass, field, replace

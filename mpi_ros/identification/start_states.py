@@ -2,8 +2,6 @@
 """
 Start states of a record: how the actuator came to its first sample.
 
-**Start states** of a record: how the actuator came to its first sample.
-
 The plays' states at the first sample (``z_H0``, (32) in the paper, where the actuator rests
 demagnetised at the origin) are not in the record, but its history leaves a small family of
 states, one per kind of history.  With the input ``u0`` at the first sample and a play of
