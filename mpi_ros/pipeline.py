@@ -38,10 +38,11 @@ from .order import format_order, Order, parse_order as parse_order_text
 from .params import write_params_yaml
 from .recordings import DATA_OPTIONS, DataOption, DataOptions, JOINT_FIELDS, read_recording, \
     Recording
+from .stop_signals import STOP_SIGNALS
 from .units import INPUT_QUANTITY_KEY
 
 __all__ = ['BagFit', 'DATA_NAMES', 'DATA_PARAMETERS', 'PARAMETERS', 'RecordingFit',
-           'STOP_SIGNALS', 'check_identifier_value', 'diagnosed_parameters', 'fit_bag',
+           'check_identifier_value', 'diagnosed_parameters', 'fit_bag',
            'fit_bag_axes',
            'LIMITS_COMMENT', 'fit_recording', 'identified_parameters', 'identify_bag',
            'parse_order']
@@ -50,9 +51,6 @@ __all__ = ['BagFit', 'DATA_NAMES', 'DATA_PARAMETERS', 'PARAMETERS', 'RecordingFi
 LIMITS_COMMENT = ('output.min / output.max: the input range the actuator was driven over '
                   'during identification\n(the model extrapolates outside it); narrow them to '
                   'the safe range of your actuator')
-
-#: The signals that stop a run (a node, or the workers of :func:`fit_bag_axes`).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 @dataclass(frozen=True)

@@ -533,7 +533,7 @@ def _cmd_merge_axes(args: argparse.Namespace) -> int:
 
 def _cmd_diagnose(argv: list[str]) -> int:
     try:
-        from ..diagnosis.cli import diagnose_main
+        from .diagnose_cli import diagnose_main
     except ImportError as err:            # pragma: no cover - during development only
         msg = f'diagnosis is not available in this installation: {err}'
         raise MPIError(msg) from err

@@ -43,10 +43,9 @@ import numpy.typing as npt
 from scipy import stats
 
 from .invertibility import _branches
-from ..plant.excitation import diagnostic_excitation
 
 __all__ = ['HoldSignature', 'BurstSignature', 'hold_signature', 'burst_signature',
-           'hold_segments', 'burst_segments', 'diagnostic_excitation']
+           'hold_segments', 'burst_segments']
 
 FloatArray = npt.NDArray[np.float64]
 
