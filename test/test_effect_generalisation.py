@@ -5,7 +5,7 @@ from mpi_ros.diagnosis import diagnose
 from mpi_ros.errors import DataError
 from mpi_ros.extensions import CreepModel, DeadTimeModel, fit_creep, fit_dead_time, \
     fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
-from mpi_ros.extensions._common import determined_start, fit_gamma, lag_search_limits
+from mpi_ros.extensions.fitting import determined_start, fit_gamma, lag_search_limits
 from mpi_ros.extensions.creep import CREEP_TIME_CONSTANTS, creep_time_constants
 from mpi_ros.extensions.dead_time import DEAD_TIME
 from mpi_ros.extensions.effect import unidentified_parameters

@@ -77,10 +77,10 @@ from .signatures import burst_signature, hold_segments, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError
 from ..extensions import EFFECTS, fit_composite
-from ..extensions._common import rate_cross_correlation
 from ..extensions.composite import check_combination, composite_cause
 from ..extensions.dead_time import DEAD_TIME
 from ..extensions.effect import unidentified_parameters
+from ..extensions.fitting import rate_cross_correlation
 from ..identification import burn_in, output_sign
 from ..identification.dynamics import return_point_drift, step_onset, StepOnset
 from ..identification.finding import DynamicsFinding, record_dynamics, \

@@ -45,16 +45,16 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
-    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
+from .fitting import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
+    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
 from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
 from ..identification.folds import blocked_folds
 from ..operators.filters import lag_bank, lag_coefficients, lag_feedback_inverse
-from ..operators.model import _superposition_value, MPIModel
+from ..operators.model import MPIModel, superposition_value
 
 __all__ = ['CreepModel', 'CreepInverse', 'creep_time_constants', 'fit_creep',
            'CREEP_TIME_CONSTANTS', 'CREEP_WEIGHTS']
@@ -247,9 +247,9 @@ class CreepInverse:
                inverse: Callable[[float, float], float]) -> float:
         """Return the current [A] whose output, creep included, is ``S[v]`` from ``y0``."""
         weights = self.model.weights
-        wanted = _superposition_value(v, *self._s)                                   # S[v]
+        wanted = superposition_value(v, *self._s)                                   # S[v]
         g = (wanted - float(np.dot(weights, self._p))) / (1.0 + float(np.dot(weights, self._b)))
-        return inverse(_superposition_value(g, *self._s_inv), 0.0)
+        return inverse(superposition_value(g, *self._s_inv), 0.0)
 
     def advance(self, current: float, previous: float, started: bool) -> float:
         """Return the applied ``current``: H sees it unchanged."""
@@ -257,7 +257,7 @@ class CreepInverse:
 
     def observe(self, hysteresis_output: float) -> None:
         """Advance the lags with ``G = S[h]`` of the applied current (after start: settle)."""
-        g = _superposition_value(hysteresis_output, *self._s)
+        g = superposition_value(hysteresis_output, *self._s)
         self.state = self._p + self._b * g
         self._last = g
 
@@ -321,7 +321,7 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record, then again on the
-        creep-free output (see :func:`~mpi_ros.extensions._common.resolve_order`).
+        creep-free output (see :func:`~mpi_ros.extensions.fitting.resolve_order`).
     time_constants : array_like of float, optional
         Creep time constants [s]; :func:`creep_time_constants` of ``time`` by default.
     epsilon : float

@@ -19,12 +19,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
+from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
+    PlantEffect, PlantParameter
+from .fitting import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
     choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
     fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
     scalar_parameter
-from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
-    PlantEffect, PlantParameter
 from .plant_steps import delay_state, delay_stream
 from ..identification import select_order
 from ..identification.folds import blocked_folds
@@ -111,7 +111,7 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record, then again on the
-        delayed current (see :func:`~mpi_ros.extensions._common.resolve_order`).
+        delayed current (see :func:`~mpi_ros.extensions.fitting.resolve_order`).
     epsilon : float
         Bound of (8)/(19).
 

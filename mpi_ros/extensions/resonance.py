@@ -80,9 +80,9 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import least_squares
 
-from ._common import AxisUnits, check_series, Order, resolve_order, scalar_parameter
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
+from .fitting import AxisUnits, check_series, Order, resolve_order, scalar_parameter
 from ..errors import DataError, IdentificationError, ModelError
 from ..identification.dynamics import InputDynamics
 from ..identification.fitter import fit_record, RecordFit

@@ -19,7 +19,7 @@ import osqp
 import scipy.sparse as sp
 
 from ..errors import DataError, IdentificationError
-from ..operators.deadzone import _dead_zone, dead_zone_operator
+from ..operators.deadzone import dead_zone, dead_zone_operator
 from ..operators.hysteresis import PIHysteresisOperator
 from ..operators.inverse import invert_superposition
 from ..operators.model import MPIModel
@@ -820,7 +820,7 @@ def _fill_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
             row[i] = z[i]
         y = ys[k]
         for j in range(ns):
-            row[nh + j] = -_dead_zone(y, r_s[j])
+            row[nh + j] = -dead_zone(y, r_s[j])
         for j in range(ne):
             row[nh + ns + j] = extra[k, j]
         total = sums[c]
@@ -849,7 +849,7 @@ def _gram_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
             phi[i] = z[i]
         y = ys[k]
         for j in range(ns):
-            phi[nh + j] = -_dead_zone(y, r_s[j])
+            phi[nh + j] = -dead_zone(y, r_s[j])
         counts[c] += 1
         for a in range(nv):
             pa = phi[a]
