@@ -112,12 +112,13 @@ from .identification.dynamics import InputDynamics, return_point_drift
 from .identification.dynamics_grid import DynamicsEstimate
 from .identification.finding import DynamicsFinding, estimate_record_dynamics, finding_of, \
     reference_order
-from .identification.fitter import fit_record, fold_line_errors
+from .identification.fitter import fit_record, fold_line_errors, RecordFit
 from .identification.folds import fold_index, FoldErrors, held_out_rows, RECORD_FOLDS
 from .identification.order_selection import ORDER_WINDOW, select_record_order
 from .identification.qp import ANCHORS, check_excitation, check_quality, check_signals, \
     FloatArray, output_sign
-from .identification.record import prepare_record, refuse_if_unmodellable, Segment
+from .identification.record import prepare_record, PreparedRecord, refuse_if_unmodellable, \
+    Segment
 from .identification.start_states import StartState
 from .operators.model import MPIModel
 
@@ -373,6 +374,70 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
 
     """
     started = time_module.perf_counter()
+    x, y, t, n, l, auto = _checked_arguments(  # noqa: E741
+        current, displacement, time, n=n, l=l, order=order, anchor=anchor, dynamics=dynamics,
+        holdout=holdout, periodic=periodic)
+    say = progress if progress is not None else _silent
+    say(f'analysing the record ({x.size} samples)')
+    record = _analysed_record(x, y, t, anchor=anchor, epsilon=epsilon, periodic=periodic)
+    notes: list[str] = []
+    n, l = _order_the_record_supports(x, y, n, l, auto, anchor, notes)  # noqa: E741
+    choose = not periodic
+    # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
+    # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
+    reference = reference_order(x.size, n, l)
+    estimate, finding = _input_dynamics(record, reference, dynamics=dynamics, holdout=holdout,
+                                        choose=choose, progress=progress)
+    found = estimate.modelled
+    table: list[dict[str, Any]] = []
+    if auto:
+        (n, l), table = _selected_order(record, x, y, reference, found,  # noqa: E741
+                                        holdout=holdout, choose=choose, anchor=anchor,
+                                        notes=notes, say=say, progress=progress)
+    say(f'fitting n={n}, l={l} on the whole record')
+    fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True,
+                     validate=True)
+    notes.extend(fit.notes)
+    held_out = fit.folds.get(fit.rule, FoldErrors())
+    line = _line_on_folds(x, y, record.keep, fit.burn_in)
+    resonance = ResonanceEstimate()
+    if t is not None and dynamics == 'auto' and record.analysis.ringing:
+        say('ringing: fitting the output mode')
+        resonance, fit = estimate_resonance(record, fit, n, l, found)
+    say('judging the fit against the straight line')
+    sim = with_mode(t, fit.simulate(), resonance)    # each segment from its start state
+    fitted = fit.fitted if fit.fitted is not None else record.keep
+    try:
+        rms, peak, linear = check_quality(x, y, sim, fitted, n, l, anchor, chosen=auto)
+        # Called here, not in a step of its own: its warnings name identify's caller.
+        notes.extend(_judge_held_out(held_out, line, rms, (n, l), auto, table, x,
+                                     record.window(ORDER_WINDOW).current.size))
+    except IdentificationError as err:
+        raise _true_cause(err, x, y) from None
+    whole = _whole_record_error(fit, found, resonance, sim, t, x, y)
+    return IdentificationResult(
+        model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
+        samples=int(x.size), solver_status=str(fit.info.status),
+        iterations=int(fit.info.iter), solve_time=time_module.perf_counter() - started,
+        order_table=table, linear_rms_error=linear, burn_in=int(fit.burn_in),
+        whole_record_rms_error=whole, start_state=_start_of(fit),
+        segments=_segments_of(fit, notes), dynamics=found, dynamics_estimate=estimate,
+        dynamics_finding=finding,
+        findings='; '.join(part for part in (record.analysis.describe(), resonance.describe(),
+                                             estimate.describe(), finding.describe()) if part),
+        excluded=int(np.count_nonzero(~record.keep)), notes=notes, resonance=resonance,
+        held_out_error=held_out.error, held_out_errors=list(held_out.per_fold),
+        line_held_out_error=line.error, line_held_out_errors=list(line.per_fold),
+        weights_from=fit.rule)
+
+
+def _checked_arguments(current: npt.ArrayLike, displacement: npt.ArrayLike,
+                       time: npt.ArrayLike | None, *, n: int | None, l: int | None,  # noqa: E741
+                       order: str | tuple[int, int] | None, anchor: str, dynamics: str,
+                       holdout: float, periodic: bool) -> tuple[
+                           FloatArray, FloatArray, FloatArray | None, int, int, bool]:
+    # The data and the options, checked once (DataError or IdentificationError naming the
+    # first thing wrong): x, y, t, the order and whether it is chosen ('auto').
     x, y = check_signals(current, displacement)
     t = _check_time(time, x.size)
     if anchor not in ANCHORS:
@@ -398,8 +463,13 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     if periodic:
         _check_one_period(x, order)
     _check_levels(x, y)
-    say = progress if progress is not None else _silent
-    say(f'analysing the record ({x.size} samples)')
+    return x, y, t, n, l, auto
+
+
+def _analysed_record(x: FloatArray, y: FloatArray, t: FloatArray | None, *, anchor: str,
+                     epsilon: float, periodic: bool) -> PreparedRecord:
+    # The record analysed (dynamics, ringing, segments), refused when the MPI model cannot
+    # represent it; a periodic record is one segment that starts where it ends.
     record = prepare_record(x, y, time=t, anchor=anchor, epsilon=epsilon)
     keep = record.keep
     _, correlation = output_sign(x[keep], y[keep])
@@ -407,60 +477,68 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         refuse_if_unmodellable(record, correlation)
     except IdentificationError as err:
         raise _true_cause(err, x, y) from None
-    notes: list[str] = []
     if periodic:
         record = replace(record, segments=[Segment(0, x.size, 'start', StartState('periodic'))])
+    return record
+
+
+def _order_the_record_supports(x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
+                               auto: bool, anchor: str, notes: list[str]) -> tuple[int, int]:
+    # A short record's order lowered (with a note); a record that cannot determine the
+    # weights of the order given refused.
     n, l, lowered = _supported_order(x.size, n, l, auto)  # noqa: E741
     if lowered:
         notes.append(lowered)
     check_excitation(x, y, n if not auto else 0, l if not auto else 0, anchor=anchor)
-    choose = not periodic
-    # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
-    # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
-    reference = reference_order(x.size, n, l)
+    return n, l
+
+
+def _input_dynamics(record: PreparedRecord, reference: tuple[int, int], *, dynamics: str,
+                    holdout: float, choose: bool, progress: Callable[[str], None] | None
+                    ) -> tuple[DynamicsEstimate, DynamicsFinding]:
+    # Dead time and lag of the input path (with a time base), and the finding: lag, dead
+    # time, tie or none, with the step response's check of a dead time.
     estimate = DynamicsEstimate()
-    if t is not None and dynamics == 'auto':
+    if record.time is not None and dynamics == 'auto':
         # On a window of a long record: trials cost the window, not the record (the
         # analysis `mpi-ros diagnose` states for the same record).
         estimate = estimate_record_dynamics(record, reference, holdout=holdout, choose=choose,
                                             progress=progress)
-    # Lag, dead time, tie or none, with the step response's check of a dead time.
     finding = finding_of(record, estimate) if dynamics == 'auto' else DynamicsFinding()
     if finding.kind != 'unavailable':
         estimate = replace(estimate, modelled=finding.modelled)
-    found = estimate.modelled
-    table: list[dict[str, Any]] = []
-    if auto:
-        trial = record.window(ORDER_WINDOW)
-        held = held_out_rows(trial.current.size, holdout, trial.keep)
-        say('order selection: start state of the trial window')
-        base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose,
-                          rule='joint start')
-        (n, l), table = select_record_order(trial, held, found, base.segments,
-                                            burn_in=base.burn_in, progress=progress,
-                                            rule=base.rule)
-        n, l = _excited_order(x, y, (n, l), table, anchor, notes)  # noqa: E741
-    say(f'fitting n={n}, l={l} on the whole record')
-    fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True,
-                     validate=True)
-    notes.extend(fit.notes)
-    held_out = fit.folds.get(fit.rule, FoldErrors())
+    return estimate, finding
+
+
+def _selected_order(record: PreparedRecord, x: FloatArray, y: FloatArray,
+                    reference: tuple[int, int], found: InputDynamics, *, holdout: float,
+                    choose: bool, anchor: str, notes: list[str],
+                    say: Callable[[str], None], progress: Callable[[str], None] | None
+                    ) -> tuple[tuple[int, int], list[dict[str, Any]]]:
+    # order='auto': the order chosen on held-out blocks of the busiest window, lowered
+    # when the record's excitation does not support it; and the order table.
+    trial = record.window(ORDER_WINDOW)
+    held = held_out_rows(trial.current.size, holdout, trial.keep)
+    say('order selection: start state of the trial window')
+    base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose,
+                      rule='joint start')
+    order, table = select_record_order(trial, held, found, base.segments,
+                                       burn_in=base.burn_in, progress=progress,
+                                       rule=base.rule)
+    return _excited_order(x, y, order, table, anchor, notes), table
+
+
+def _line_on_folds(x: FloatArray, y: FloatArray, keep: npt.NDArray[np.bool_],
+                   burn: int) -> FoldErrors:
+    # The straight line's held-out errors on the record's folds, on the samples scored.
     scored = keep.copy()
-    scored[:fit.burn_in] = False
-    line = fold_line_errors(x, y, scored)
-    resonance = ResonanceEstimate()
-    if t is not None and dynamics == 'auto' and record.analysis.ringing:
-        say('ringing: fitting the output mode')
-        resonance, fit = estimate_resonance(record, fit, n, l, found)
-    say('judging the fit against the straight line')
-    sim = with_mode(t, fit.simulate(), resonance)    # each segment from its start state
-    fitted = fit.fitted if fit.fitted is not None else keep
-    try:
-        rms, peak, linear = check_quality(x, y, sim, fitted, n, l, anchor, chosen=auto)
-        notes.extend(_judge_held_out(held_out, line, rms, (n, l), auto, table, x,
-                                     record.window(ORDER_WINDOW).current.size))
-    except IdentificationError as err:
-        raise _true_cause(err, x, y) from None
+    scored[:burn] = False
+    return fold_line_errors(x, y, scored)
+
+
+def _whole_record_error(fit: RecordFit, found: InputDynamics, resonance: ResonanceEstimate,
+                        sim: FloatArray, t: FloatArray | None, x: FloatArray,
+                        y: FloatArray) -> float:
     # What `mpi-ros simulate` gives: the model from its initial states, straight through
     # (Gamma of the input after the dynamics, then the output mode if one is modelled); one
     # segment from sample 0 without a mode is that already.
@@ -470,16 +548,30 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     else:
         one = len(fit.segments) == 1 and fit.segments[0].start == 0
         straight = sim if one else fit.model.simulate(fit.material_input)
-    whole = _rms(straight, y, float(np.ptp(y)))
+    return _rms(straight, y, float(np.ptp(y)))
+
+
+def _to_input(fit: RecordFit) -> Callable[[float], float]:
     design = fit.design
-    first = fit.segments[0].start_state
 
     def to_input(level: float) -> float:
         return float(design.input_offset + level * design.x_scale)
 
-    start = ({**first.to_json(to_input), 'description': first.describe(to_input, 'A')}
-             if first is not None else {'kind': 'continue', 'levels': [],
-                                        'description': 'continues'})
+    return to_input
+
+
+def _start_of(fit: RecordFit) -> dict[str, Any]:
+    # How the record starts, in the input's unit, with its description.
+    first = fit.segments[0].start_state
+    to_input = _to_input(fit)
+    return ({**first.to_json(to_input), 'description': first.describe(to_input, 'A')}
+            if first is not None else {'kind': 'continue', 'levels': [],
+                                       'description': 'continues'})
+
+
+def _segments_of(fit: RecordFit, notes: list[str]) -> list[dict[str, Any]]:
+    # The experiments of a stitched record, each with its start state (and a note).
+    to_input = _to_input(fit)
     segments = [{'start': s.start, 'stop': s.stop, 'reason': s.reason,
                  'start_state': (s.start_state.to_json(to_input) if s.start_state is not None
                                  else {'kind': 'continue', 'levels': []})}
@@ -489,20 +581,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
                      f'{", ".join(str(s.start) for s in fit.segments[1:])}: '
                      f'{"; ".join(s.reason for s in fit.segments[1:])}), each with its own'
                      ' start state')
-    findings = '; '.join(part for part in (record.analysis.describe(), resonance.describe(),
-                                           estimate.describe(), finding.describe()) if part)
-    info = fit.info
-    return IdentificationResult(
-        model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
-        samples=int(x.size), solver_status=str(info.status), iterations=int(info.iter),
-        solve_time=time_module.perf_counter() - started, order_table=table,
-        linear_rms_error=linear, burn_in=int(fit.burn_in), whole_record_rms_error=whole,
-        start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
-        dynamics_finding=finding, findings=findings,
-        excluded=int(np.count_nonzero(~keep)), notes=notes, resonance=resonance,
-        held_out_error=held_out.error, held_out_errors=list(held_out.per_fold),
-        line_held_out_error=line.error, line_held_out_errors=list(line.per_fold),
-        weights_from=fit.rule)
+    return segments
 
 
 def _silent(text: str) -> None:
