@@ -175,8 +175,8 @@ def test_the_package_is_found():
     assert 'mpi_ros.identification.fitter' in MODULES
     edges = _edges()
     assert 'mpi_ros.extensions.resonance' in edges['mpi_ros.model_fit']
-    # A lazy import inside a function counts (the node's main imports rclpy lazily; here
-    # the application's lazy import of the diagnose command).
+    # A lazy import inside a function counts (here the application's import of the
+    # diagnose command, made when the subcommand runs).
     assert 'mpi_ros.app.diagnose_cli' in edges['mpi_ros.app.cli']
 
 
