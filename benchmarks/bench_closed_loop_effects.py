@@ -75,15 +75,15 @@ from typing import Any, Iterator
 
 from mpi_ros.compensation import Compensator, gamma_of
 from mpi_ros.diagnosis import diagnose
-from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import MPIError
 from mpi_ros.extensions import EFFECTS, extended_model_from_params, fit_composite
 from mpi_ros.extensions.effect import plant_switch
-from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error
+from mpi_ros.model_fit import identify
 from mpi_ros.params import write_params_yaml
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
+from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation, \
+    tracking_trajectory
 from mpi_ros.recordings import Recording
 import numpy as np
 

@@ -22,7 +22,7 @@ import time
 
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator, MultiAxisCompensator
-from mpi_ros.extensions._signals import first_order_lag
+from mpi_ros.operators.filters import first_order_lag
 import numpy as np
 
 

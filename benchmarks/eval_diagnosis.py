@@ -21,9 +21,8 @@ import sys
 import time
 
 from mpi_ros.diagnosis import diagnose
-from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.plant.excitation import identification_excitation
+from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
 from mpi_ros.recordings import Recording
 import numpy as np
 

@@ -88,8 +88,10 @@ def loop_errors(model, config, seed, lo, hi):
 
 def burn_in_model(x, y):
     """Return the (14, 7) model fitted only after the plays are determined."""
-    from mpi_ros.identification.procedure import determined_from, fit_record, prepare_record
+    from mpi_ros.identification.fitter import fit_record
     from mpi_ros.identification.qp import scaled_design
+    from mpi_ros.identification.record import prepare_record
+    from mpi_ros.identification.start_states import determined_from
     rec = prepare_record(x, y)
     design = scaled_design(x, y, *ORDER, sign=rec.sign)
     split = determined_from(design.scaled_input(x), float(design.hysteresis_thresholds[-1]))

@@ -8,13 +8,13 @@ The core (this package without ``mpi_ros.nodes``) never imports rclpy.
 
 numba caches the compiled kernels in a per-user directory (``$NUMBA_CACHE_DIR``, else
 ``$XDG_CACHE_HOME/mpi_ros/numba`` or ``~/.cache/mpi_ros/numba``, one subdirectory per
-state of the sources), never in the package: see :mod:`mpi_ros._numba_cache`.
+state of the sources), never in the package: see :mod:`mpi_ros.numba_cache`.
 """
 
 # First: sets numba's cache directory before any @numba.njit(cache=True) is decorated.
-from . import _numba_cache  # noqa: F401
+from . import numba_cache  # noqa: F401
 from .errors import DataError, IdentificationError, ModelError, MPIError, MPIWarning
-from .identification import IdentificationResult, identify
+from .model_fit import IdentificationResult, identify
 from .operators.model import MPIModel
 
 __all__ = ['MPIModel', 'identify', 'IdentificationResult', 'MPIError', 'ModelError',

@@ -4,7 +4,7 @@ The one identification pipeline: recording + data options + order -> fitted mode
 
 ``mpi-ros identify``, the identifier node and the diagnosis' reading all go through
 :func:`mpi_ros.recordings.read_recording` with one :class:`~mpi_ros.recordings.DataOptions`;
-:func:`fit_recording` adds the fit with :func:`mpi_ros.identification.identify` (its design,
+:func:`fit_recording` adds the fit with :func:`mpi_ros.model_fit.identify` (its design,
 refusals and order selection), so a bag or CSV gives the same model whichever tool reads it.
 
 :func:`fit_bag` is the identifier node's fit of one actuator (the model as parameters,
@@ -29,16 +29,17 @@ from typing import Any, Dict, List, Tuple
 import numpy as np
 
 from .errors import DataError, IdentificationError, MPIError
-from .identification import IdentificationResult, identify
+from .model_fit import IdentificationResult, identify
 from .node_parameters import axis_key, LIMIT_KEYS
 from .node_parameters.identifier import DATA_NAMES, parse_order
 from .operators.model import MODEL_KEYS, OPERATING_POINT_KEYS, RECORD_START_STATES
 from .order import format_order, Order
 from .params import write_params_yaml
 from .recordings import DataOptions, read_recording, Recording
+from .stop_signals import STOP_SIGNALS
 from .units import INPUT_QUANTITY_KEY
 
-__all__ = ['BagFit', 'RecordingFit', 'STOP_SIGNALS', 'diagnosed_parameters', 'fit_bag',
+__all__ = ['BagFit', 'RecordingFit', 'diagnosed_parameters', 'fit_bag',
            'fit_bag_axes', 'LIMITS_COMMENT', 'fit_recording', 'identified_parameters',
            'identify_bag']
 
@@ -46,9 +47,6 @@ __all__ = ['BagFit', 'RecordingFit', 'STOP_SIGNALS', 'diagnosed_parameters', 'fi
 LIMITS_COMMENT = ('output.min / output.max: the input range the actuator was driven over '
                   'during identification\n(the model extrapolates outside it); narrow them to '
                   'the safe range of your actuator')
-
-#: The signals that stop a run (a node, or the workers of :func:`fit_bag_axes`).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 @dataclass(frozen=True)
@@ -76,7 +74,7 @@ class BagFit:
 
     Attributes
     ----------
-    result : mpi_ros.identification.IdentificationResult
+    result : mpi_ros.model_fit.IdentificationResult
         The fit: ``.model``, ``.order``, ``.nonlinearity_error`` (37), ``.rms_error``,
         ``.samples``, solver status.
     parameters : dict of str to list of float, float or int
@@ -135,9 +133,9 @@ def fit_recording(source: 'str | os.PathLike[str] | Recording',
     order : 'auto' or (int, int)
         Model orders, or the automatic selection.
     anchor : {'operating_point', 'origin'}
-        See :func:`mpi_ros.identification.identify`.
+        See :func:`mpi_ros.model_fit.identify`.
     **identify_options
-        Further keywords of :func:`~mpi_ros.identification.identify` (``epsilon``,
+        Further keywords of :func:`~mpi_ros.model_fit.identify` (``epsilon``,
         ``holdout``, ``dynamics``, ``periodic``; ``time`` defaults to the recording's).
 
     Returns

@@ -9,7 +9,7 @@ prints a permanent line (the command's messages) and keeps the status line below
 status line is drawn only when the stream is a terminal and ``quiet`` is False, so a log
 file, a pipe or a test's captured stderr get the permanent lines only.  The library functions take
 the status callback as ``progress: Callable[[str], None] | None``
-(:func:`mpi_ros.identification.identify`, :func:`mpi_ros.diagnosis.diagnose`).
+(:func:`mpi_ros.model_fit.identify`, :func:`mpi_ros.diagnosis.diagnose`).
 """
 
 from collections.abc import Callable

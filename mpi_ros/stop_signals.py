@@ -14,9 +14,11 @@ import threading
 from types import FrameType
 from typing import Any, Dict, Optional
 
-from .pipeline import STOP_SIGNALS
-
 __all__ = ['STOP_SIGNALS', 'StopSignals']
+
+#: The signals that stop a run (a node, or the workers of
+#: :func:`mpi_ros.pipeline.fit_bag_axes`).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 class StopSignals:

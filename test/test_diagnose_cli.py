@@ -4,9 +4,8 @@
 import json
 
 from mpi_ros.app.cli import main
-from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.plant.excitation import identification_excitation
+from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
 from mpi_ros.recordings import read_csv_table, write_csv_columns
 import numpy as np
 

@@ -6,12 +6,11 @@ from pathlib import Path
 
 from mpi_ros.diagnosis import check_invertible_class, diagnose, write_report
 from mpi_ros.diagnosis.report import write_extended_params, write_json
-from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import DataError, IdentificationError
 from mpi_ros.extensions import extended_model_from_params
 from mpi_ros.params import read_params_yaml
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.plant.excitation import identification_excitation
+from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
 from mpi_ros.recordings import read_signals, Recording, write_bag_signals
 import numpy as np
 import pytest

@@ -7,7 +7,7 @@ import importlib
 import pytest
 
 MODULES = ['mpi_ros.operators.play', 'mpi_ros.operators.deadzone', 'mpi_ros.operators.model',
-           'mpi_ros.identification',
+           'mpi_ros.identification', 'mpi_ros.identification.folds', 'mpi_ros.model_fit',
            'mpi_ros.metrics', 'mpi_ros.recordings.recording', 'mpi_ros.recordings.bag_writer',
            'mpi_ros.recordings.csv_files', 'mpi_ros.recordings.options', 'mpi_ros.order',
            'mpi_ros.plant.actuator', 'mpi_ros.plant.excitation', 'mpi_ros.array_layout',

@@ -5,10 +5,10 @@ from mpi_ros.diagnosis import diagnose
 from mpi_ros.errors import DataError
 from mpi_ros.extensions import CreepModel, DeadTimeModel, fit_creep, fit_dead_time, \
     fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
-from mpi_ros.extensions._common import determined_start, fit_gamma, lag_search_limits
 from mpi_ros.extensions.creep import CREEP_TIME_CONSTANTS, creep_time_constants
 from mpi_ros.extensions.dead_time import DEAD_TIME
 from mpi_ros.extensions.effect import unidentified_parameters
+from mpi_ros.extensions.fitting import determined_start, fit_gamma, lag_search_limits
 from mpi_ros.extensions.rate_dependence import RATE_TIME_CONSTANT
 from mpi_ros.extensions.thermal_drift import THERMAL_TIME_CONSTANT
 from mpi_ros.identification import identify_weights

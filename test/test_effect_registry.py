@@ -20,8 +20,8 @@ from mpi_ros.diagnosis import diagnose
 from mpi_ros.errors import ModelError
 from mpi_ros.extensions import (Effect, EffectParameter, EFFECTS, extended_model_from_params,
                                 ExtendedModelBase, register_effect, unregister_effect)
-from mpi_ros.extensions._common import fit_gamma, search_fit
 from mpi_ros.extensions.effect import PlantEffect, PlantParameter
+from mpi_ros.extensions.fitting import fit_gamma, search_fit
 from mpi_ros.nodes.plant_simulator import PlantSimulatorNode
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation

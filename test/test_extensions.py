@@ -5,18 +5,18 @@ import math
 import warnings
 
 from mpi_ros.compensation import Compensator
-from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.errors import DataError, ModelError
 from mpi_ros.extensions import CompositeModel, CreepModel, DeadTimeModel, EFFECTS, \
     extended_model_from_params, fit_composite, fit_creep, fit_dead_time, \
     fit_rate_dependence, fit_thermal_drift, RateDependentModel, ThermalDriftModel
-from mpi_ros.extensions._signals import delay, first_order_lag, lag_bank, \
-    lag_feedback_inverse
-from mpi_ros.identification import identify
 from mpi_ros.metrics import control_error, rms_range_error
+from mpi_ros.model_fit import identify
+from mpi_ros.operators.filters import delay, first_order_lag, lag_bank, \
+    lag_feedback_inverse
 from mpi_ros.operators.model import OPERATING_POINT_KEYS
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
+from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation, \
+    tracking_trajectory
 import numpy as np
 import pytest
 

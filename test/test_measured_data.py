@@ -191,7 +191,7 @@ def test_tum_loops_widen_with_rate_and_the_diagnosis_names_rate_dependence(tmp_p
     # validates.  The loop widens with the rate (the lag's phase grows: SOURCE.md), so the
     # rate-dependent extension must win there, named through the CLI a user runs.
     import json
-    from mpi_ros.diagnosis.cli import diagnose_main
+    from mpi_ros.app.diagnose_cli import diagnose_main
     report = tmp_path / 'report.json'
     status = diagnose_main([
         str(TUM / 'rs_20hz_nolp_20140608.csv'), str(TUM / 'rs_40hz_nolp_20140608.csv'),

@@ -16,7 +16,7 @@ from mpi_ros.errors import ModelError
 from mpi_ros.extensions import CreepModel, extended_model_from_params, fit_rate_dependence, \
     RateDependentModel, ThermalDriftModel
 from mpi_ros.extensions.rate_dependence import LEAD_GAIN, RateDependenceInverse
-from mpi_ros.identification import identify
+from mpi_ros.model_fit import identify
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
 import numpy as np

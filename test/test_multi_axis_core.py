@@ -113,18 +113,18 @@ def test_one_sample_rows_equal_blocks(axes):
 def test_one_compiled_variant_serves_every_block_layout():
     # Read-only views (as decoded from message bytes), strided and Fortran-ordered blocks
     # must not compile another variant of the loop in the middle of a stream.
-    from mpi_ros.compensation.kernels import _compensate_axes
+    from mpi_ros.compensation.kernels import compensate_axes
     rng = np.random.default_rng(8)
     multi = MultiAxisCompensator([random_model(rng, n=5, l=2) for _ in range(3)],
                                  output_min=-1.0, output_max=2.0)
-    variants = len(_compensate_axes.signatures)
+    variants = len(compensate_axes.signatures)
     ranges = np.array([c.displacement_range for c in multi.axes])
     block = _blocks(rng, ranges, 20)
     readonly = np.frombuffer(block.tobytes(), dtype=np.float64).reshape(block.shape)
     strided = np.hstack([block, block])[:, ::2]
     for layout in (readonly, strided, np.asfortranarray(block), block[0]):
         multi.command(layout)
-    assert len(_compensate_axes.signatures) == variants
+    assert len(compensate_axes.signatures) == variants
 
 
 def test_an_axis_used_alone_between_blocks_stays_exact():

@@ -14,7 +14,7 @@ import subprocess
 import sys
 
 import mpi_ros
-from mpi_ros import _numba_cache
+from mpi_ros import numba_cache
 import pytest
 
 PACKAGE = Path(mpi_ros.__file__).resolve().parent
@@ -55,13 +55,13 @@ def _run(code, env_updates, *, first=''):
 @pytest.mark.parametrize('first', ['', 'import numba\n'])
 def test_kernels_are_cached_under_xdg_cache_home(tmp_path, first):
     used = _run(RUN_KERNEL, {'XDG_CACHE_HOME': str(tmp_path)}, first=first)
-    digest = _numba_cache.sources_digest()
+    digest = numba_cache.sources_digest()
     assert Path(used) == tmp_path / 'mpi_ros' / 'numba' / f'sources-{digest}'
     assert _cache_files(tmp_path / 'mpi_ros' / 'numba'), 'no cache file written'
 
 
 @pytest.mark.slow
-def test_numba_cache_dir_set_by_the_user_is_kept(tmp_path):
+def testnumba_cache_dir_set_by_the_user_is_kept(tmp_path):
     used = _run(RUN_KERNEL, {'NUMBA_CACHE_DIR': str(tmp_path / 'mine')})
     assert Path(used) == tmp_path / 'mine'
     assert _cache_files(tmp_path / 'mine')
@@ -82,12 +82,12 @@ def test_an_unwritable_cache_home_falls_back_to_the_temporary_directory(tmp_path
 def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
     monkeypatch.delenv('NUMBA_CACHE_DIR', raising=False)
     monkeypatch.setenv('XDG_CACHE_HOME', str(tmp_path))
-    assert _numba_cache.cache_dir() == tmp_path / 'mpi_ros' / 'numba'
+    assert numba_cache.cache_dir() == tmp_path / 'mpi_ros' / 'numba'
     monkeypatch.delenv('XDG_CACHE_HOME')
     monkeypatch.setenv('HOME', str(tmp_path / 'home'))
-    assert _numba_cache.cache_dir() == tmp_path / 'home' / '.cache' / 'mpi_ros' / 'numba'
+    assert numba_cache.cache_dir() == tmp_path / 'home' / '.cache' / 'mpi_ros' / 'numba'
     monkeypatch.setenv('NUMBA_CACHE_DIR', str(tmp_path / 'given'))
-    assert _numba_cache.cache_dir() == tmp_path / 'given'
+    assert numba_cache.cache_dir() == tmp_path / 'given'
 
 
 def test_this_process_caches_outside_the_package():
@@ -105,8 +105,8 @@ def test_a_changed_source_file_gets_a_new_cache_directory(tmp_path):
     (tree / 'sub').mkdir(parents=True)
     (tree / 'play.py').write_text('rule = 1\n')
     (tree / 'sub' / 'kernels.py').write_text('calls the rule\n')
-    first = _numba_cache.sources_digest(tree)
-    assert _numba_cache.sources_digest(tree) == first
+    first = numba_cache.sources_digest(tree)
+    assert numba_cache.sources_digest(tree) == first
     (tree / 'play.py').write_text('rule = 22\n')
-    assert _numba_cache.sources_digest(tree) != first
-    assert _numba_cache.sources_digest() == _numba_cache.sources_digest(PACKAGE)
+    assert numba_cache.sources_digest(tree) != first
+    assert numba_cache.sources_digest() == numba_cache.sources_digest(PACKAGE)

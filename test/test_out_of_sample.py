@@ -16,8 +16,10 @@ import warnings
 
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
-from mpi_ros.identification.procedure import determined_from, fit_record, prepare_record
+from mpi_ros.identification.fitter import fit_record
 from mpi_ros.identification.qp import scaled_design
+from mpi_ros.identification.record import prepare_record
+from mpi_ros.identification.start_states import determined_from
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 import numpy as np
@@ -102,7 +104,7 @@ def test_held_out_numbers_reported_against_the_line():
     ([0.9, 0.9, 0.9, 0.9, float('inf')], [1.0, 1.0, 1.0, 1.0, 1.0], False),   # cannot fit one
 ])
 def test_a_rule_replaces_another_only_beyond_the_folds_noise(candidate, incumbent, better):
-    from mpi_ros.identification.procedure import better_on_folds, FoldErrors
+    from mpi_ros.identification.folds import better_on_folds, FoldErrors
 
     def errors(per_fold):
         values = np.array(per_fold) / 100.0

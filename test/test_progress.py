@@ -11,8 +11,8 @@ import sys
 
 from mpi_ros.app.cli import main
 from mpi_ros.app.progress import Progress
-from mpi_ros.identification import identify
-import mpi_ros.identification.api as selection
+import mpi_ros.identification.order_selection as selection
+from mpi_ros.model_fit import identify
 from mpi_ros.plant.synthetic import synthetic_record
 from mpi_ros.recordings import write_csv_columns
 import numpy as np
@@ -129,7 +129,7 @@ def test_unstable_orders_are_marked_in_the_table_and_the_json(record_csv, tmp_pa
                                                               monkeypatch, capsys):
     # Make two orders' held-out errors absurd: one huge, one not a number (as an order
     # that blows up on a short record gives).
-    errors = selection._errors
+    errors = selection.range_errors
     absurd = {3: (883.282, 88.3), 4: (float('nan'), float('nan'))}
     calls = []
 
@@ -137,7 +137,7 @@ def test_unstable_orders_are_marked_in_the_table_and_the_json(record_csv, tmp_pa
         calls.append(1)
         return absurd.get(len(calls), errors(sim, y, held))
 
-    monkeypatch.setattr(selection, '_errors', errors_with_absurd_orders)
+    monkeypatch.setattr(selection, 'range_errors', errors_with_absurd_orders)
     assert main(['identify', str(record_csv), '--order', 'auto', '-o', str(tmp_path / 'p.yaml'),
                  '--json', str(tmp_path / 'fit.json')]) == 0
     err = capsys.readouterr().err

@@ -14,9 +14,8 @@ import re
 
 from mpi_ros.app.cli import main
 from mpi_ros.diagnosis.report import data_units, markdown, summary_lines, z_wording
-from mpi_ros.diagnosis.signatures import diagnostic_excitation
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.plant.excitation import identification_excitation
+from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
 from mpi_ros.recordings import write_csv_columns
 import numpy as np
 import pytest

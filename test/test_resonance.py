@@ -19,7 +19,7 @@ from mpi_ros.errors import ModelError
 from mpi_ros.extensions import CompositeModel, EFFECTS, extended_model_from_params, \
     fit_resonance, RateDependentModel, ResonanceModel
 from mpi_ros.extensions.resonance import mode_state, mode_stream, output_mode
-from mpi_ros.identification import identify
+from mpi_ros.model_fit import identify
 from mpi_ros.params import read_params_yaml
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.synthetic import synthetic_record

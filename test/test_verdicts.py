@@ -141,7 +141,8 @@ def test_a_dead_time_must_show_in_the_step_onset():
     """The output moves one sample after each step: a 0.5 ms dead time is not physical."""
     from mpi_ros.identification.dynamics import step_onset
     from mpi_ros.identification.finding import dynamics_finding
-    from mpi_ros.identification.procedure import DynamicsEstimate, InputDynamics
+    from mpi_ros.identification.dynamics import InputDynamics
+    from mpi_ros.identification.dynamics_grid import DynamicsEstimate
     rate = 10000.0
     t = np.arange(6000) / rate
     # Steps every 0.1 s on an input that barely moves between them.

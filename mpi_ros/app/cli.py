@@ -162,7 +162,7 @@ def order_table_lines(table: list[dict[str, Any]]) -> list[str]:
     Parameters
     ----------
     table : list of dict
-        :attr:`mpi_ros.identification.IdentificationResult.order_table`.
+        :attr:`mpi_ros.model_fit.IdentificationResult.order_table`.
 
     Returns
     -------
@@ -534,7 +534,7 @@ def _cmd_merge_axes(args: argparse.Namespace) -> int:
 
 def _cmd_diagnose(argv: list[str]) -> int:
     try:
-        from ..diagnosis.cli import diagnose_main
+        from .diagnose_cli import diagnose_main
     except ImportError as err:            # pragma: no cover - during development only
         msg = f'diagnosis is not available in this installation: {err}'
         raise MPIError(msg) from err

@@ -17,7 +17,7 @@ Where the range comes from:
 
 What a model knows of its identification record (:func:`identified_range`):
 
-- **Displacement.** :func:`mpi_ros.identification.identify` places the thresholds of the
+- **Displacement.** :func:`mpi_ros.model_fit.identify` places the thresholds of the
   inverse superposition operator S' over the record's output range, (29)-(31): the largest
   of ``l`` positive thresholds is ``(l - 1/2)/l`` of the output's extent above the operating
   point ``y0`` (and the same below), so the output range follows from them exactly.

@@ -14,16 +14,16 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from .kernels import (
-    _compensate_axes, _compensate_step, _inverse_value, _warm_up, INDEX_COLUMNS, TABLE_COLUMNS,
-)
+from .kernels import compensate_axes, compensate_step, COMPILED, INDEX_COLUMNS, inverse_value, \
+    LAST_COMMAND, warm_up
 from .screening import best_linear_map, operating_range, screen_desired
 from ..errors import ModelError
 from ..operators.memory import TurningPointMemory
-from ..operators.model import _hysteresis_step, _superposition_value, MPIModel
+from ..operators.model import hysteresis_step, MPIModel, superposition_value
 from ..operators.start import identified_ranges, rest_states, start_range, StartState
 
-__all__ = ['Compensator', 'InverseStep', 'Pack', 'gamma_of', 'inverse_step_of', 'kind_of',
+__all__ = ['check_sample_period', 'Compensator', 'InverseStep', 'Pack', 'gamma_of',
+           'inverse_step_of', 'kind_of',
            'loop_block', 'pack']
 
 FloatArray = npt.NDArray[np.float64]
@@ -188,7 +188,7 @@ class Compensator:
         self._check_limits(output_min, output_max)
         self.start = StartState.parse(start)
         self.lead_gain = lead_gain
-        _check_sample_period(sample_period)
+        check_sample_period(sample_period)
         self.output_min = float(output_min)
         self.output_max = float(output_max)
         self._enabled = bool(enabled)
@@ -268,7 +268,7 @@ class Compensator:
             np.empty_like(z_h), np.ascontiguousarray(s_inv.thresholds),
             np.ascontiguousarray(s_inv.weights),
             np.array([gamma.input_offset, gamma.output_offset, float(gamma.output_sign)]))
-        _warm_up(self._kernel, lo, self.output_min, self.output_max)
+        warm_up(self._kernel, lo, self.output_min, self.output_max)
         self._observe: Callable[[float], None] | None = getattr(step, 'observe', None)
         if self._observe is not None:
             self._observe(float(np.dot(h.weights, z_h)))    # H's output in the (replayed) state
@@ -368,14 +368,14 @@ class Compensator:
         step = self._step
         if step is None:
             if self.enabled:
-                current, raw = _compensate_step(s_c, self.output_min, self.output_max, r_h,
-                                                w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point,
-                                                self.last_command)
+                current, raw = compensate_step(s_c, self.output_min, self.output_max, r_h,
+                                               w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point,
+                                               self.last_command)
             else:
                 raw = self.linear_map(s_c)
                 current = min(max(raw if math.isfinite(raw) else self.last_command,
                                   self.output_min), self.output_max)
-                _hysteresis_step(current - point[0], r_h, w_h, z_h)
+                hysteresis_step(current - point[0], r_h, w_h, z_h)
             material = current
         else:
             interval = self._interval(time)
@@ -383,10 +383,10 @@ class Compensator:
             previous, started = self.last_command, self._started
             step.prepare(previous, interval, started)
             if self.enabled:
-                v = _superposition_value(sign * (s_c - y0), r_si, w_si)     # S' (27)
+                v = superposition_value(sign * (s_c - y0), r_si, w_si)     # S' (27)
 
                 def inverse(value: float, beta: float) -> float:
-                    return x0 + float(_inverse_value(value, r_h, w_h, beta, z_h))
+                    return x0 + float(inverse_value(value, r_h, w_h, beta, z_h))
 
                 raw = step.invert(v, previous, started, inverse)
             else:
@@ -394,7 +394,7 @@ class Compensator:
             current = min(max(raw if math.isfinite(raw) else previous, self.output_min),
                           self.output_max)
             material = step.advance(current, previous, started)
-            h_out = _hysteresis_step(material - x0, r_h, w_h, z_h)
+            h_out = hysteresis_step(material - x0, r_h, w_h, z_h)
             if self._observe is not None:
                 self._observe(h_out)
             self._started = True
@@ -436,13 +436,13 @@ class Compensator:
         if self._own_pack is None:
             self._own_pack = pack([self])
         coefficients, states, index, table = self._own_pack
-        table[0, _LAST] = self.last_command
+        table[0, LAST_COMMAND] = self.last_command
         out = np.empty((values.size, 1))
         counts = np.zeros((1, len(COMPILED_COUNTERS)), dtype=np.int64)
-        _compensate_axes(values.reshape(-1, 1), out, coefficients, states, index, table,
-                         counts, self.memory.buffer.reshape(1, -1),
-                         self.memory.state.reshape(1, -1))
-        self.last_command = float(table[0, _LAST])
+        compensate_axes(values.reshape(-1, 1), out, coefficients, states, index, table,
+                        counts, self.memory.buffer.reshape(1, -1),
+                        self.memory.state.reshape(1, -1))
+        self.last_command = float(table[0, LAST_COMMAND])
         self.add_counts(counts[0])
         return out.reshape(-1)
 
@@ -491,9 +491,6 @@ class Compensator:
 #: The packed arrays of :func:`pack`: coefficients, states, index, table.
 Pack = tuple[FloatArray, FloatArray, npt.NDArray[np.int64], FloatArray]
 
-_LAST = TABLE_COLUMNS.index('last_command')
-_COMPILED = INDEX_COLUMNS.index('compiled')
-
 
 def loop_block(block: FloatArray) -> FloatArray:
     """
@@ -525,7 +522,7 @@ def pack(axes: list[Compensator]) -> Pack:
 
     The thresholds, weights, play states, operating points, limits and last commands of
     the axes go into four arrays (the layout of
-    :func:`~mpi_ros.compensation.kernels._compensate_axes`); every axis's compiled step is
+    :func:`~mpi_ros.compensation.kernels.compensate_axes`); every axis's compiled step is
     then bound to views of them, so its state is the packed one.  The last commands are
     copied: write them back after the loop (column ``last_command`` of ``table``).
 
@@ -556,7 +553,7 @@ def pack(axes: list[Compensator]) -> Pack:
     index[1:, 0] = np.cumsum(4 * n1 + 2 * m1)[:-1]
     index[:, 1], index[:, 2] = n1, m1
     index[1:, 3] = np.cumsum(2 * n1)[:-1]
-    index[:, _COMPILED] = [axis.compiled for axis in axes]
+    index[:, COMPILED] = [axis.compiled for axis in axes]
     table = np.array([[*k[8], *axis.displacement_range, axis.output_min, axis.output_max,
                        axis.last_command] for k, axis in zip(kernels, axes)])
     for a, axis in enumerate(axes):
@@ -568,7 +565,21 @@ def pack(axes: list[Compensator]) -> Pack:
     return coefficients, states, index, table
 
 
-def _check_sample_period(sample_period: float) -> None:
+def check_sample_period(sample_period: float) -> None:
+    """
+    Refuse a sample period that is not finite and positive.
+
+    Parameters
+    ----------
+    sample_period : float
+        Seconds between commands [s].
+
+    Raises
+    ------
+    ModelError
+        When it is not finite and > 0.
+
+    """
     if not (math.isfinite(sample_period) and sample_period > 0.0):
         msg = f'sample_period must be finite and > 0 [s]; found {sample_period!r}'
         raise ModelError(msg)

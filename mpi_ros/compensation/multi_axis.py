@@ -4,7 +4,7 @@ Several actuators served together.
 
 One :class:`~mpi_ros.compensation.Compensator` per axis (models, limits, bumpless handover);
 blocks of samples x axes in and out through one compiled loop over every axis
-(:func:`~mpi_ros.compensation.kernels._compensate_axes`), which runs each axis's own step
+(:func:`~mpi_ros.compensation.kernels.compensate_axes`), which runs each axis's own step
 on its slices of a few packed arrays: the columns are exactly the single-axis results.
 
 What a multi-axis node keeps between its callbacks, on plain values: each axis's validated
@@ -21,10 +21,9 @@ import numpy as np
 import numpy.typing as npt
 
 from .compensator import (
-    _check_sample_period, _COMPILED, _LAST, Compensator, COMPILED_COUNTERS, kind_of, loop_block,
-    pack,
+    check_sample_period, Compensator, COMPILED_COUNTERS, kind_of, loop_block, pack,
 )
-from .kernels import _compensate_axes, TABLE_COLUMNS
+from .kernels import compensate_axes, COMPILED, LAST_COMMAND, TABLE_COLUMNS
 from .screening import FAULT_KEYS
 from ..errors import DataError, ModelError, ParameterRejected
 from ..operators.memory import TurningPointMemory
@@ -100,7 +99,7 @@ class MultiAxisCompensator:
         self._counts = np.zeros((count, len(COMPILED_COUNTERS)), dtype=np.int64)
         for axis in self._axes:
             axis.before_change = self._unpack
-        self._warm_up()
+        self.warm_up()
 
     def __len__(self) -> int:
         """Return the number of axes."""
@@ -179,7 +178,7 @@ class MultiAxisCompensator:
 
     @sample_period.setter
     def sample_period(self, value: float) -> None:
-        _check_sample_period(value)
+        check_sample_period(value)
         for axis in self._axes:
             axis.sample_period = float(value)
 
@@ -237,19 +236,19 @@ class MultiAxisCompensator:
         pack = self._pack if self._pack is not None else self._build()
         coefficients, states, index, table, others = pack
         out = np.empty(rows.shape)
-        _compensate_axes(rows, out, coefficients, states, index, table, self._counts,
-                         self._memory, self._memory_state)
+        compensate_axes(rows, out, coefficients, states, index, table, self._counts,
+                        self._memory, self._memory_state)
         for axis in others:
             out[:, axis] = self._axes[axis].command_batch(rows[:, axis], stamps)
         return out[0] if single else out
 
-    def _warm_up(self) -> None:
+    def warm_up(self) -> None:
         """Run the compiled loop once on copies (the first block does not compile it)."""
         coefficients, states, index, table, _ = self._build()
         start = table[:, TABLE_COLUMNS.index('displacement_lo')].reshape(1, -1)
-        _compensate_axes(start.copy(), np.empty(start.shape), coefficients, states.copy(),
-                         index, table.copy(), np.zeros_like(self._counts),
-                         np.zeros((len(self._axes), 4)), np.zeros_like(self._memory_state))
+        compensate_axes(start.copy(), np.empty(start.shape), coefficients, states.copy(),
+                        index, table.copy(), np.zeros_like(self._counts),
+                        np.zeros((len(self._axes), 4)), np.zeros_like(self._memory_state))
 
     def _build(self) -> tuple[Any, ...]:
         """Pack the axes (:func:`~mpi_ros.compensation.compensator.pack`); note the others."""
@@ -266,8 +265,8 @@ class MultiAxisCompensator:
         table = pack[3]
         for a, axis in enumerate(self._axes):
             axis.add_counts(self._counts[a])
-            if pack[2][a, _COMPILED]:
-                axis.last_command = float(table[a, _LAST])
+            if pack[2][a, COMPILED]:
+                axis.last_command = float(table[a, LAST_COMMAND])
         self._counts[:] = 0
 
 

@@ -22,7 +22,7 @@ FloatArray = npt.NDArray[np.float64]
 
 #: Desired values beyond this many operating ranges outside it are saturated there (the
 #: clamped command is the same, and the inverse's arithmetic stays finite).  The compiled
-#: block loop (:func:`~mpi_ros.compensation.kernels._compensate_axes`) uses it too.
+#: block loop (:func:`~mpi_ros.compensation.kernels.compensate_axes`) uses it too.
 SATURATION_RANGES = 10.0
 #: Counters of bad inputs (a node's diagnostics period with any of them is WARN).
 FAULT_KEYS = ('nonfinite_input', 'out_of_range', 'clamped', 'nonfinite_command')

@@ -13,7 +13,7 @@ Procedure (documented in ``docs/diagnosis.md``):
    ``model.output_sign = -1``); failing data get the verdict ``outside_invertible_class``
    and no fit.  A separate validation record is checked on its own.
 2. **Baseline.**  Gamma is identified on the training data by
-   :func:`mpi_ros.identification.identify` (operating point, detected sign, burn-in, the
+   :func:`mpi_ros.model_fit.identify` (operating point, detected sign, burn-in, the
    order selection of ``order='auto'``), with the record's time base when it has one: the
    same preparation as ``mpi-ros identify`` (segments, ringing after steps left out, start
    state; ``dynamics='off'``: the effects are the candidates).  The dynamics finding
@@ -77,18 +77,19 @@ from .signatures import burst_signature, hold_segments, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError
 from ..extensions import EFFECTS, fit_composite
-from ..extensions._common import rate_cross_correlation
-from ..extensions._signals import first_order_lag
 from ..extensions.composite import check_combination, composite_cause
 from ..extensions.dead_time import DEAD_TIME
 from ..extensions.effect import unidentified_parameters
-from ..identification import burn_in, identify, output_sign
+from ..extensions.fitting import rate_cross_correlation
+from ..identification import burn_in, output_sign
 from ..identification.dynamics import return_point_drift, step_onset, StepOnset
 from ..identification.finding import DynamicsFinding, record_dynamics, \
     SEPARATE_LAG_AND_DEAD_TIME
-from ..identification.procedure import estimate_start_state, prepare_record, \
-    refuse_if_unmodellable
+from ..identification.record import prepare_record, refuse_if_unmodellable
+from ..identification.start_states import estimate_start_state
 from ..metrics import range_error, rms_range_error
+from ..model_fit import identify
+from ..operators.filters import first_order_lag
 from ..operators.model import OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
@@ -253,7 +254,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     DataError
         Malformed data, a bad option, or a record too short to split.
     IdentificationError
-        When :func:`mpi_ros.identification.identify` refuses the training record, or the
+        When :func:`mpi_ros.model_fit.identify` refuses the training record, or the
         baseline is no better than a straight line on the validation data.
 
     """

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['InvertibilityCheck', 'check_invertible_class', 'OUTSIDE_INVERTIBLE_CLASS']
+__all__ = ['monotone_branches', 'InvertibilityCheck', 'check_invertible_class',
+           'OUTSIDE_INVERTIBLE_CLASS']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -49,9 +50,26 @@ class InvertibilityCheck:
     reason: str
 
 
-def _branches(x: FloatArray, band: float) -> list[tuple[int, int]]:
-    # Zig-zag turning points: a reversal counts once the input moved back by more than
-    # ``band`` from the running extremum (noise does not split a branch).
+def monotone_branches(x: FloatArray, band: float) -> list[tuple[int, int]]:
+    """
+    Return the input's monotone branches between zig-zag turning points.
+
+    A reversal counts once the input moved back by more than ``band`` from the running
+    extremum (noise does not split a branch).
+
+    Parameters
+    ----------
+    x : ndarray of float, shape (N,)
+        Input [A].
+    band : float
+        Smallest move back that counts as a reversal [A].
+
+    Returns
+    -------
+    list of (int, int)
+        ``(start, stop)`` sample indices of each branch.
+
+    """
     turns = [0]
     ext, direction = 0, 0
     for k in range(1, x.size):
@@ -96,7 +114,7 @@ def check_invertible_class(current: npt.ArrayLike, displacement: npt.ArrayLike, 
     against = 0.0
     total = 0.0
     used = 0
-    for a, b in _branches(x, 0.05 * span):
+    for a, b in monotone_branches(x, 0.05 * span):
         lo, hi = sorted((a, b))
         seg_x, seg_y = x[lo:hi + 1], y[lo:hi + 1]
         if seg_x.size < 2 * bins or np.ptp(seg_x) < 0.5 * span:

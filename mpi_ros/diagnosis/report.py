@@ -28,7 +28,7 @@ from scipy.stats import norm
 
 from .diagnose import DiagnosisReport, z_wording
 from ..extensions import EFFECTS
-from ..extensions._common import AxisUnits
+from ..extensions.fitting import AxisUnits
 from ..params import write_params_yaml
 from ..recordings.files import atomic_write
 from ..units import INPUT_UNITS, OUTPUT_UNITS, resolve_units

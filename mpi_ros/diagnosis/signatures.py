@@ -42,11 +42,10 @@ import numpy as np
 import numpy.typing as npt
 from scipy import stats
 
-from .invertibility import _branches
-from ..plant.excitation import diagnostic_excitation
+from .invertibility import monotone_branches
 
 __all__ = ['HoldSignature', 'BurstSignature', 'hold_signature', 'burst_signature',
-           'hold_segments', 'burst_segments', 'diagnostic_excitation']
+           'hold_segments', 'burst_segments']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -211,7 +210,7 @@ def burst_segments(time: FloatArray, current: FloatArray, *, minimum_cycles: int
         ``(start, end, frequency [Hz])`` per burst, without its first cycle.
 
     """
-    branches = _branches(current, 0.02 * float(np.ptp(current)))
+    branches = monotone_branches(current, 0.02 * float(np.ptp(current)))
     found = []
     i = 0
     while i < len(branches):

@@ -82,7 +82,7 @@ def implausible_dynamics(estimate: Any) -> list[TimeConstant]:
     Parameters
     ----------
     estimate : DynamicsEstimate
-        :attr:`mpi_ros.identification.IdentificationResult.dynamics_estimate`: the best
+        :attr:`mpi_ros.model_fit.IdentificationResult.dynamics_estimate`: the best
         dead time and lag time constant of its trials (modelled or not) [s].
 
     Returns

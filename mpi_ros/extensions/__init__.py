@@ -16,7 +16,7 @@ cause                  model                                          extra para
 ``u = x - x0``; Gamma carries the operating point (``model.input_offset`` ``x0``,
 ``model.output_offset`` ``y0``, ``model.output_sign``), and every extended model keeps it
 in ``simulate`` and in its parameter form.  The fits use
-:func:`mpi_ros.identification.identify`'s design (operating point, detected sign, constant
+:func:`mpi_ros.model_fit.identify`'s design (operating point, detected sign, constant
 term, burn-in), so an extension is fitted on the same samples as the plain model; with
 ``order='auto'`` a fit selects Gamma's order again on the effect-free signals.
 

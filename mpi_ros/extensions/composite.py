@@ -37,8 +37,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import check_series, Order
 from .effect import EFFECTS, effects_present, ExtendedModelBase
+from .fitting import check_series, Order
 from ..errors import ModelError
 from ..operators.model import MPIModel
 

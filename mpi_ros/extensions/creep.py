@@ -5,7 +5,7 @@ Creep extension: a share of every displacement change that creeps in afterwards.
 The extended operator is ``s = y0 + sign (G + sum_j w_Cj C_j[G])`` with ``G = S[H[x - x0]]``
 (Gamma's displacement relative to its operating point ``x0``, ``y0``, ``sign``), where each
 creep operator ``C_j`` is a first-order lag ``tau_j dc_j/dt = G - c_j`` (see
-:mod:`mpi_ros.extensions._signals`) and the time constants ``tau_j`` are spaced
+:mod:`mpi_ros.operators.filters`) and the time constants ``tau_j`` are spaced
 logarithmically over the record's time scales.  After a step of the displacement by ``D``
 the output jumps by ``D`` and creeps on by ``w_Cj D`` with each ``tau_j``: the ``log t`` law
 of piezoelectric and magnetostrictive actuators (creep proportional to the displacement
@@ -20,7 +20,7 @@ its compensator tracked worse than the plain one (docs/diagnosis.md).
 
 Fit (:func:`fit_creep`): the generalised error (33) needs ``S'[G]`` with the creep-free
 output ``G = F^-1[v]`` (``F = 1 + sum_j w_Cj C_j``, undone exactly by
-:func:`~mpi_ros.extensions._signals.lag_feedback_inverse`); to first order in the creep,
+:func:`~mpi_ros.operators.filters.lag_feedback_inverse`); to first order in the creep,
 ``S'[G] = S'[v] - S'_slope(v) sum_j w_Cj C_j[G]``, so with the slope and ``G`` taken from
 the round before, ``E = w_H^T H[u] + sum_j w_Cj S'_slope(v) C_j[G] - w'_S^T S'[v] + c`` is
 linear in ``w_H``, ``w_C >= 0`` and ``w'_S``: one convex QP (34)-(36) per round, a few
@@ -45,16 +45,16 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
-    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
-from ._signals import lag_bank, lag_coefficients, lag_feedback_inverse
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
+from .fitting import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
+    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
 from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
 from ..identification.folds import blocked_folds
-from ..operators.model import _superposition_value, MPIModel
+from ..operators.filters import lag_bank, lag_coefficients, lag_feedback_inverse
+from ..operators.model import MPIModel, superposition_value
 
 __all__ = ['CreepModel', 'CreepInverse', 'creep_time_constants', 'fit_creep',
            'CREEP_TIME_CONSTANTS', 'CREEP_WEIGHTS']
@@ -247,9 +247,9 @@ class CreepInverse:
                inverse: Callable[[float, float], float]) -> float:
         """Return the current [A] whose output, creep included, is ``S[v]`` from ``y0``."""
         weights = self.model.weights
-        wanted = _superposition_value(v, *self._s)                                   # S[v]
+        wanted = superposition_value(v, *self._s)                                   # S[v]
         g = (wanted - float(np.dot(weights, self._p))) / (1.0 + float(np.dot(weights, self._b)))
-        return inverse(_superposition_value(g, *self._s_inv), 0.0)
+        return inverse(superposition_value(g, *self._s_inv), 0.0)
 
     def advance(self, current: float, previous: float, started: bool) -> float:
         """Return the applied ``current``: H sees it unchanged."""
@@ -257,7 +257,7 @@ class CreepInverse:
 
     def observe(self, hysteresis_output: float) -> None:
         """Advance the lags with ``G = S[h]`` of the applied current (after start: settle)."""
-        g = _superposition_value(hysteresis_output, *self._s)
+        g = superposition_value(hysteresis_output, *self._s)
         self.state = self._p + self._b * g
         self._last = g
 
@@ -321,7 +321,7 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record, then again on the
-        creep-free output (see :func:`~mpi_ros.extensions._common.resolve_order`).
+        creep-free output (see :func:`~mpi_ros.extensions.fitting.resolve_order`).
     time_constants : array_like of float, optional
         Creep time constants [s]; :func:`creep_time_constants` of ``time`` by default.
     epsilon : float

@@ -19,16 +19,16 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
+from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
+    PlantEffect, PlantParameter
+from .fitting import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
     choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
     fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
     scalar_parameter
-from ._signals import delay
-from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
-    PlantEffect, PlantParameter
 from .plant_steps import delay_state, delay_stream
 from ..identification import select_order
 from ..identification.folds import blocked_folds
+from ..operators.filters import delay
 from ..operators.model import MPIModel
 
 __all__ = ['DeadTimeModel', 'fit_dead_time', 'DEAD_TIME']
@@ -97,7 +97,7 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     blocks of the record (:func:`~mpi_ros.identification.folds.blocked_folds`), each
     predicted by the fit on the other two, over the samples determined for every trial
     (after the raw current's burn-in and the longest trial lag), with
-    :func:`mpi_ros.identification.identify`'s design (operating point, sign, constant term).
+    :func:`mpi_ros.model_fit.identify`'s design (operating point, sign, constant term).
     The held-out errors choose the bracket (two grid steps), the whole record's fit error
     refines the lag inside it.  The chosen lag is then fitted on the whole record and kept
     only when it fits the record
@@ -111,7 +111,7 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record, then again on the
-        delayed current (see :func:`~mpi_ros.extensions._common.resolve_order`).
+        delayed current (see :func:`~mpi_ros.extensions.fitting.resolve_order`).
     epsilon : float
         Bound of (8)/(19).
 

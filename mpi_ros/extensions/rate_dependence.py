@@ -21,17 +21,17 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
+from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
+    PlantEffect, PlantParameter
+from .fitting import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
     choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
     fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
     scalar_parameter
-from ._signals import first_order_lag, lag_coefficients
-from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
-    PlantEffect, PlantParameter
 from .plant_steps import lag_state, lag_stream
 from ..errors import ModelError
 from ..identification import select_order
 from ..identification.folds import blocked_folds
+from ..operators.filters import first_order_lag, lag_coefficients
 from ..operators.model import MPIModel
 
 __all__ = ['RateDependentModel', 'RateDependenceInverse', 'fit_rate_dependence',
@@ -230,7 +230,7 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     judged out of sample: on three contiguous blocks of the record
     (:func:`~mpi_ros.identification.folds.blocked_folds`), each predicted by the fit on the
     other two, over the samples determined for every trial (after the raw current's burn-in
-    and three of the longest trial lags), with :func:`mpi_ros.identification.identify`'s
+    and three of the longest trial lags), with :func:`mpi_ros.model_fit.identify`'s
     design (operating point, sign, constant term).  The held-out errors choose the lag's
     bracket (two grid steps); inside it the whole record's fit error refines it (the held-out
     error is noisier: on a 4 ms lag it refined to 3.4-3.7 ms, in sample 4.9 ms, and the creep
@@ -246,7 +246,7 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     order : (int, int) or 'auto'
         ``(n, l)`` of Gamma; ``'auto'``: found by
         :func:`~mpi_ros.identification.select_order` on the record, then again on the
-        lagged current (see :func:`~mpi_ros.extensions._common.resolve_order`).
+        lagged current (see :func:`~mpi_ros.extensions.fitting.resolve_order`).
     epsilon : float
         Bound of (8)/(19).
 

@@ -26,15 +26,15 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import AxisUnits, bound_note, check_series, choose_out_of_sample, \
-    fixed_held_out_error, fold_simulations, held_out_error, hold_evidence, Order, residual_axes, \
-    resolve_order, scalar_parameter
-from ._signals import first_order_lag, lag_coefficients
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
+from .fitting import AxisUnits, bound_note, check_series, choose_out_of_sample, \
+    fixed_held_out_error, fold_simulations, held_out_error, hold_evidence, Order, residual_axes, \
+    resolve_order, scalar_parameter
 from .plant_steps import lag_add, lag_state
 from ..identification import identify_weights
 from ..identification.folds import blocked_folds
+from ..operators.filters import first_order_lag, lag_coefficients
 from ..operators.model import MPIModel
 
 __all__ = ['ThermalDriftModel', 'ThermalDriftInverse', 'fit_thermal_drift',

@@ -98,7 +98,7 @@ def run_demo(args: argparse.Namespace, progress: Progress,
     import rclpy
 
     from ..plant.excitation import identification_excitation
-    from ..identification import identify
+    from ..model_fit import identify
     from .driver import LoopDriver
     from .processes import NodeProcess
     from ..metrics import control_error
@@ -198,7 +198,7 @@ def run_effect_demo(args: argparse.Namespace, progress: Progress,
     from ..plant.excitation import identification_excitation
     from ..extensions import EFFECTS as REGISTRY
     from ..extensions.effect import plant_switch
-    from ..identification import identify
+    from ..model_fit import identify
     from .driver import LoopDriver
     from .processes import NodeProcess
     from ..metrics import control_error

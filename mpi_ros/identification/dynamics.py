@@ -36,8 +36,9 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['DynamicsAnalysis', 'analyse_dynamics', 'noise_std', 'MAX_COUNTER_MOVE', 'StepOnset',
-           'step_onset', 'ReturnPointDrift', 'return_point_drift', 'DRIFT_LIMIT']
+__all__ = ['DynamicsAnalysis', 'analyse_dynamics', 'InputDynamics', 'noise_std',
+           'MAX_COUNTER_MOVE', 'StepOnset', 'step_onset', 'ReturnPointDrift', 'return_point_drift',
+           'DRIFT_LIMIT']
 
 #: A monotone change of the output at the input's extreme over the record, as a fraction of
 #: the output's range, from which the record is said to drift.
@@ -670,7 +671,7 @@ def _explain(t: FloatArray, x: FloatArray, v: FloatArray, keep: npt.NDArray[np.b
              span_y: float) -> tuple[str, float, float, tuple[int, int]]:
     # The shortest explanation: the delay (output shifted back) or first-order lag of the
     # input, up to `limit`, that leaves the smallest counter-movement.
-    from ..extensions._signals import first_order_lag
+    from ..operators.filters import first_order_lag
     n = x.size
     dt = float(np.median(np.diff(t)))
     best = ('unexplained', 0.0, math.inf, (0, 0))
@@ -748,3 +749,43 @@ def _butterfly_band(x: FloatArray, v: FloatArray, turns: IntArray,
     lo = float(min(b[0] for b in bands))
     hi = float(max(b[1] for b in bands))
     return kind, (lo, hi), (found, large)
+
+
+@dataclass(frozen=True)
+class InputDynamics:
+    """
+    Dynamics of the input path found in a record (0: none).
+
+    Attributes
+    ----------
+    dead_time : float
+        Pure delay ``L`` [s] between input and output.
+    lag_time_constant : float
+        Time constant ``tau`` [s] of a first-order lag of the input.
+
+    """
+
+    dead_time: float = 0.0
+    lag_time_constant: float = 0.0
+
+    @property
+    def present(self) -> bool:
+        """Tell whether any dynamics is modelled."""
+        return self.dead_time > 0.0 or self.lag_time_constant > 0.0
+
+    def apply(self, time: FloatArray, current: FloatArray) -> FloatArray:
+        """Return the input the hysteresis sees: delayed, then lagged."""
+        from ..operators.filters import delay, first_order_lag
+        x = delay(time, current, self.dead_time) if self.dead_time > 0.0 else current
+        if self.lag_time_constant > 0.0:
+            x = first_order_lag(time, x, self.lag_time_constant)
+        return np.asarray(x, dtype=np.float64)
+
+    def describe(self) -> str:
+        """Return the dynamics in words."""
+        parts = []
+        if self.dead_time > 0.0:
+            parts.append(f'a dead time of {1e3 * self.dead_time:.3g} ms')
+        if self.lag_time_constant > 0.0:
+            parts.append(f'a first-order lag of {1e3 * self.lag_time_constant:.3g} ms')
+        return ' and '.join(parts) if parts else 'none'

@@ -4,7 +4,7 @@ The dynamics finding of a record: a lag, a dead time, a tie or none; one rule, t
 
 ``mpi-ros identify`` and ``mpi-ros diagnose`` state what moves the output after the input
 from one analysis of the same record (:func:`record_dynamics`): the record prepared once
-(time base, segments, ringing windows: :func:`~mpi_ros.identification.procedure.prepare_record`),
+(time base, segments, ringing windows: :func:`~mpi_ros.identification.record.prepare_record`),
 the dead-time and lag grids scored on held-out blocks of its busiest window
 (:func:`estimate_record_dynamics`, the identification's own estimate), and the physical
 check of the step response (:func:`~mpi_ros.identification.dynamics.step_onset`).  So the
@@ -35,9 +35,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .dynamics import step_onset, StepOnset
-from .procedure import (DynamicsEstimate, estimate_dynamics, fit_record, held_out_rows,
-                        InputDynamics, prepare_record, PreparedRecord)
+from .dynamics import InputDynamics, step_onset, StepOnset
+from .dynamics_grid import DynamicsEstimate, estimate_dynamics
+from .fitter import fit_record
+from .folds import held_out_rows
+from .record import prepare_record, PreparedRecord
 
 __all__ = ['DYNAMICS_WINDOW', 'DynamicsFinding', 'dynamics_finding', 'estimate_record_dynamics',
            'FINDING_KINDS', 'finding_of', 'MODEL_GAIN', 'record_dynamics', 'reference_order',
@@ -46,12 +48,12 @@ __all__ = ['DYNAMICS_WINDOW', 'DynamicsFinding', 'dynamics_finding', 'estimate_r
 FloatArray = npt.NDArray[np.float64]
 
 #: Held-out errors within this fraction of each other tie (the identification's own rule,
-#: :data:`mpi_ros.identification.procedure._TIE`), and a kind explains the record only when
+#: :data:`mpi_ros.identification.dynamics_grid.TIE`), and a kind explains the record only when
 #: it beats the static model by more.
 TIE_FRACTION = 0.03
 
 #: The identification models a kind when it cuts the static model's held-out error by this
-#: fraction (the bar of :func:`~mpi_ros.identification.procedure.estimate_dynamics`).
+#: fraction (the bar of :func:`~mpi_ros.identification.dynamics_grid.estimate_dynamics`).
 MODEL_GAIN = 0.1
 
 #: The findings.
@@ -198,7 +200,7 @@ def estimate_record_dynamics(record: PreparedRecord, reference: tuple[int, int],
     """
     Estimate the input's dead time and lag on the record's busiest window, held out.
 
-    The identification's estimate (:func:`~mpi_ros.identification.procedure.estimate_dynamics`
+    The identification's estimate (:func:`~mpi_ros.identification.dynamics_grid.estimate_dynamics`
     on a window of at most :data:`DYNAMICS_WINDOW` samples, its start state chosen first),
     shared by ``identify`` and ``diagnose``.
 

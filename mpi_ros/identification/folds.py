@@ -15,12 +15,16 @@ an effect's lags are functions of the input alone, so each fold's model is simul
 the whole record and scored on its own blocks.
 """
 
+from dataclasses import dataclass, field
+import math
+
 import numpy as np
 import numpy.typing as npt
 
 from ..errors import DataError
 
-__all__ = ['blocked_folds', 'FOLDS']
+__all__ = ['better_on_folds', 'blocked_folds', 'fold_index', 'FoldErrors', 'FOLDS',
+           'held_out_rows', 'RECORD_FOLDS']
 
 #: Folds of the out-of-sample choices.
 FOLDS = 3
@@ -78,3 +82,141 @@ def blocked_folds(size: int, count: int = FOLDS, *, start: int = 0,
     for b, (lo, hi) in enumerate(zip(edges[:-1], edges[1:])):
         masks[b % count][lo:hi] = True
     return masks
+
+
+#: Contiguous folds of the blocked cross-validation inside a record (:func:`fold_index`).
+RECORD_FOLDS = 5
+
+#: Held-out RMS errors closer than this fraction of the output's range tie, however
+#: consistent over the folds (a tenth of the order selection's absolute tolerance; set after
+#: seeing issue 17's lag records tie at 1e-5 and a plant seed's real gain of 1.3e-4).
+_FOLD_FLOOR = 1e-4
+
+
+@dataclass(frozen=True)
+class FoldErrors:
+    """
+    Held-out errors of blocked cross-validation inside a record (see :func:`fold_index`).
+
+    Attributes
+    ----------
+    error : float
+        RMS output error over every held-out row, over the output's range (NaN: none).
+    per_fold : list of float
+        The same per fold, in the record's order.
+    rule : str
+        Where the weights came from: ``'determined'`` (the rows after the plays are
+        determined; the start state explains the rows before, with those weights) or
+        ``'joint'`` (every row, with the chosen start state).
+    interior_error : float
+        ``error`` over the held-out rows whose input lies inside the range of the input the
+        fold was fitted on (no extrapolation).
+    outside : float
+        Fraction of the held-out rows outside that range.
+    interior_per_fold : list of float
+        ``interior_error`` per fold (NaN: no such rows).
+
+    """
+
+    error: float = math.nan
+    per_fold: list[float] = field(default_factory=list)
+    rule: str = 'joint'
+    interior_error: float = math.nan
+    outside: float = 0.0
+    interior_per_fold: list[float] = field(default_factory=list)
+
+
+def better_on_folds(candidate: FoldErrors, incumbent: FoldErrors) -> bool:
+    """
+    Tell whether a rule's held-out error is lower than another's beyond the folds' noise.
+
+    The pooled held-out RMS error must fall by more than :data:`_FOLD_FLOOR` of the output's
+    range, and either the paired differences of the folds' mean squared errors have a
+    negative mean larger than its standard error (one sigma over the folds), or no fold is
+    worse by more than :data:`_FOLD_FLOOR` (a gain in one fold only, such as the record's
+    start, is a gain); otherwise they tie.
+
+    Parameters
+    ----------
+    candidate, incumbent : FoldErrors
+        The two rules' cross-validations on the same folds.
+
+    Returns
+    -------
+    bool
+        The candidate is better.
+
+    """
+    a = np.square(np.asarray(candidate.per_fold, dtype=np.float64))
+    b = np.square(np.asarray(incumbent.per_fold, dtype=np.float64))
+    if a.size != b.size or not math.isfinite(candidate.error):
+        return False
+    if not math.isfinite(incumbent.error):
+        return True
+    finite = np.isfinite(a) & np.isfinite(b)
+    d = (a - b)[finite]
+    if d.size < 2:
+        return bool(candidate.error < incumbent.error)
+    if not candidate.error < incumbent.error - _FOLD_FLOOR:
+        return False
+    noise = float(np.std(d, ddof=1)) / math.sqrt(d.size)
+    rms_a = np.asarray(candidate.per_fold, dtype=np.float64)[finite]
+    rms_b = np.asarray(incumbent.per_fold, dtype=np.float64)[finite]
+    dominates = bool(np.all(rms_a <= rms_b + _FOLD_FLOOR))
+    return bool(float(np.mean(d)) < -noise or dominates)
+
+
+def fold_index(size: int, folds: int = RECORD_FOLDS) -> npt.NDArray[np.int8]:
+    """
+    Return each sample's fold: ``folds`` contiguous blocks of (nearly) equal length.
+
+    Parameters
+    ----------
+    size : int
+        Samples.
+    folds : int
+        Blocks.
+
+    Returns
+    -------
+    ndarray of int8, shape (size,)
+        0 for the first block, ``folds - 1`` for the last.
+
+    """
+    return np.minimum((np.arange(size) * folds) // max(size, 1), folds - 1).astype(np.int8)
+
+
+def held_out_rows(size: int, holdout: float, keep: npt.NDArray[np.bool_],
+                  blocks: int | None = None) -> npt.NDArray[np.bool_]:
+    """
+    Return held-out blocks spread evenly over a record, ringing excluded.
+
+    Short blocks (30 of them, at least 8 samples each) keep every kind of excitation the
+    record holds on both sides: a long held-out block of a short record (one reversal
+    curve of a few) would hold content no training sample has.
+
+    Parameters
+    ----------
+    size : int
+        Samples in the record.
+    holdout : float
+        Fraction held out, in (0, 1).
+    keep : ndarray of bool, shape (N,)
+        Samples that may be fitted or scored.
+    blocks : int, optional
+        Blocks the record is cut into (default: 30, fewer for a record under 240 samples).
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        True on the held-out samples.
+
+    """
+    if blocks is None:
+        blocks = int(min(30, max(size // 8, 3)))
+    held = np.zeros(size, dtype=bool)
+    edges = np.linspace(0, size, blocks + 1).astype(int)
+    count = min(max(int(round(holdout * blocks)), 1), blocks - 1)
+    for b in np.unique(np.round(np.linspace(1, blocks - 2, count)).astype(int)):
+        held[edges[b]:edges[b + 1]] = True
+    return held & keep

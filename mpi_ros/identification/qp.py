@@ -19,17 +19,18 @@ import osqp
 import scipy.sparse as sp
 
 from ..errors import DataError, IdentificationError
-from ..operators.deadzone import _dead_zone, dead_zone_operator
+from ..operators.deadzone import dead_zone, dead_zone_operator
 from ..operators.hysteresis import PIHysteresisOperator
 from ..operators.inverse import invert_superposition
 from ..operators.model import MPIModel
 from ..operators.play import play_clamp, play_operator
 from ..operators.superposition import PISuperpositionOperator
 
-__all__ = ['ANCHORS', 'DEFAULT_ORDERS', 'SLOPE_FLOOR', 'GramParts', 'ScaledDesign', 'burn_in',
+__all__ = ['ANCHORS', 'DEFAULT_ORDERS', 'IDLE_PLAY', 'SLOPE_FLOOR', 'GramParts', 'ScaledDesign',
+           'burn_in', 'check_excitation', 'check_quality', 'check_signals',
            'fit_generalized_error', 'fit_model', 'fit_plain', 'generalized_error_gram',
            'hysteresis_thresholds', 'identify_weights', 'inverse_superposition_thresholds',
-           'output_sign', 'regressor_gram', 'scaled_design']
+           'output_sign', 'range_errors', 'regressor_gram', 'scaled_design']
 
 
 FloatArray = npt.NDArray[np.float64]
@@ -45,7 +46,7 @@ ANCHORS = ('operating_point', 'origin')
 
 #: A play whose standard deviation after the burn-in is below this fraction of the first
 #: play's is idle: its weight is fixed at 0.
-_IDLE_PLAY = 0.05
+IDLE_PLAY = 0.05
 
 #: The burn-in lasts until the input covered this fraction of its range (2 = full range).
 _FULL_SWEEP = 2.0 * 0.99
@@ -371,8 +372,29 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
                         sign=sign, burn_in=start, constant=True, input_rest=x_lo)
 
 
-def _check_signals(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple[
+def check_signals(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple[
         FloatArray, FloatArray]:
+    """
+    Return the input and output as flat float arrays, checked: same length, all finite.
+
+    Parameters
+    ----------
+    current : array_like of float, shape (N,)
+        Input [A].
+    displacement : array_like of float, shape (N,)
+        Output [m].
+
+    Returns
+    -------
+    x, y : ndarray of float, shape (N,)
+        The data.
+
+    Raises
+    ------
+    DataError
+        Different lengths or a non-finite value (the message names the first).
+
+    """
     x = np.asarray(current, dtype=np.float64).reshape(-1)
     y = np.asarray(displacement, dtype=np.float64).reshape(-1)
     if x.size != y.size:
@@ -388,8 +410,27 @@ def _check_signals(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple
     return x, y
 
 
-def _check_excitation(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
-                      anchor: str = 'operating_point') -> None:
+def check_excitation(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
+                     anchor: str = 'operating_point') -> None:
+    """
+    Refuse a record that cannot determine the weights of order ``(n, l)``.
+
+    Parameters
+    ----------
+    x, y : ndarray of float, shape (N,)
+        Input [A] and output [m].
+    n, l : int
+        The order.
+    anchor : {'operating_point', 'origin'}
+        See :func:`scaled_design`.
+
+    Raises
+    ------
+    IdentificationError
+        Too few samples (two per weight), a zero or constant input or output, or (n > 0)
+        no input reversal larger than twice the smallest play threshold (28).
+
+    """
     needed = 2 * (n + 1 + 2 * l + 1)
     if x.size < needed:
         msg = (f'too few samples to identify order n={n}, l={l}: found {x.size}, need at'
@@ -779,7 +820,7 @@ def _fill_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
             row[i] = z[i]
         y = ys[k]
         for j in range(ns):
-            row[nh + j] = -_dead_zone(y, r_s[j])
+            row[nh + j] = -dead_zone(y, r_s[j])
         for j in range(ne):
             row[nh + ns + j] = extra[k, j]
         total = sums[c]
@@ -808,7 +849,7 @@ def _gram_rows(xs: FloatArray, ys: FloatArray, r_h: FloatArray, r_s: FloatArray,
             phi[i] = z[i]
         y = ys[k]
         for j in range(ns):
-            phi[nh + j] = -_dead_zone(y, r_s[j])
+            phi[nh + j] = -dead_zone(y, r_s[j])
         counts[c] += 1
         for a in range(nv):
             pa = phi[a]
@@ -904,7 +945,7 @@ def identify_weights(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E
         # record's later reversals) is a constant column: it would satisfy (36) at no
         # cost and shrink every other weight.  Such plays get weight 0.
         variance = np.diag(gram)[:n + 1]
-        idle = np.flatnonzero(variance <= _IDLE_PLAY ** 2 * variance[0])
+        idle = np.flatnonzero(variance <= IDLE_PLAY ** 2 * variance[0])
     w_h, w_s_inv, w_extra, info = fit_generalized_error(
         gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,    # (36), scaled
         superposition_center=design.center, epsilon=epsilon, extra_lower=extra_lower,
@@ -961,7 +1002,7 @@ def fit_plain(current: npt.ArrayLike, displacement: npt.ArrayLike, n: int = 14,
     The paper's QP (34)-(36) with its small bound ``epsilon`` on (8) and (19), the input
     and output centred on their ranges, the plays from the centre (``z = 0``) at the first
     sample, every sample fitted: what a careful engineer fits by hand.  No start state, no
-    dynamics, no ringing left out, no refusal.  :func:`~mpi_ros.identification.identify` is
+    dynamics, no ringing left out, no refusal.  :func:`~mpi_ros.model_fit.identify` is
     judged against it (issue 17: within 1.1x or 0.5 points, simulated from sample 0).
 
     Parameters
@@ -995,10 +1036,27 @@ def fit_plain(current: npt.ArrayLike, displacement: npt.ArrayLike, n: int = 14,
     return design.model(w_h, w_s, constant, initial_states=np.zeros(n + 1))
 
 
-def _errors(sim: FloatArray, y: FloatArray,
-            keep: slice | npt.NDArray[np.bool_]) -> tuple[float, float]:
-    # (37) and RMS over the selected samples, both over the whole record's output range
-    # (the same denominator for every order and for the straight line).
+def range_errors(sim: FloatArray, y: FloatArray,
+                 keep: slice | npt.NDArray[np.bool_]) -> tuple[float, float]:
+    """
+    Return (37) and the RMS error over the selected samples, over the output's range.
+
+    Both are divided by the whole record's output range (the same denominator for every
+    order and for the straight line).
+
+    Parameters
+    ----------
+    sim, y : ndarray of float, shape (N,)
+        Simulated and measured output [m].
+    keep : slice or ndarray of bool
+        The samples scored.
+
+    Returns
+    -------
+    peak, rms : float
+        Fractions of the output's range.
+
+    """
     span = float(np.ptp(y))
     error = sim[keep] - y[keep]
     return (float(np.max(np.abs(error))) / span,
@@ -1014,15 +1072,42 @@ def _linear_fit(x: FloatArray, y: FloatArray) -> FloatArray:
     return line
 
 
-def _quality_check(x: FloatArray, y: FloatArray, sim: FloatArray,
-                   fitted: slice | int | npt.NDArray[np.bool_], n: int,
-                   l: int, anchor: str, *,  # noqa: E741
-                   chosen: bool = False) -> tuple[float, float, float]:
-    # Every fit is judged against the straight line on the same samples; a fit that is
-    # no better, or absurd, is refused: never a silent garbage model.
+def check_quality(x: FloatArray, y: FloatArray, sim: FloatArray,
+                  fitted: slice | int | npt.NDArray[np.bool_], n: int,
+                  l: int, anchor: str, *,  # noqa: E741
+                  chosen: bool = False) -> tuple[float, float, float]:
+    """
+    Judge a fit against the straight line on the same samples; refuse it when no better.
+
+    Parameters
+    ----------
+    x, y : ndarray of float, shape (N,)
+        Input [A] and output [m].
+    sim : ndarray of float, shape (N,)
+        The model's simulation [m].
+    fitted : slice, int or ndarray of bool
+        The samples the weights were fitted on (an int: from that sample on).
+    n, l : int
+        The order.
+    anchor : str
+        The design's anchor (named in the hint).
+    chosen : bool
+        The order was chosen by the search (then even (0, 0) must beat the line).
+
+    Returns
+    -------
+    rms, peak, linear : float
+        RMS error and (37) of the fit, RMS error of the line [fractions of the range].
+
+    Raises
+    ------
+    IdentificationError
+        An absurd fit (RMS over the output's range) or one worse than the line.
+
+    """
     keep = slice(fitted, None) if isinstance(fitted, int) else fitted
-    peak, error = _errors(sim, y, keep)
-    _, linear = _errors(_linear_fit(x[keep], y[keep]), y[keep], slice(None))
+    peak, error = range_errors(sim, y, keep)
+    _, linear = range_errors(_linear_fit(x[keep], y[keep]), y[keep], slice(None))
     if not (math.isfinite(error) and error < 1.0):
         msg = (f'the identified model (n={n}, l={l}) is absurd: its simulation is off by'
                f' {100 * error:.3g} % of the output range (RMS); check the input and'

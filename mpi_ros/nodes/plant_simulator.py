@@ -32,7 +32,7 @@ Truth (``truth``, read-only)
 Excitation mode (``excitation.enabled:=true``)
     The node drives itself with :func:`mpi_ros.plant.excitation.identification_excitation`
     (or, with ``excitation.signal:=diagnostic``, the validation record of the diagnosis,
-    :func:`mpi_ros.diagnosis.signatures.diagnostic_excitation`):
+    :func:`mpi_ros.plant.excitation.diagnostic_excitation`):
     it publishes each sample's current on ``current_command`` and the plant's answer on
     ``displacement``, on the schedule's own time base (so the data do not depend on
     timer jitter). It subscribes to ``current_command`` only afterwards, so neither its

@@ -11,13 +11,29 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['dead_zone_operator', 'dead_zone_step']
+__all__ = ['dead_zone', 'dead_zone_operator', 'dead_zone_step']
 
 FloatArray = npt.NDArray[np.float64]
 
 
 @numba.njit(cache=True, nogil=True, inline='always')
-def _dead_zone(x: float, r: float) -> float:  # pragma: no cover - compiled
+def dead_zone(x: float, r: float) -> float:  # pragma: no cover - compiled
+    """
+    Return the one-sided dead-zone operator's output for one sample and threshold (17).
+
+    Parameters
+    ----------
+    x : float
+        Input sample.
+    r : float
+        Threshold (any sign), unit of the input.
+
+    Returns
+    -------
+    float
+        ``max(x - r, 0)`` for ``r > 0``, ``min(x - r, 0)`` for ``r < 0``, ``x`` for ``r = 0``.
+
+    """
     if r > 0.0:
         d = x - r
         return d if d > 0.0 else 0.0
@@ -44,7 +60,7 @@ def dead_zone_step(x: float, r: FloatArray,
 
     """
     for i in range(r.shape[0]):
-        out[i] = _dead_zone(x, r[i])
+        out[i] = dead_zone(x, r[i])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -52,7 +68,7 @@ def _dead_zone_batch(x: FloatArray, r: FloatArray) -> FloatArray:  # pragma: no 
     out = np.empty((x.shape[0], r.shape[0]))
     for k in range(x.shape[0]):
         for i in range(r.shape[0]):
-            out[k, i] = _dead_zone(x[k], r[i])
+            out[k, i] = dead_zone(x[k], r[i])
     return out
 
 

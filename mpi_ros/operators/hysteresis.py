@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from .play import _play_batch
-from .._arrays import frozen_vector
+from .play import play_batch
+from .vectors import frozen_vector
 from ..errors import ModelError
 
 __all__ = ['PIHysteresisOperator']
@@ -133,7 +133,7 @@ class PIHysteresisOperator:
         """
         x_arr = np.ascontiguousarray(x, dtype=np.float64).reshape(-1)
         z = np.array(self.initial_states if state is None else state, dtype=np.float64)
-        out = _play_batch(x_arr, np.ascontiguousarray(self.thresholds), z)
+        out = play_batch(x_arr, np.ascontiguousarray(self.thresholds), z)
         return out, z
 
     def apply(self, x: npt.ArrayLike,

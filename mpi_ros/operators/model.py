@@ -47,7 +47,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from .deadzone import _dead_zone
+from .deadzone import dead_zone
 from .hysteresis import PIHysteresisOperator
 from .inverse import invert_hysteresis, invert_superposition
 from .play import play_clamp
@@ -55,12 +55,11 @@ from .superposition import PISuperpositionOperator
 from .usability import check_usable
 from ..errors import ModelError
 
-__all__ = ['ActuatorModel', 'HYSTERESIS_INITIAL_STATES', 'HYSTERESIS_THRESHOLDS',
-           'RECORD_START_STATES',
-           'HYSTERESIS_WEIGHTS', 'INPUT_OFFSET', 'MODEL_KEYS', 'MPIModel', 'MPIStream',
-           'OPERATING_POINT_DEFAULTS', 'OPERATING_POINT_KEYS', 'OUTPUT_OFFSET', 'OUTPUT_SIGN',
-           'SUPERPOSITION_THRESHOLDS', 'SUPERPOSITION_WEIGHTS', 'check_model_parameters',
-           'check_operating_point']
+__all__ = ['hysteresis_step', 'superposition_value', 'ActuatorModel', 'HYSTERESIS_INITIAL_STATES',
+           'HYSTERESIS_THRESHOLDS', 'RECORD_START_STATES', 'HYSTERESIS_WEIGHTS', 'INPUT_OFFSET',
+           'MODEL_KEYS', 'MPIModel', 'MPIStream', 'OPERATING_POINT_DEFAULTS',
+           'OPERATING_POINT_KEYS', 'OUTPUT_OFFSET', 'OUTPUT_SIGN', 'SUPERPOSITION_THRESHOLDS',
+           'SUPERPOSITION_WEIGHTS', 'check_model_parameters', 'check_operating_point']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -254,9 +253,26 @@ def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
 
 
 @numba.njit(cache=True, nogil=True, inline='always')
-def _hysteresis_step(x: float, r_h: FloatArray, w_h: FloatArray,
-                     z: FloatArray) -> float:  # pragma: no cover - compiled
-    # Play operators (4) then the weighted sum (5).
+def hysteresis_step(x: float, r_h: FloatArray, w_h: FloatArray,
+                    z: FloatArray) -> float:  # pragma: no cover - compiled
+    """
+    Advance H by one sample: play operators (4), then the weighted sum (5); compiled.
+
+    Parameters
+    ----------
+    x : float
+        Input sample, relative to the input offset [A].
+    r_h, w_h : ndarray of float, shape (n+1,)
+        Play thresholds [A] and weights.
+    z : ndarray of float, shape (n+1,)
+        Play states [A], advanced in place.
+
+    Returns
+    -------
+    float
+        ``H[x]`` [A].
+
+    """
     acc = 0.0
     for i in range(r_h.shape[0]):
         z[i] = play_clamp(x, r_h[i], z[i])
@@ -265,11 +281,27 @@ def _hysteresis_step(x: float, r_h: FloatArray, w_h: FloatArray,
 
 
 @numba.njit(cache=True, nogil=True, inline='always')
-def _superposition_value(x: float, r_s: FloatArray,
-                         w_s: FloatArray) -> float:  # pragma: no cover - compiled
+def superposition_value(x: float, r_s: FloatArray,
+                        w_s: FloatArray) -> float:  # pragma: no cover - compiled
+    """
+    Return S at one value: the weighted sum of dead-zone operators (17)-(18); compiled.
+
+    Parameters
+    ----------
+    x : float
+        S's input (H's output, or a displacement for S').
+    r_s, w_s : ndarray of float, shape (l,)
+        Dead-zone thresholds and weights.
+
+    Returns
+    -------
+    float
+        ``S[x]``.
+
+    """
     acc = 0.0
     for i in range(r_s.shape[0]):
-        acc += w_s[i] * _dead_zone(x, r_s[i])              # (17)-(18)
+        acc += w_s[i] * dead_zone(x, r_s[i])              # (17)-(18)
     return acc
 
 
@@ -280,9 +312,9 @@ def _mpi_step(x: float, r_h: FloatArray, w_h: FloatArray, z: FloatArray, r_s: Fl
     # affine = (a, b, c, d): the operators see a + b x, the output is c + d * result.
     u = affine[0] + affine[1] * x
     if inverse:                                             # (27): H' o S'
-        out = _hysteresis_step(_superposition_value(u, r_s, w_s), r_h, w_h, z)
+        out = hysteresis_step(superposition_value(u, r_s, w_s), r_h, w_h, z)
     else:
-        out = _superposition_value(_hysteresis_step(u, r_h, w_h, z), r_s, w_s)   # (26)
+        out = superposition_value(hysteresis_step(u, r_h, w_h, z), r_s, w_s)   # (26)
     result: float = affine[2] + affine[3] * out
     return result
 
@@ -297,12 +329,12 @@ def _mpi_batch(x: FloatArray, r_h: FloatArray, w_h: FloatArray, z: FloatArray,
     a, b, c, d = affine[0], affine[1], affine[2], affine[3]
     if inverse:                                             # (27): H' o S'
         for k in range(x.shape[0]):
-            out[k] = c + d * _hysteresis_step(_superposition_value(a + b * x[k], r_s, w_s),
-                                              r_h, w_h, z)
+            out[k] = c + d * hysteresis_step(superposition_value(a + b * x[k], r_s, w_s),
+                                             r_h, w_h, z)
     else:                                                   # (26)
         for k in range(x.shape[0]):
-            out[k] = c + d * _superposition_value(_hysteresis_step(a + b * x[k], r_h, w_h, z),
-                                                  r_s, w_s)
+            out[k] = c + d * superposition_value(hysteresis_step(a + b * x[k], r_h, w_h, z),
+                                                 r_s, w_s)
     return out
 
 

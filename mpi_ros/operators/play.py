@@ -16,7 +16,8 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ['play_end_state', 'play_operator', 'PlayOperatorStream', 'play_step', 'play_clamp']
+__all__ = ['play_batch', 'play_end_state', 'play_operator', 'PlayOperatorStream', 'play_step',
+           'play_clamp']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -52,8 +53,26 @@ def play_clamp(x: float, r: float, z: float) -> float:  # pragma: no cover - com
 
 
 @numba.njit(cache=True, nogil=True)
-def _play_batch(x: FloatArray, r: FloatArray,
-                z: FloatArray) -> FloatArray:  # pragma: no cover - compiled
+def play_batch(x: FloatArray, r: FloatArray,
+               z: FloatArray) -> FloatArray:  # pragma: no cover - compiled
+    """
+    Return the play operators' outputs for a batch, from the states ``z`` (4), compiled.
+
+    Parameters
+    ----------
+    x : ndarray of float, shape (N,)
+        Input, unit of the input.
+    r : ndarray of float, shape (m,)
+        Thresholds.
+    z : ndarray of float, shape (m,)
+        States before the first sample (updated in place to the states after the last).
+
+    Returns
+    -------
+    ndarray of float, shape (N, m)
+        The plays' outputs.
+
+    """
     n_samples = x.shape[0]
     m = r.shape[0]
     out = np.empty((n_samples, m))
@@ -127,7 +146,7 @@ def play_operator(x: npt.ArrayLike, thresholds: npt.ArrayLike,
     r = np.ascontiguousarray(thresholds, dtype=np.float64).reshape(-1)
     z = (np.zeros_like(r) if initial_states is None
          else np.array(initial_states, dtype=np.float64).reshape(-1))
-    out = _play_batch(x_arr, r, z)
+    out = play_batch(x_arr, r, z)
     return out, z
 
 

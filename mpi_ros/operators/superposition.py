@@ -18,7 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .deadzone import dead_zone_operator
-from .._arrays import frozen_vector
+from .vectors import frozen_vector
 from ..errors import ModelError
 
 __all__ = ['PISuperpositionOperator']

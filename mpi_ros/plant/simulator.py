@@ -17,8 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .actuator import ActuatorConfig, MagnetostrictiveActuator
-from .excitation import identification_excitation
-from ..diagnosis.signatures import diagnostic_excitation
+from .excitation import diagnostic_excitation, identification_excitation
 from ..errors import ParameterRejected
 from ..extensions.effect import plant_effects
 from ..operators.model import HYSTERESIS_INITIAL_STATES, MODEL_KEYS, MPIModel, \

@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 from rosbags.rosbag2 import StoragePlugin, Writer
 
-from .files import _check_target, _equal_length_arrays, _install, _make_tmpdir, \
+from .files import check_target, equal_length_arrays, install_directory, make_tmpdir, \
     write_target
 from .messages import Float64Reader, typestore
 from .options import show_value
@@ -156,8 +156,8 @@ class BagRecorder:
                 msg = (f'BagRecorder for {self._path} was already opened; '
                        'create a new BagRecorder for each bag')
                 raise DataError(msg)
-            _check_target(self._path, overwrite=self._overwrite, kind='bag')
-            tmpdir = _make_tmpdir(self._path)
+            check_target(self._path, overwrite=self._overwrite, kind='bag')
+            tmpdir = make_tmpdir(self._path)
             writer: Writer | None = None
             try:
                 writer = Writer(tmpdir / self._path.name, version=Writer.VERSION_LATEST,
@@ -229,7 +229,7 @@ class BagRecorder:
                         writer.abort()
                     msg = f'cannot finish bag {self._path}: {type(err).__name__}: {err}'
                     raise DataError(msg) from err
-                _install(tmpdir / self._path.name, self._path, overwrite=self._overwrite)
+                install_directory(tmpdir / self._path.name, self._path, overwrite=self._overwrite)
             finally:
                 shutil.rmtree(tmpdir, ignore_errors=True)
 
@@ -321,7 +321,7 @@ def write_bag_signals(
         cannot be written. Nothing is left at `path` on failure.
 
     """
-    arrays = _equal_length_arrays(
+    arrays = equal_length_arrays(
         {'time': time, 'current': current, 'displacement': displacement},
         what='write_bag_signals')
     stamps = _seconds_to_ns_array(arrays['time'])

@@ -18,7 +18,7 @@ from typing import Callable, Iterator, Mapping, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from .files import _equal_length_arrays, atomic_write
+from .files import atomic_write, equal_length_arrays
 from .options import DataOptions
 from .recording import check_magnitudes, FloatArray, in_si, MIN_SAMPLES, PathLike, Recording
 from ..errors import DataError
@@ -315,7 +315,7 @@ def write_csv_columns(
             msg = (f'write_csv_columns({target}): invalid column name {name!r}; use a '
                    'non-empty name without commas, quotes, line breaks or a leading #')
             raise DataError(msg)
-    arrays = _equal_length_arrays(dict(columns), what=f'write_csv_columns({target})')
+    arrays = equal_length_arrays(dict(columns), what=f'write_csv_columns({target})')
     rows = np.column_stack(list(arrays.values())).tolist() if arrays else []
     with atomic_write(target) as handle:
         if comment is not None:

@@ -24,7 +24,8 @@ import numpy.typing as npt
 from .recording import FloatArray, PathLike
 from ..errors import DataError
 
-__all__ = ['atomic_write', 'atomic_writes', 'same_file', 'write_target']
+__all__ = ['check_target', 'equal_length_arrays', 'install_directory', 'make_tmpdir',
+           'atomic_write', 'atomic_writes', 'same_file', 'write_target']
 
 
 @contextlib.contextmanager
@@ -102,7 +103,7 @@ def atomic_writes(paths: Sequence[PathLike], *,
                for path, device in zip(paths, special)]
     for target, device in zip(targets, special):
         if not device:
-            _check_target(target, overwrite=True, kind='file')
+            check_target(target, overwrite=True, kind='file')
     if len({str(t) for t in targets}) != len(targets):
         msg = (f'cannot write {", ".join(map(str, paths))}: two of them are the same file; '
                'give each output its own path')
@@ -244,7 +245,8 @@ def _sync_directory(directory: Path) -> None:
             os.close(fd)
 
 
-def _make_tmpdir(target: Path) -> Path:
+def make_tmpdir(target: Path) -> Path:
+    """Return a new temporary directory next to ``target`` (same file system)."""
     try:
         return Path(tempfile.mkdtemp(prefix=f'.{target.name}.', suffix='.tmp',
                                      dir=target.parent))
@@ -253,7 +255,8 @@ def _make_tmpdir(target: Path) -> Path:
         raise DataError(msg) from err
 
 
-def _check_target(target: Path, *, overwrite: bool, kind: str) -> None:
+def check_target(target: Path, *, overwrite: bool, kind: str) -> None:
+    """Refuse a target whose directory is missing, or that exists without ``overwrite``."""
     parent = target.parent
     if not parent.is_dir():
         msg = f'cannot write {kind} {target}: directory {parent} does not exist; create it first'
@@ -267,7 +270,7 @@ def _check_target(target: Path, *, overwrite: bool, kind: str) -> None:
         raise DataError(msg)
 
 
-def _install(built: Path, target: Path, *, overwrite: bool) -> None:
+def install_directory(built: Path, target: Path, *, overwrite: bool) -> None:
     """Move the finished bag directory `built` to `target` (same file system)."""
     try:
         if not (target.exists() or target.is_symlink()):
@@ -293,9 +296,10 @@ def _install(built: Path, target: Path, *, overwrite: bool) -> None:
         raise DataError(msg) from err
 
 
-def _equal_length_arrays(
+def equal_length_arrays(
     columns: Mapping[str, npt.ArrayLike], *, what: str,
 ) -> dict[str, FloatArray]:
+    """Return the columns as flat float arrays of one length (DataError names ``what``)."""
     arrays: dict[str, FloatArray] = {}
     for name, column in columns.items():
         try:

@@ -25,14 +25,14 @@ from pathlib import Path
 import sys
 from typing import Any, Callable, Sequence
 
-from .diagnose import diagnose
-from .report import data_units, report_facts, summary_lines, \
-    write_extended_params, write_json, write_report
-from .signatures import diagnostic_excitation
-from ..app.cli_options import (
+from .cli_options import (
     add_data_options, add_order_option, ArgumentParser, check_outputs, data_options,
     order_option)
+from ..diagnosis.diagnose import diagnose
+from ..diagnosis.report import data_units, report_facts, summary_lines, \
+    write_extended_params, write_json, write_report
 from ..errors import DataError, MPIError
+from ..plant.excitation import diagnostic_excitation
 from ..progress import Progress
 from ..recordings import DataOptions, join_recordings, read_recording, Recording, \
     write_csv_columns

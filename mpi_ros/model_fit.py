@@ -1,13 +1,38 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """
-Identification of the MPI operator from measured data, section 4.2 of Kuhnen's paper.
+Identify a model from a record: Gamma, its order, input dynamics and output mode, judged.
 
-The entry of :mod:`mpi_ros.identification`: :func:`identify` (order given or chosen on
-held-out data by :func:`select_order` / :func:`select_record_order`) ties together
-:mod:`.qp` (operating point, thresholds (28)-(31), checks of the data, the QP (34)-(36), the
-straight-line baseline), :mod:`.procedure` (record, segments, start states, dynamics grid,
-refusals, the start states) and :mod:`.dynamics`; the output mode of a record that rings is
-fitted here (below, "The output mode").
+The procedure above the effects: :func:`identify` (order given or chosen on held-out data
+by :mod:`mpi_ros.identification.order_selection`) ties together
+:mod:`mpi_ros.identification` (operating point, thresholds (28)-(31), checks of the data, the
+QP (34)-(36), the straight-line baseline, record, segments, start states, dynamics grid,
+refusals), the input dynamics it finds (modelled as :mod:`mpi_ros.extensions.dead_time` or
+:mod:`mpi_ros.extensions.rate_dependence`) and the output mode of a record that rings
+(:func:`mpi_ros.extensions.resonance.estimate_resonance`); it returns an
+:class:`IdentificationResult`.
+
+Section 4.2 of Kuhnen's paper, on real records.  Steps (documented in docs/design.md,
+"Identification on real records"):
+
+1. **What moves the output against the input** (:mod:`mpi_ros.identification.dynamics`): a
+   butterfly loop, switching transients or an output unrelated to the input are refused,
+   naming the cause; ringing after steps is left out of the fit; lag and dead time are
+   measured.
+2. **Segments**: a record stitched from several experiments (time gaps, time running back,
+   output jumps the input does not explain) is cut at the joins; each segment gets its own
+   start state (:mod:`mpi_ros.identification.record`).
+3. **Start state** (:mod:`mpi_ros.identification.start_states`): one QP per candidate
+   history; the best is the record's start state, written into the model, so that the model
+   simulated from the first sample reproduces the record.  A burn-in is kept only where no
+   candidate explains the start (reported).
+4. **Dynamics** (with a time base): a grid over the dead time and the time constant of a
+   first-order lag of the input, one QP each, scored on held-out blocks by the output's
+   RMS error; kept when it beats the static model on them clearly
+   (:mod:`mpi_ros.identification.dynamics_grid`).
+5. **Order** (``order='auto'``): raised until the held-out error saturates
+   (:mod:`mpi_ros.identification.order_selection`).
+6. **Judgement**: the model, simulated over the whole record from its start state, against
+   the best straight line on the same samples; never a model worse than the line.
 
 Three parts, as in the paper:
 
@@ -65,34 +90,8 @@ Real records (documented in docs/design.md, "Identification on real records"):
   result: a failure raises :class:`IdentificationError`, never a silently
   non-invertible model.
 
-**The output mode** of a record that rings after steps: fitted, judged, kept or not.
 
-A rate-independent Gamma cannot follow ringing: :mod:`.dynamics` finds the windows after
-steps where the output rings and leaves them out of the QP.  With a time base the
-identification then models the ringing as a lightly damped mechanical mode after Gamma
-(:mod:`mpi_ros.extensions.resonance`, ``s = R[Gamma[x]]``):
-
-1. the mode (natural frequency, decay, and the initial deflection when the record starts
-   ringing) is fitted by least squares of ``R[g]`` against the measured output, ``g`` the
-   static model simulated from the first sample, starting from the detected ringing
-   frequency;
-2. Gamma is fitted again, with the same order, burn-in and input dynamics, its start states
-   chosen afresh, on the output with the mode's part taken out, ``y - (R[g] - g)`` (the
-   ringing windows still left out); the mode is fitted again on the new ``g``.  The ringing's
-   tails beyond the windows and the mode's gain at the excitation's frequencies
-   (``1 / (1 - (f_x / f)^2)``) no longer bias Gamma, nor the choice of its start state;
-3. of the two, the one with the lower RMS error of the model simulated over the whole record
-   from its first sample (ringing windows are never held out: this is the error the mode can
-   change) is kept when that error falls by :data:`RESONANCE_GAIN` or more, and the error
-   outside the ringing windows rises by at most :data:`OUTSIDE_TOLERANCE` of the output's
-   range.  Otherwise the static model stays (the windows stay left out) and the mode found
-   is reported as not modelled.
-
-Why the second condition: Gamma is piecewise linear (each play that starts to move changes its
-slope at once), and the mode rings after every such kink, as a real, smooth hysteresis does
-not make it ring.  On slow excitation the ripple is below the noise; on the TUM piezo's 100 Hz
-cycles it doubles the error outside the start's ringing (0.33 % -> 0.61 %), more than the start
-ringing's share of the whole record gains: the mode is found there, and not modelled.
+The output mode: see :mod:`mpi_ros.extensions.resonance`, "The output mode".
 """
 
 from collections.abc import Callable
@@ -105,236 +104,25 @@ import warnings
 import numpy as np
 import numpy.typing as npt
 
-from .dynamics import return_point_drift
-from .finding import DynamicsFinding, estimate_record_dynamics, finding_of, reference_order
-from .procedure import (DynamicsEstimate, fit_record, fold_line_errors, FoldErrors, FOLDS,
-                        held_out_rows, InputDynamics, prepare_record, PreparedRecord,
-                        RecordFit, refuse_if_unmodellable, Segment, StartState)
-from .qp import _check_excitation, _check_signals, _errors, _quality_check, ANCHORS, \
-    DEFAULT_ORDERS, FloatArray, output_sign
-from ..errors import DataError, IdentificationError, MPIWarning
-from ..operators.model import MPIModel
+from .errors import DataError, IdentificationError, MPIWarning
+from .extensions import CompositeModel, DeadTimeModel, RateDependentModel
+from .extensions.resonance import estimate_resonance, ResonanceEstimate, ResonanceModel, \
+    with_mode
+from .identification.dynamics import InputDynamics, return_point_drift
+from .identification.dynamics_grid import DynamicsEstimate
+from .identification.finding import DynamicsFinding, estimate_record_dynamics, finding_of, \
+    reference_order
+from .identification.fitter import fit_record, fold_line_errors, RecordFit
+from .identification.folds import fold_index, FoldErrors, held_out_rows, RECORD_FOLDS
+from .identification.order_selection import ORDER_WINDOW, select_record_order
+from .identification.qp import ANCHORS, check_excitation, check_quality, check_signals, \
+    FloatArray, output_sign
+from .identification.record import prepare_record, PreparedRecord, refuse_if_unmodellable, \
+    Segment
+from .identification.start_states import StartState
+from .operators.model import MPIModel
 
-__all__ = ['DEFAULT_ORDERS', 'estimate_resonance', 'IdentificationResult', 'identify',
-           'model_with_dynamics', 'model_with_resonance', 'OUTSIDE_TOLERANCE', 'RESONANCE_GAIN',
-           'ResonanceEstimate', 'select_order', 'select_record_order', 'with_mode']
-
-#: The mode is kept when it lowers the whole-record RMS error by this fraction ...
-RESONANCE_GAIN = 0.1
-
-#: ... and raises the RMS error outside the ringing windows by at most this fraction of the
-#: output's range (the order selection's absolute tolerance: smaller differences count as
-#: equal).
-OUTSIDE_TOLERANCE = 1e-3
-
-
-@dataclass(frozen=True)
-class ResonanceEstimate:
-    """
-    The output mode fitted on a record that rings, and whether the model carries it.
-
-    Attributes
-    ----------
-    modelled : bool
-        The model carries the mode.
-    frequency : float
-        Natural frequency [Hz] (0: none fitted).
-    decay : float
-        Time constant of the ringing's envelope [s].
-    deflection : float
-        The mode's deflection from Gamma's output at the first sample [m].
-    detected_frequency : float
-        The ringing frequency the analysis detected [Hz] (NaN: no ringing).
-    static_error, error : float
-        RMS error of the model simulated over the whole record from its first sample,
-        without and with the mode [fraction of the output range].
-    static_outside_error, outside_error : float
-        The same on the samples outside the ringing windows.
-    refitted : bool
-        Gamma was fitted again on the output without the mode's part (step 2).
-
-    """
-
-    modelled: bool = False
-    frequency: float = 0.0
-    decay: float = 0.0
-    deflection: float = 0.0
-    detected_frequency: float = math.nan
-    static_error: float = math.nan
-    error: float = math.nan
-    static_outside_error: float = math.nan
-    outside_error: float = math.nan
-    refitted: bool = False
-
-    def describe(self) -> str:
-        """Return what was found, in words (empty when no mode was fitted)."""
-        if self.frequency <= 0.0:
-            return ''
-        what = (f'a lightly damped output mode rings at {self.frequency:.4g} Hz, decay'
-                f' {1e3 * self.decay:.3g} ms')
-        change = (f'whole-record RMS {100 * self.static_error:.3g} % ->'
-                  f' {100 * self.error:.3g} %, outside the ringing'
-                  f' {100 * self.static_outside_error:.3g} % -> {100 * self.outside_error:.3g}'
-                  ' %')
-        if self.modelled:
-            return (f'{what}; modelled ({change}; the compensator inverts Gamma only: the mode'
-                    ' is left to feedback or input shaping)')
-        if self.error > (1.0 - RESONANCE_GAIN) * self.static_error:
-            why = f'less than {100 * RESONANCE_GAIN:.0f} % better over the whole record'
-        else:
-            why = ('it rings after the kinks of the piecewise-linear Gamma where the record'
-                   f' does not ring, raising the error there by more than'
-                   f' {100 * OUTSIDE_TOLERANCE:.2g} % of the range')
-        return f'{what}: not modelled ({change}: {why})'
-
-    def to_json(self) -> dict[str, Any]:
-        """Return the JSON form."""
-        def finite(value: float) -> float | None:
-            return value if math.isfinite(value) else None
-        return {'modelled': self.modelled, 'frequency': self.frequency, 'decay': self.decay,
-                'initial_deflection': self.deflection,
-                'detected_frequency': finite(self.detected_frequency),
-                'static_whole_record_rms_error': finite(self.static_error),
-                'whole_record_rms_error': finite(self.error),
-                'static_outside_ringing_rms_error': finite(self.static_outside_error),
-                'outside_ringing_rms_error': finite(self.outside_error),
-                'refitted': self.refitted}
-
-
-def estimate_resonance(record: PreparedRecord, fit: RecordFit, n: int, l: int,  # noqa: E741
-                       dynamics: InputDynamics = InputDynamics()
-                       ) -> tuple[ResonanceEstimate, RecordFit]:
-    """
-    Fit the output mode of a record that rings after steps; keep it when it helps clearly.
-
-    Parameters
-    ----------
-    record : PreparedRecord
-        The record, with its analysis (ringing windows, detected frequency).
-    fit : RecordFit
-        Gamma fitted on the samples outside the ringing.
-    n, l : int
-        Its order.
-    dynamics : InputDynamics
-        The input dynamics modelled with Gamma.
-
-    Returns
-    -------
-    estimate : ResonanceEstimate
-        The mode found (``frequency`` 0: the record has no ringing to fit, or no time base).
-    fit : RecordFit
-        The fit of Gamma that goes with the mode: ``fit`` itself, or Gamma fitted again on
-        the output without the mode's part (when that is better and the mode is kept).
-
-    """
-    t = record.time
-    analysis = record.analysis
-    if (t is None or not analysis.ringing or not math.isfinite(analysis.ringing_frequency)
-            or not bool(np.all(np.diff(t) > 0.0))):
-        return ResonanceEstimate(), fit
-    from ..extensions.resonance import fit_mode, output_mode
-    y = record.displacement
-    span = float(np.ptp(y))
-    outside = record.keep
-    start_rings = analysis.ringing[0][0] == 0          # the record starts ringing
-    static = _whole(fit)
-    first = fit_mode(t, static, y, analysis.ringing_frequency, deflection=start_rings)
-    rung = output_mode(t, static, first.frequency, first.decay, first.deflection)
-    options = [(first, fit, rung, False)]
-    try:
-        again = fit_record(replace(record, displacement=y - (rung - static)), n, l,
-                           dynamics=dynamics, starts=fit.segments, burn_in=fit.burn_in)
-    except (IdentificationError, DataError):
-        again = None
-    if again is not None:
-        second = fit_mode(t, _whole(again), y, first.frequency, decay=first.decay,
-                          deflection=start_rings)
-        options.append((second, again, output_mode(t, _whole(again), second.frequency,
-                                                   second.decay, second.deflection), True))
-    static_error = _rms(static, y, span)
-    static_outside = _rms(static[outside], y[outside], span)
-
-    def passes(option: tuple[Any, RecordFit, FloatArray, bool]) -> bool:
-        mode, _, sim, _ = option
-        return bool(mode.error <= (1.0 - RESONANCE_GAIN) * static_error and _rms(
-            sim[outside], y[outside], span) <= static_outside + OUTSIDE_TOLERANCE)
-
-    kept = [option for option in options if passes(option)]
-    mode, chosen, sim, refitted = min(kept or options, key=lambda option: option[0].error)
-    estimate = ResonanceEstimate(
-        modelled=bool(kept), frequency=mode.frequency, decay=mode.decay,
-        deflection=mode.deflection, detected_frequency=analysis.ringing_frequency,
-        static_error=static_error, error=mode.error, static_outside_error=static_outside,
-        outside_error=_rms(sim[outside], y[outside], span), refitted=refitted)
-    return estimate, (chosen if estimate.modelled else fit)
-
-
-def model_with_resonance(model: Any, estimate: ResonanceEstimate) -> Any:
-    """
-    Return a model with the output mode after it (the model itself when none is modelled).
-
-    Parameters
-    ----------
-    model : MPIModel or extended model
-        Gamma, or Gamma with input dynamics (a dead-time or rate-dependence model).
-    estimate : ResonanceEstimate
-        The mode.
-
-    Returns
-    -------
-    MPIModel, ResonanceModel or CompositeModel
-        ``R[model]``.
-
-    """
-    if not estimate.modelled:
-        return model
-    from ..extensions import CompositeModel
-    from ..extensions.resonance import ResonanceModel
-    gamma = getattr(model, 'model', model)
-    mode = ResonanceModel(gamma, estimate.frequency, estimate.decay, estimate.deflection)
-    if gamma is model:
-        return mode
-    return CompositeModel(gamma, (model, mode))
-
-
-def with_mode(time: FloatArray | None, simulation: FloatArray,
-              estimate: ResonanceEstimate) -> FloatArray:
-    """
-    Return a simulation of the model without the mode passed through the mode, if modelled.
-
-    Parameters
-    ----------
-    time : ndarray of float, shape (N,), or None
-        Sample times [s] (None: no mode can be modelled).
-    simulation : ndarray of float, shape (N,)
-        The model's output without the mode [m].
-    estimate : ResonanceEstimate
-        The mode.
-
-    Returns
-    -------
-    ndarray of float, shape (N,)
-        ``R[simulation]``, or ``simulation`` itself.
-
-    """
-    if time is None or not estimate.modelled:
-        return simulation
-    from ..extensions.resonance import output_mode
-    return output_mode(time, simulation, estimate.frequency, estimate.decay,
-                       estimate.deflection)
-
-
-def _whole(fit: RecordFit) -> FloatArray:
-    # The model simulated over the whole record from its first sample (its initial states).
-    return np.asarray(fit.model.simulate(fit.material_input), dtype=np.float64)
-
-
-def _finite(value: float) -> float | None:
-    return value if math.isfinite(value) else None
-
-
-def _rms(sim: FloatArray, y: FloatArray, span: float) -> float:
-    return float(np.sqrt(np.mean((sim - y) ** 2)) / span)
+__all__ = ['IdentificationResult', 'identify', 'model_with_dynamics', 'model_with_resonance']
 
 
 @dataclass(frozen=True)
@@ -373,7 +161,8 @@ class IdentificationResult:
         output's range: the baseline every fit is checked against.
     burn_in : int
         Samples at the start left out of the fit because no start state explains them
-        (0 when the start state is determined; see :mod:`.procedure`, "Start states").
+        (0 when the start state is determined; see
+        :mod:`mpi_ros.identification.start_states`).
     whole_record_rms_error : float
         RMS error of the model simulated over the whole record from its first sample
         (ringing and burn-in included), over the output's range.
@@ -388,20 +177,22 @@ class IdentificationResult:
     dynamics_estimate : DynamicsEstimate
         Both kinds as estimated (with a time base), their held-out errors, whether they tie.
     dynamics_finding : DynamicsFinding
-        Lag, dead time, tie or none (:mod:`.finding`: the rule ``mpi-ros diagnose`` states
-        for the same record, with the step response's check of a dead time).
+        Lag, dead time, tie or none (:mod:`mpi_ros.identification.finding`: the rule
+        ``mpi-ros diagnose`` states for the same record, with the step response's check of
+        a dead time).
     findings : str
         What moves the output against the input (ringing, lag, dead time), in words.
     excluded : int
         Samples of ringing the analysis found after steps (left out of the static fit).
     resonance : ResonanceEstimate
         The lightly damped output mode fitted on the ringing (with a time base), and whether
-        the model carries it (:attr:`full_model`; see "The output mode" above).
+        the model carries it (:attr:`full_model`; see "The output mode" in
+        :mod:`mpi_ros.extensions.resonance`).
     notes : list of str
         What the identification changed or noticed (lowered order, burn-in, ...).
     held_out_error : float
         RMS output error of the fit's procedure on the record's held-out blocks (blocked
-        cross-validation: :data:`~mpi_ros.identification.procedure.FOLDS` contiguous folds of
+        cross-validation: :data:`~mpi_ros.identification.folds.RECORD_FOLDS` contiguous folds of
         the record's first 100000 samples, each held out once), over the output's range.
     held_out_errors : list of float
         The same per fold, in the record's order.
@@ -494,7 +285,6 @@ def model_with_dynamics(model: MPIModel, dynamics: InputDynamics) -> Any:
     """
     if not dynamics.present:
         return model
-    from ..extensions import DeadTimeModel, RateDependentModel
     if dynamics.lag_time_constant > 0.0 and dynamics.dead_time > 0.0:
         msg = 'a dead time and a lag together are not supported yet'
         raise IdentificationError(msg)
@@ -513,10 +303,11 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     Identify a modified Prandtl-Ishlinskii model from measured input/output data.
 
     The whole record is used from its first sample: the start state is estimated (see
-    :mod:`.procedure`, "Start states"), ringing after steps is left out, lag and dead time are
-    measured and, with a time base, modelled (see :mod:`.procedure`); with a time base,
-    ringing after steps is then modelled as a lightly damped output mode when that lowers
-    the whole-record error clearly (see "The output mode" in this module;
+    :mod:`mpi_ros.identification.start_states`), ringing after steps is left
+    out, lag and dead time are measured and, with a time base, modelled (see
+    :mod:`mpi_ros.identification.fitter`); with a time base, ringing after steps is then
+    modelled as a lightly damped output mode when that lowers the whole-record error clearly
+    (see "The output mode" in :mod:`mpi_ros.extensions.resonance`;
     :attr:`IdentificationResult.full_model` carries it).  The record may have any
     sensor zero, input bias or output sign.  The fit is refused, never returned, for a
     butterfly loop or switching transients, an output unrelated to the input, a fit no
@@ -538,7 +329,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     holdout : float
         Held-out fraction (order selection and dynamics).
     anchor : {'operating_point', 'origin'}
-        Where thresholds and states are anchored, see :func:`scaled_design`.
+        Where thresholds and states are anchored, see
+        :func:`~mpi_ros.identification.scaled_design`.
     periodic : bool
         The record is one period of a periodic excitation the actuator had been following
         (e.g. a single measured loop that ends where it starts): its start state is the
@@ -582,7 +374,71 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
 
     """
     started = time_module.perf_counter()
-    x, y = _check_signals(current, displacement)
+    x, y, t, n, l, auto = _checked_arguments(  # noqa: E741
+        current, displacement, time, n=n, l=l, order=order, anchor=anchor, dynamics=dynamics,
+        holdout=holdout, periodic=periodic)
+    say = progress if progress is not None else _silent
+    say(f'analysing the record ({x.size} samples)')
+    record = _analysed_record(x, y, t, anchor=anchor, epsilon=epsilon, periodic=periodic)
+    notes: list[str] = []
+    n, l = _order_the_record_supports(x, y, n, l, auto, anchor, notes)  # noqa: E741
+    choose = not periodic
+    # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
+    # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
+    reference = reference_order(x.size, n, l)
+    estimate, finding = _input_dynamics(record, reference, dynamics=dynamics, holdout=holdout,
+                                        choose=choose, progress=progress)
+    found = estimate.modelled
+    table: list[dict[str, Any]] = []
+    if auto:
+        (n, l), table = _selected_order(record, x, y, reference, found,  # noqa: E741
+                                        holdout=holdout, choose=choose, anchor=anchor,
+                                        notes=notes, say=say, progress=progress)
+    say(f'fitting n={n}, l={l} on the whole record')
+    fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True,
+                     validate=True)
+    notes.extend(fit.notes)
+    held_out = fit.folds.get(fit.rule, FoldErrors())
+    line = _line_on_folds(x, y, record.keep, fit.burn_in)
+    resonance = ResonanceEstimate()
+    if t is not None and dynamics == 'auto' and record.analysis.ringing:
+        say('ringing: fitting the output mode')
+        resonance, fit = estimate_resonance(record, fit, n, l, found)
+    say('judging the fit against the straight line')
+    sim = with_mode(t, fit.simulate(), resonance)    # each segment from its start state
+    fitted = fit.fitted if fit.fitted is not None else record.keep
+    try:
+        rms, peak, linear = check_quality(x, y, sim, fitted, n, l, anchor, chosen=auto)
+        # Called here, not in a step of its own: its warnings name identify's caller.
+        notes.extend(_judge_held_out(held_out, line, rms, (n, l), auto, table, x,
+                                     record.window(ORDER_WINDOW).current.size))
+    except IdentificationError as err:
+        raise _true_cause(err, x, y) from None
+    whole = _whole_record_error(fit, found, resonance, sim, t, x, y)
+    return IdentificationResult(
+        model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
+        samples=int(x.size), solver_status=str(fit.info.status),
+        iterations=int(fit.info.iter), solve_time=time_module.perf_counter() - started,
+        order_table=table, linear_rms_error=linear, burn_in=int(fit.burn_in),
+        whole_record_rms_error=whole, start_state=_start_of(fit),
+        segments=_segments_of(fit, notes), dynamics=found, dynamics_estimate=estimate,
+        dynamics_finding=finding,
+        findings='; '.join(part for part in (record.analysis.describe(), resonance.describe(),
+                                             estimate.describe(), finding.describe()) if part),
+        excluded=int(np.count_nonzero(~record.keep)), notes=notes, resonance=resonance,
+        held_out_error=held_out.error, held_out_errors=list(held_out.per_fold),
+        line_held_out_error=line.error, line_held_out_errors=list(line.per_fold),
+        weights_from=fit.rule)
+
+
+def _checked_arguments(current: npt.ArrayLike, displacement: npt.ArrayLike,
+                       time: npt.ArrayLike | None, *, n: int | None, l: int | None,  # noqa: E741
+                       order: str | tuple[int, int] | None, anchor: str, dynamics: str,
+                       holdout: float, periodic: bool) -> tuple[
+                           FloatArray, FloatArray, FloatArray | None, int, int, bool]:
+    # The data and the options, checked once (DataError or IdentificationError naming the
+    # first thing wrong): x, y, t, the order and whether it is chosen ('auto').
+    x, y = check_signals(current, displacement)
     t = _check_time(time, x.size)
     if anchor not in ANCHORS:
         msg = f"anchor must be one of {', '.join(ANCHORS)}; found {anchor!r}"
@@ -607,8 +463,13 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     if periodic:
         _check_one_period(x, order)
     _check_levels(x, y)
-    say = progress if progress is not None else _silent
-    say(f'analysing the record ({x.size} samples)')
+    return x, y, t, n, l, auto
+
+
+def _analysed_record(x: FloatArray, y: FloatArray, t: FloatArray | None, *, anchor: str,
+                     epsilon: float, periodic: bool) -> PreparedRecord:
+    # The record analysed (dynamics, ringing, segments), refused when the MPI model cannot
+    # represent it; a periodic record is one segment that starts where it ends.
     record = prepare_record(x, y, time=t, anchor=anchor, epsilon=epsilon)
     keep = record.keep
     _, correlation = output_sign(x[keep], y[keep])
@@ -616,60 +477,68 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         refuse_if_unmodellable(record, correlation)
     except IdentificationError as err:
         raise _true_cause(err, x, y) from None
-    notes: list[str] = []
     if periodic:
         record = replace(record, segments=[Segment(0, x.size, 'start', StartState('periodic'))])
+    return record
+
+
+def _order_the_record_supports(x: FloatArray, y: FloatArray, n: int, l: int,  # noqa: E741
+                               auto: bool, anchor: str, notes: list[str]) -> tuple[int, int]:
+    # A short record's order lowered (with a note); a record that cannot determine the
+    # weights of the order given refused.
     n, l, lowered = _supported_order(x.size, n, l, auto)  # noqa: E741
     if lowered:
         notes.append(lowered)
-    _check_excitation(x, y, n if not auto else 0, l if not auto else 0, anchor=anchor)
-    choose = not periodic
-    # Dynamics and the order are decided at (8, 4) (or lower for a record too short for
-    # it): rich enough that a lag does not stand in for the hysteresis a low order misses.
-    reference = reference_order(x.size, n, l)
+    check_excitation(x, y, n if not auto else 0, l if not auto else 0, anchor=anchor)
+    return n, l
+
+
+def _input_dynamics(record: PreparedRecord, reference: tuple[int, int], *, dynamics: str,
+                    holdout: float, choose: bool, progress: Callable[[str], None] | None
+                    ) -> tuple[DynamicsEstimate, DynamicsFinding]:
+    # Dead time and lag of the input path (with a time base), and the finding: lag, dead
+    # time, tie or none, with the step response's check of a dead time.
     estimate = DynamicsEstimate()
-    if t is not None and dynamics == 'auto':
+    if record.time is not None and dynamics == 'auto':
         # On a window of a long record: trials cost the window, not the record (the
         # analysis `mpi-ros diagnose` states for the same record).
         estimate = estimate_record_dynamics(record, reference, holdout=holdout, choose=choose,
                                             progress=progress)
-    # Lag, dead time, tie or none, with the step response's check of a dead time.
     finding = finding_of(record, estimate) if dynamics == 'auto' else DynamicsFinding()
     if finding.kind != 'unavailable':
         estimate = replace(estimate, modelled=finding.modelled)
-    found = estimate.modelled
-    table: list[dict[str, Any]] = []
-    if auto:
-        trial = record.window(_ORDER_WINDOW)
-        held = held_out_rows(trial.current.size, holdout, trial.keep)
-        say('order selection: start state of the trial window')
-        base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose,
-                          rule='joint start')
-        (n, l), table = select_record_order(trial, held, found, base.segments,
-                                            burn_in=base.burn_in, progress=progress,
-                                            rule=base.rule)
-        n, l = _excited_order(x, y, (n, l), table, anchor, notes)  # noqa: E741
-    say(f'fitting n={n}, l={l} on the whole record')
-    fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True,
-                     validate=True)
-    notes.extend(fit.notes)
-    held_out = fit.folds.get(fit.rule, FoldErrors())
+    return estimate, finding
+
+
+def _selected_order(record: PreparedRecord, x: FloatArray, y: FloatArray,
+                    reference: tuple[int, int], found: InputDynamics, *, holdout: float,
+                    choose: bool, anchor: str, notes: list[str],
+                    say: Callable[[str], None], progress: Callable[[str], None] | None
+                    ) -> tuple[tuple[int, int], list[dict[str, Any]]]:
+    # order='auto': the order chosen on held-out blocks of the busiest window, lowered
+    # when the record's excitation does not support it; and the order table.
+    trial = record.window(ORDER_WINDOW)
+    held = held_out_rows(trial.current.size, holdout, trial.keep)
+    say('order selection: start state of the trial window')
+    base = fit_record(trial, *reference, dynamics=found, held=held, choose=choose,
+                      rule='joint start')
+    order, table = select_record_order(trial, held, found, base.segments,
+                                       burn_in=base.burn_in, progress=progress,
+                                       rule=base.rule)
+    return _excited_order(x, y, order, table, anchor, notes), table
+
+
+def _line_on_folds(x: FloatArray, y: FloatArray, keep: npt.NDArray[np.bool_],
+                   burn: int) -> FoldErrors:
+    # The straight line's held-out errors on the record's folds, on the samples scored.
     scored = keep.copy()
-    scored[:fit.burn_in] = False
-    line = fold_line_errors(x, y, scored)
-    resonance = ResonanceEstimate()
-    if t is not None and dynamics == 'auto' and record.analysis.ringing:
-        say('ringing: fitting the output mode')
-        resonance, fit = estimate_resonance(record, fit, n, l, found)
-    say('judging the fit against the straight line')
-    sim = with_mode(t, fit.simulate(), resonance)    # each segment from its start state
-    fitted = fit.fitted if fit.fitted is not None else keep
-    try:
-        rms, peak, linear = _quality_check(x, y, sim, fitted, n, l, anchor, chosen=auto)
-        notes.extend(_judge_held_out(held_out, line, rms, (n, l), auto, table, x,
-                                     record.window(_ORDER_WINDOW).current.size))
-    except IdentificationError as err:
-        raise _true_cause(err, x, y) from None
+    scored[:burn] = False
+    return fold_line_errors(x, y, scored)
+
+
+def _whole_record_error(fit: RecordFit, found: InputDynamics, resonance: ResonanceEstimate,
+                        sim: FloatArray, t: FloatArray | None, x: FloatArray,
+                        y: FloatArray) -> float:
     # What `mpi-ros simulate` gives: the model from its initial states, straight through
     # (Gamma of the input after the dynamics, then the output mode if one is modelled); one
     # segment from sample 0 without a mode is that already.
@@ -679,16 +548,30 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     else:
         one = len(fit.segments) == 1 and fit.segments[0].start == 0
         straight = sim if one else fit.model.simulate(fit.material_input)
-    whole = _rms(straight, y, float(np.ptp(y)))
+    return _rms(straight, y, float(np.ptp(y)))
+
+
+def _to_input(fit: RecordFit) -> Callable[[float], float]:
     design = fit.design
-    first = fit.segments[0].start_state
 
     def to_input(level: float) -> float:
         return float(design.input_offset + level * design.x_scale)
 
-    start = ({**first.to_json(to_input), 'description': first.describe(to_input, 'A')}
-             if first is not None else {'kind': 'continue', 'levels': [],
-                                        'description': 'continues'})
+    return to_input
+
+
+def _start_of(fit: RecordFit) -> dict[str, Any]:
+    # How the record starts, in the input's unit, with its description.
+    first = fit.segments[0].start_state
+    to_input = _to_input(fit)
+    return ({**first.to_json(to_input), 'description': first.describe(to_input, 'A')}
+            if first is not None else {'kind': 'continue', 'levels': [],
+                                       'description': 'continues'})
+
+
+def _segments_of(fit: RecordFit, notes: list[str]) -> list[dict[str, Any]]:
+    # The experiments of a stitched record, each with its start state (and a note).
+    to_input = _to_input(fit)
     segments = [{'start': s.start, 'stop': s.stop, 'reason': s.reason,
                  'start_state': (s.start_state.to_json(to_input) if s.start_state is not None
                                  else {'kind': 'continue', 'levels': []})}
@@ -698,20 +581,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
                      f'{", ".join(str(s.start) for s in fit.segments[1:])}: '
                      f'{"; ".join(s.reason for s in fit.segments[1:])}), each with its own'
                      ' start state')
-    findings = '; '.join(part for part in (record.analysis.describe(), resonance.describe(),
-                                           estimate.describe(), finding.describe()) if part)
-    info = fit.info
-    return IdentificationResult(
-        model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,
-        samples=int(x.size), solver_status=str(info.status), iterations=int(info.iter),
-        solve_time=time_module.perf_counter() - started, order_table=table,
-        linear_rms_error=linear, burn_in=int(fit.burn_in), whole_record_rms_error=whole,
-        start_state=start, segments=segments, dynamics=found, dynamics_estimate=estimate,
-        dynamics_finding=finding, findings=findings,
-        excluded=int(np.count_nonzero(~keep)), notes=notes, resonance=resonance,
-        held_out_error=held_out.error, held_out_errors=list(held_out.per_fold),
-        line_held_out_error=line.error, line_held_out_errors=list(line.per_fold),
-        weights_from=fit.rule)
+    return segments
 
 
 def _silent(text: str) -> None:
@@ -760,8 +630,8 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
         worse = sum(1 for m, b in pairs if m > b + _FAR_ABSOLUTE)
         if 2 * worse > len(held_out.per_fold):
             msg = (f'the identified model (n={n}, l={l}) is no better than a straight line on'
-                   f" the record's held-out blocks ({FOLDS} contiguous folds, each fitted on"
-                   f' the others): RMS {100 * held_out.error:.3g} % of the output range vs'
+                   f" the record's held-out blocks ({RECORD_FOLDS} contiguous folds, each fitted"
+                   f' on the others): RMS {100 * held_out.error:.3g} % of the output range vs'
                    f' {100 * line.error:.3g} % for the line (per fold {folds} % vs {lines} %;'
                    f' {where}); in sample it is {100 * rms:.3g} %: the fit does not carry over'
                    ' within its own record (drift or leakage, switching, or a part of the'
@@ -795,13 +665,12 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
                      f" {100 * row['rms_error']:.3g} %) and the chosen model's held-out error"
                      f' ({100 * held_out.error:.3g} %) differ: the table holds out 30 short'
                      f' blocks of {scope} (every kind of excitation on both sides), the'
-                     f' model {FOLDS} long contiguous folds of the record ({where})')
+                     f' model {RECORD_FOLDS} long contiguous folds of the record ({where})')
     return notes
 
 
 def _outside_fraction(x: FloatArray, fold: int, folds: int) -> float:
     # Fraction of a fold's input outside the range of the other folds' input.
-    from .procedure import fold_index
     size = min(x.size, 100000)
     index = fold_index(size, folds)
     mine, others = x[:size][index == fold], x[:size][index != fold]
@@ -816,7 +685,7 @@ def _excited_order(x: FloatArray, y: FloatArray, order: tuple[int, int],
     # The order chosen, or, when the record's excitation does not support it, the best
     # lower order of the table that it supports (refused only when none is).
     try:
-        _check_excitation(x, y, *order, anchor=anchor)
+        check_excitation(x, y, *order, anchor=anchor)
         return order
     except IdentificationError as err:
         first = err
@@ -825,7 +694,7 @@ def _excited_order(x: FloatArray, y: FloatArray, order: tuple[int, int],
                    key=lambda r: r['rms_error'])
     for row in lower:
         try:
-            _check_excitation(x, y, row['n'], row['l'], anchor=anchor)
+            check_excitation(x, y, row['n'], row['l'], anchor=anchor)
         except IdentificationError:
             continue
         notes.append(f"order lowered from n={order[0]}, l={order[1]} to n={row['n']},"
@@ -852,11 +721,8 @@ def _check_time(time: npt.ArrayLike | None, size: int) -> FloatArray | None:
 
 def _check_levels(x: FloatArray, y: FloatArray) -> None:
     # Too few samples, or an input or output that does not move: nothing to identify.
-    _check_excitation(x, y, 0, 0)
+    check_excitation(x, y, 0, 0)
 
-
-#: Samples of the window the order selection runs on.
-_ORDER_WINDOW = 100000
 
 #: Fewer samples than this (or than two per weight of the requested order) are too few to
 #: lower the order for: the order stays and the excitation check refuses the record.
@@ -893,162 +759,35 @@ def _check_one_period(x: npt.NDArray[Any], order: Any) -> None:
         raise DataError(msg)
 
 
-def select_order(current: npt.ArrayLike, displacement: npt.ArrayLike, *,
-                 orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
-                 holdout: float = 0.3, tolerance: float = 0.02, patience: int = 3,
-                 absolute_tolerance: float = 1e-3, epsilon: float = 1e-6,
-                 anchor: str = 'operating_point'
-                 ) -> tuple[tuple[int, int], list[dict[str, Any]]]:
+def model_with_resonance(model: Any, estimate: ResonanceEstimate) -> Any:
     """
-    Choose (n, l) as in the paper: raise the order until the held-out error saturates.
-
-    The determined part of the record (after the burn-in of the highest order tried) is
-    cut into ten blocks; ``holdout`` of them, spread over the record, are held out and
-    the rest train each order.  The model is simulated over the whole record (so each
-    held-out block starts from the state the data before it leave) and (37), over the
-    output's range, is measured on the held-out blocks.  An order that is worse than a
-    lower one does not stop the search while no order has halved the first (linear)
-    order's error (low orders often are worse, on real records); after that it stops
-    when ``patience`` successive orders fail to improve the best error by more than the
-    tolerance: the error has saturated.  The tolerance is the larger
-    of ``tolerance`` (relative) and ``absolute_tolerance`` (fraction of the output
-    range: differences below it are noise) for the stop.  The chosen order is the
-    smallest whose held-out error is within ``tolerance`` (relative) of the best.
+    Return a model with the output mode after it (the model itself when none is modelled).
 
     Parameters
     ----------
-    current : array_like of float, shape (N,)
-        Input [A].
-    displacement : array_like of float, shape (N,)
-        Output [m].
-    orders : tuple of (int, int)
-        Candidate orders in increasing complexity.
-    holdout : float
-        Fraction of the determined samples held out, in (0, 1).
-    tolerance : float
-        Relative difference that counts as significant.
-    patience : int
-        Saturated orders before the search stops.
-    absolute_tolerance : float
-        Difference, as a fraction of the output range, below which errors count as equal.
-    epsilon : float
-        Bound of (8)/(19), scaled units.
-    anchor : {'operating_point', 'origin'}
-        See :func:`scaled_design`.
+    model : MPIModel or extended model
+        Gamma, or Gamma with input dynamics (a dead-time or rate-dependence model).
+    estimate : ResonanceEstimate
+        The mode.
 
     Returns
     -------
-    order : (int, int)
-        The chosen order.
-    table : list of dict
-        ``{'n', 'l', 'nonlinearity_error', 'rms_error'}`` per order tried (held-out
-        blocks, fractions of the output's range).
+    MPIModel, ResonanceModel or CompositeModel
+        ``R[model]``.
 
     """
-    x, y = _check_signals(current, displacement)
-    if not 0.0 < holdout < 1.0:
-        msg = f'holdout must be a fraction in (0, 1); found {holdout}'
-        raise DataError(msg)
-    record = prepare_record(x, y, anchor=anchor, epsilon=epsilon)
-    held = held_out_rows(x.size, holdout, record.keep)
-    n_ref = min(8, max(n for n, _ in orders))
-    base = fit_record(record, n_ref, n_ref // 2, held=held)
-    return select_record_order(record, held, InputDynamics(), base.segments, orders=orders,
-                               tolerance=tolerance, patience=patience,
-                               absolute_tolerance=absolute_tolerance, burn_in=base.burn_in,
-                               rule=base.rule)
+    if not estimate.modelled:
+        return model
+    gamma = getattr(model, 'model', model)
+    mode = ResonanceModel(gamma, estimate.frequency, estimate.decay, estimate.deflection)
+    if gamma is model:
+        return mode
+    return CompositeModel(gamma, (model, mode))
 
 
-def select_record_order(record: PreparedRecord, held: npt.NDArray[np.bool_],
-                        dynamics: InputDynamics, starts: list[Segment], *,
-                        orders: tuple[tuple[int, int], ...] = DEFAULT_ORDERS,
-                        tolerance: float = 0.02, patience: int = 3,
-                        absolute_tolerance: float = 1e-3, burn_in: int = 0,
-                        progress: Callable[[str], None] | None = None,
-                        rule: str = 'joint') -> tuple[
-                            tuple[int, int], list[dict[str, Any]]]:
-    """
-    Choose (n, l) as in the paper: raise the order until the held-out error saturates.
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
 
-    Each order (with at least ten training samples per weight) is fitted on the training
-    blocks with the record's start states and dynamics, simulated over the whole record
-    and scored on the held-out blocks by its RMS error over the output's range (and (37),
-    reported).  The search stops when ``patience`` successive orders fail to improve the
-    best error by the tolerance once an order has halved the linear one's; the chosen
-    order is the smallest within ``tolerance`` (relative) of the best.  Orders whose
-    held-out error is absurd (over the output's range) are marked ``unstable`` and not
-    considered.
 
-    Parameters
-    ----------
-    record : PreparedRecord
-        The record.
-    held : ndarray of bool, shape (N,)
-        Held-out rows.
-    dynamics : InputDynamics
-        The input's dynamics.
-    starts : list of Segment
-        Start states (their kinds are kept for every order).
-    orders : tuple of (int, int)
-        Candidate orders in increasing complexity.
-    tolerance : float
-        Relative difference of held-out RMS errors that counts as significant.
-    patience : int
-        Saturated orders before the search stops.
-    absolute_tolerance : float
-        Difference, as a fraction of the output range, below which errors count as equal
-        for the stop.
-    burn_in : int
-        Samples at the start left out of every fit (the reference fit's burn-in).
-    progress : callable, optional
-        Called with a line of text before each order is fitted (a progress display).
-    rule : {'joint', 'determined'}
-        Where each order's weights come from (the reference fit's rule, see
-        :func:`~mpi_ros.identification.procedure.fit_record`).
-
-    Returns
-    -------
-    order : (int, int)
-        The chosen order.
-    table : list of dict
-        ``{'n', 'l', 'nonlinearity_error', 'rms_error', 'unstable'}`` per order tried
-        (held-out blocks, fractions of the output's range).
-
-    """
-    y = record.displacement
-    train = int(np.count_nonzero(record.keep & ~held))
-    table: list[dict[str, Any]] = []
-    best = math.inf
-    saturated = 0
-    for i, (n, l) in enumerate(orders):  # noqa: E741
-        if train < 10 * (n + 2 * l + 2) and table:
-            break
-        if progress is not None:
-            progress(f'order selection: n={n}, l={l} ({i + 1} of at most {len(orders)})')
-        try:
-            fit = fit_record(record, n, l, dynamics=dynamics, held=held, starts=starts,
-                             choose=False, burn_in=burn_in, rule=rule)
-        except IdentificationError:
-            continue
-        peak, rms = _errors(fit.simulate(), y, held)
-        unstable = not (math.isfinite(rms) and rms < 1.0)
-        table.append({'n': n, 'l': l, 'nonlinearity_error': peak, 'rms_error': rms,
-                      'unstable': unstable})
-        if unstable:
-            continue
-        first = next(r for r in table if not r['unstable'])['rms_error']
-        margin = max(tolerance * best, absolute_tolerance) if math.isfinite(best) else 0.0
-        if rms < best - margin or not math.isfinite(best):
-            saturated = 0
-        elif best < 0.5 * first:
-            saturated += 1      # no better, once hysteresis models work: saturating
-        best = min(best, rms)
-        if saturated >= patience:
-            break
-    stable = [r for r in table if not r['unstable']]
-    if not stable:
-        msg = ('no order could be evaluated on the held-out blocks (every fit was absurd or'
-               ' failed); give the order (e.g. 8,4), or record more cycles')
-        raise IdentificationError(msg)
-    chosen = next(r for r in stable if r['rms_error'] <= best * (1.0 + tolerance))
-    return (chosen['n'], chosen['l']), table
+def _rms(sim: FloatArray, y: FloatArray, span: float) -> float:
+    return float(np.sqrt(np.mean((sim - y) ** 2)) / span)

@@ -2,7 +2,7 @@
 """
 Helpers shared by the model extensions: argument checks, parameter reading, 1-D search.
 
-Every extension is fitted with :func:`mpi_ros.identification.identify`'s design: input and
+Every extension is fitted with :func:`mpi_ros.model_fit.identify`'s design: input and
 output centred on the record's operating point, the output's sign detected, a constant term
 in the generalised error, and only the samples after the burn-in (the plays' and the
 actuator's states are determined by the data) in the fit and in the trial errors.
@@ -19,7 +19,8 @@ from scipy.optimize import minimize_scalar
 
 from ..errors import DataError, ModelError
 from ..identification import select_order
-from ..identification.procedure import fit_record, prepare_record
+from ..identification.fitter import fit_record
+from ..identification.record import prepare_record
 from ..metrics import rms_range_error
 from ..operators.model import MPIModel
 
@@ -207,7 +208,7 @@ def fit_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, i
     """
     Identify Gamma on a (possibly transformed) current and return it with its error.
 
-    The fit is :func:`mpi_ros.identification.identify`'s (operating point, detected sign,
+    The fit is :func:`mpi_ros.model_fit.identify`'s (operating point, detected sign,
     constant term, the start state estimated, ringing left out); the generalised error and
     the returned error cover the samples from ``start`` on (see :func:`determined_start`),
     so trials on differently transformed inputs are compared on the same samples.
@@ -431,7 +432,7 @@ def determined_start(time: FloatArray, current: FloatArray, displacement: FloatA
     Return the first sample the data determine, for the raw current and its transforms.
 
     The samples no start state explains in a fit of the raw current (usually none: the
-    start state is estimated, see :mod:`mpi_ros.identification.procedure`), plus
+    start state is estimated, see :mod:`mpi_ros.identification.fitter`), plus
     ``settle`` seconds for a delayed or lagged version of it to have forgotten its own
     start.
 

@@ -1,6 +1,6 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """
-Linear time-domain blocks shared by the model extensions: first-order lags and a pure delay.
+First-order lags and a pure delay on a time base: the linear blocks of the input path.
 
 A first-order lag ``tau dq/dt = u - q`` is advanced exactly for an input that is linear
 between samples (first-order hold): with ``h = t_k - t_(k-1)``, ``a = exp(-h / tau)`` and

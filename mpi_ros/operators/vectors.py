@@ -1,10 +1,10 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
-"""Small helpers shared by the operator modules: read-only float vectors."""
+"""Read-only float vectors: the parameter arrays of the operators."""
 
 import numpy as np
 import numpy.typing as npt
 
-from .errors import ModelError
+from ..errors import ModelError
 
 __all__ = ['frozen_vector']
 
