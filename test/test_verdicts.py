@@ -15,6 +15,7 @@ from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import read_csv_table, write_csv_columns
 import numpy as np
+import pytest
 
 PARAMS = {
     'model.hysteresis.thresholds': [0.0, 0.4, 0.8, 1.2],
@@ -161,9 +162,15 @@ def test_a_dead_time_must_show_in_the_step_onset():
     delayed = np.concatenate([np.full(20, y[0]), y[:-20]])   # a dead time of 20 samples
     assert step_onset(t, x, delayed).bound >= 20.0 / rate
     # Held-out errors that favour a 0.5 ms dead time: the onset rules it out; the lag wins.
+    # Nine blocks whose errors scatter by 20 % (the static model's 9x the lag's everywhere).
+    scatter = 1.0 + 0.2 * np.sin(np.arange(9.0))
     estimate = DynamicsEstimate(InputDynamics(dead_time=5e-4), dead_time=5e-4,
                                 lag_time_constant=6e-4, static_error=0.016,
-                                dead_time_error=0.004, lag_error=0.0018)
+                                dead_time_error=0.004, lag_error=0.0018,
+                                block_sizes=(100,) * 9,
+                                static_blocks=tuple(0.016 ** 2 * scatter),
+                                dead_time_blocks=tuple(0.0017 ** 2 * scatter[::-1]),
+                                lag_blocks=tuple(0.0018 ** 2 * scatter))
     finding = dynamics_finding(estimate, onset, 1.0 / rate)
     assert finding.kind == 'lag' and not finding.dead_time_physical
     assert finding.modelled == InputDynamics(lag_time_constant=6e-4)
@@ -171,12 +178,42 @@ def test_a_dead_time_must_show_in_the_step_onset():
     tie = dynamics_finding(replace_errors(estimate, 0.0018), step_onset(t, x, delayed),
                            1.0 / rate)
     assert tie.kind == 'tie' and tie.dead_time_physical and 'a step' in tie.separate_by
+    assert 'within the noise of each other (RMS ratio' in tie.reason
 
 
 def replace_errors(estimate, dead_time_error):
     """Return the estimate with another dead-time error."""
     from dataclasses import replace
     return replace(estimate, dead_time_error=dead_time_error)
+
+
+def test_block_comparison_ties_within_the_noise_and_separates_beyond_it():
+    """
+    The paired test over held-out blocks: scatter ties, a consistent difference does not.
+
+    A 3 % relative rule got both wrong: a 10 % difference on blocks that disagree by 30 %
+    either way is noise; a 2 % difference that holds on every one of 9 blocks is not.
+    """
+    from mpi_ros.identification.ties import compare_on_blocks
+    rng = np.random.default_rng(5)
+    sizes = (400,) * 9
+    scale = np.geomspace(1e-6, 1e-3, 9)                 # quiet and busy blocks
+    noisy = scale * np.exp(rng.normal(0.0, 0.3, 9))
+    noise = compare_on_blocks(tuple(noisy), tuple(scale * 0.9), sizes)
+    assert noise.tie and not noise.first_better
+    consistent = compare_on_blocks(tuple(scale * 0.96 * np.exp(rng.normal(0.0, 0.005, 9))),
+                                   tuple(scale), sizes)
+    assert not consistent.tie and consistent.first_better
+    assert consistent.ratio == pytest.approx(0.98, abs=0.005)
+    assert f'RMS ratio {consistent.ratio:.3g}, t' in consistent.describe()
+    assert '|t| >= 2.31' in consistent.describe()
+    # The largest block alone does not decide (it would on squared errors): 8 of 9 blocks
+    # better by 30 %, the busiest 2x worse.
+    mixed = np.concatenate([scale[:8] * 0.7, scale[8:] * 2.0])
+    assert compare_on_blocks(tuple(mixed), tuple(scale), sizes).first_better is False
+    # Too few blocks: the noise cannot be estimated, and nothing is separated.
+    few = compare_on_blocks((1.0, 2.0), (2.0, 4.0), (10, 10))
+    assert few.tie and 'too few' in few.describe()
 
 
 # --- Real records (skipped without ../shared) ----------------------------------------------
