@@ -670,6 +670,14 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
                                      record.window(_ORDER_WINDOW).current.size))
     except IdentificationError as err:
         raise _true_cause(err, x, y) from None
+    drift = return_point_drift(x, y)
+    if drift.drifts:
+        # Modelled better than a line on the held-out blocks, but not what the model misses.
+        note = (f'warning: {drift.describe()}: the MPI model cannot follow it; its held-out'
+                f' RMS error {100 * held_out.error:.3g} % of the range (the line'
+                f' {100 * line.error:.3g} %) includes it')
+        warnings.warn(note, MPIWarning, stacklevel=2)
+        notes.append(note)
     # What `mpi-ros simulate` gives: the model from its initial states, straight through
     # (Gamma of the input after the dynamics, then the output mode if one is modelled); one
     # segment from sample 0 without a mode is that already.

@@ -68,8 +68,8 @@ import numpy as np
 import numpy.typing as npt
 
 from .dynamics import analyse_dynamics, DynamicsAnalysis
-from .qp import _IDLE_PLAY, burn_in, fit_generalized_error, FloatArray, GramParts, output_sign, \
-    regressor_gram, scaled_design, ScaledDesign
+from .qp import _IDLE_PLAY, burn_in, fit_generalized_error, FloatArray, GramParts, \
+    OUTER_SLOPE, output_sign, regressor_gram, scaled_design, ScaledDesign
 from .ties import block_errors, BlockComparison, compare_on_blocks
 from ..errors import DataError, IdentificationError
 from ..operators.deadzone import dead_zone_operator
@@ -558,7 +558,8 @@ class DynamicsEstimate:
         Held-out RMS output errors of the static model and of the best of each kind
         [fraction of the output range].
     tie : bool
-        The dead time and the lag are within the noise of each other on the held-out blocks
+        The dead time and the lag both beat the static model beyond the noise of the
+        held-out blocks and are within it of each other
         (:func:`~mpi_ros.identification.ties.compare_on_blocks`): this record cannot tell
         them apart (a record with bursts at two rates can).
     trials : list of dict
@@ -1333,7 +1334,7 @@ class _Fitter:
         w_h, w_s, _, info = fit_generalized_error(
             gram, 1.0 - self.r_h, n_hysteresis=n1, n_superposition=self.r_s.size,
             superposition_center=self.design.center, epsilon=self.epsilon, fixed_zero=idle,
-            tolerance=tolerance)
+            tolerance=tolerance, outer_slope=OUTER_SLOPE)
         constant = (-float(mean @ np.concatenate([w_h, w_s])) if self.design.constant
                     else 0.0)
         return w_h, w_s, constant, info
@@ -1914,9 +1915,18 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
     sizes = blocks.get(InputDynamics(), none)[1]
     per_block = {kind: blocks.get(InputDynamics(**{kind: value}), none)[0]
                  for kind, value in (('dead_time', dead[1]), ('lag_time_constant', lag[1]))}
-    tie = compare_on_blocks(per_block['dead_time'], per_block['lag_time_constant'], sizes).tie
+    static_blocks = blocks.get(InputDynamics(), none)[0]
+    # Which kinds beat the static model beyond the noise of the blocks; a tie is two that do
+    # and are within the noise of each other (the rule of the dynamics finding).
+    beats = {kind: compare_on_blocks(per_block[kind], static_blocks, sizes).first_better
+             for kind in per_block}
+    tie = (beats['dead_time'] and beats['lag_time_constant'] and compare_on_blocks(
+        per_block['dead_time'], per_block['lag_time_constant'], sizes).tie)
     # A tie models the lag: its inverse (a lead) is causal, a dead time's is not.
-    kind = 'lag_time_constant' if tie or lag[0] < dead[0] else 'dead_time'
+    kind = ('lag_time_constant' if tie else
+            'dead_time' if beats['dead_time'] and not beats['lag_time_constant'] else
+            'lag_time_constant' if beats['lag_time_constant'] and not beats['dead_time'] else
+            'lag_time_constant' if lag[0] < dead[0] else 'dead_time')
     chosen = best[kind]
     modelled = (InputDynamics(**{kind: chosen[1]})
                 if chosen[0] <= (1.0 - _DYNAMICS_GAIN) * static_error else InputDynamics())
@@ -1925,7 +1935,7 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
     return DynamicsEstimate(modelled, dead_time=dead[1], lag_time_constant=lag[1],
                             static_error=static_error, dead_time_error=dead[0],
                             lag_error=lag[0], tie=tie, trials=trials, block_sizes=sizes,
-                            static_blocks=blocks.get(InputDynamics(), none)[0],
+                            static_blocks=static_blocks,
                             dead_time_blocks=per_block['dead_time'],
                             lag_blocks=per_block['lag_time_constant'])
 
