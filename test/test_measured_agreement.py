@@ -69,6 +69,7 @@ RECORDS = {
                                                input_column='voltage_V', output_column='strain'),
 }
 
+
 @pytest.mark.parametrize('name', sorted(RECORDS))
 def test_identify_and_diagnose_agree_on_every_measured_record(name):
     rec = RECORDS[name]()
