@@ -414,6 +414,14 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
                                      record.window(ORDER_WINDOW).current.size))
     except IdentificationError as err:
         raise _true_cause(err, x, y) from None
+    drift = return_point_drift(x, y)
+    if drift.drifts:
+        # Modelled better than a line on the held-out blocks, but not what the model misses.
+        note = (f'warning: {drift.describe()}: the MPI model cannot follow it; its held-out'
+                f' RMS error {100 * held_out.error:.3g} % of the range (the line'
+                f' {100 * line.error:.3g} %) includes it')
+        warnings.warn(note, MPIWarning, stacklevel=2)
+        notes.append(note)
     whole = _whole_record_error(fit, found, resonance, sim, t, x, y)
     return IdentificationResult(
         model=fit.model, order=(n, l), nonlinearity_error=peak, rms_error=rms,

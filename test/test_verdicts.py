@@ -15,6 +15,7 @@ from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
 from mpi_ros.recordings import read_csv_table, write_csv_columns
 import numpy as np
+import pytest
 
 from .core_models import hand_model
 
@@ -135,6 +136,10 @@ def test_two_rates_let_the_right_kind_win_in_both_commands():
         result, report = _finding_pair(rates_record(effect, 0.002, 3))
         assert _check_same_finding(result, report) == effect
         assert report.cause == verdict, report.decision['steps']
+        # A clear effect is not called a tie, in either command.
+        assert not report.decision['ambiguous'], report.decision['steps']
+        assert 'beyond the noise' in result.dynamics_finding.reason
+        assert not result.dynamics_estimate.tie
 
 
 def test_a_dead_time_must_show_in_the_step_onset():
@@ -158,9 +163,15 @@ def test_a_dead_time_must_show_in_the_step_onset():
     delayed = np.concatenate([np.full(20, y[0]), y[:-20]])   # a dead time of 20 samples
     assert step_onset(t, x, delayed).bound >= 20.0 / rate
     # Held-out errors that favour a 0.5 ms dead time: the onset rules it out; the lag wins.
+    # Nine blocks whose errors scatter by 20 % (the static model's 9x the lag's everywhere).
+    scatter = 1.0 + 0.2 * np.sin(np.arange(9.0))
     estimate = DynamicsEstimate(InputDynamics(dead_time=5e-4), dead_time=5e-4,
                                 lag_time_constant=6e-4, static_error=0.016,
-                                dead_time_error=0.004, lag_error=0.0018)
+                                dead_time_error=0.004, lag_error=0.0018,
+                                block_sizes=(100,) * 9,
+                                static_blocks=tuple(0.016 ** 2 * scatter),
+                                dead_time_blocks=tuple(0.0017 ** 2 * scatter[::-1]),
+                                lag_blocks=tuple(0.0018 ** 2 * scatter))
     finding = dynamics_finding(estimate, onset, 1.0 / rate)
     assert finding.kind == 'lag' and not finding.dead_time_physical
     assert finding.modelled == InputDynamics(lag_time_constant=6e-4)
@@ -168,12 +179,42 @@ def test_a_dead_time_must_show_in_the_step_onset():
     tie = dynamics_finding(replace_errors(estimate, 0.0018), step_onset(t, x, delayed),
                            1.0 / rate)
     assert tie.kind == 'tie' and tie.dead_time_physical and 'a step' in tie.separate_by
+    assert 'within the noise of each other (RMS ratio' in tie.reason
 
 
 def replace_errors(estimate, dead_time_error):
     """Return the estimate with another dead-time error."""
     from dataclasses import replace
     return replace(estimate, dead_time_error=dead_time_error)
+
+
+def test_block_comparison_ties_within_the_noise_and_separates_beyond_it():
+    """
+    The paired test over held-out blocks: scatter ties, a consistent difference does not.
+
+    A 3 % relative rule got both wrong: a 10 % difference on blocks that disagree by 30 %
+    either way is noise; a 2 % difference that holds on every one of 9 blocks is not.
+    """
+    from mpi_ros.identification.ties import compare_on_blocks
+    rng = np.random.default_rng(5)
+    sizes = (400,) * 9
+    scale = np.geomspace(1e-6, 1e-3, 9)                 # quiet and busy blocks
+    noisy = scale * np.exp(rng.normal(0.0, 0.3, 9))
+    noise = compare_on_blocks(tuple(noisy), tuple(scale * 0.9), sizes)
+    assert noise.tie and not noise.first_better
+    consistent = compare_on_blocks(tuple(scale * 0.96 * np.exp(rng.normal(0.0, 0.005, 9))),
+                                   tuple(scale), sizes)
+    assert not consistent.tie and consistent.first_better
+    assert consistent.ratio == pytest.approx(0.98, abs=0.005)
+    assert f'RMS ratio {consistent.ratio:.3g}, t' in consistent.describe()
+    assert '|t| >= 2.31' in consistent.describe()
+    # The largest block alone does not decide (it would on squared errors): 8 of 9 blocks
+    # better by 30 %, the busiest 2x worse.
+    mixed = np.concatenate([scale[:8] * 0.7, scale[8:] * 2.0])
+    assert compare_on_blocks(tuple(mixed), tuple(scale), sizes).first_better is False
+    # Too few blocks: the noise cannot be estimated, and nothing is separated.
+    few = compare_on_blocks((1.0, 2.0), (2.0, 4.0), (10, 10))
+    assert few.tie and 'too few' in few.describe()
 
 
 # --- Real records (skipped without ../shared) ----------------------------------------------
@@ -228,41 +269,46 @@ def test_low_passed_piezo_capture_is_a_lag_in_both_commands(tmp_path, capsys):
     assert fit['dynamics']['finding']['text'] in err.splitlines()
 
 
-def _one_cycle_tables():
-    import pytest
-    return pytest.mark.parametrize('table', ['SLOW_table07_TEST_800V', 'SLOW_table09_TEST_800V',
-                                             'SLOW_table10_TEST_800V'])
-
-
-@_one_cycle_tables()
-def test_one_cycle_pzt_refusal_names_the_extrapolation(table, tmp_path, capsys):
+def test_one_cycle_pzt_table_is_validated_on_a_block_inside_its_range(tmp_path, capsys):
     """
-    A single 800 V cycle split 60/40: the validation part leaves the training range.
+    A single 800 V cycle split 60/40: the tail leaves the training range (72.5 % outside).
 
-    identify models these records (in sample); diagnose cannot validate a split of one
-    cycle, and says why (it used to say "unrelated", "worse than a line", "check the
-    columns").
+    identify models the record better than a line on its held-out blocks; diagnose refused
+    it (the training part "unrelated": correlation -0.17).  Now the tail's refusal moves the
+    validation to the latest block of the same length inside the range of the rest: exit 0,
+    the report saying why.
     """
-    path = _real(f'pnzt-aixacct-tue/csv/{table}.csv')
+    path = _real('pnzt-aixacct-tue/csv/SLOW_table07_TEST_800V.csv')
     argv = ['diagnose', str(path), '--time-column', 'Time_s', '--input-column', 'Vplus_V',
             '--output-column', 'D1_nm', '--output-scale', '1e-9', '--order', '6', '3',
-            '--json', str(tmp_path / 'd.json'), '--report', str(tmp_path / 'report'),
-            '--quiet']
-    assert main(argv) == 1
-    last = capsys.readouterr().err.strip().splitlines()[-1]
-    assert 'the validation input leaves the training range' in last, last
-    assert '72.5 % of the scored samples lie outside' in last, last
-    assert 'likely cause' in last
+            '--json', str(tmp_path / 'd.json'), '--report', str(tmp_path / 'report')]
+    assert main(argv) == 0, capsys.readouterr().err
+    err = capsys.readouterr().err
+    report = json.loads((tmp_path / 'd.json').read_text(encoding='utf-8'))
+    a, b = report['data']['validation_block']
+    assert b - a == 401 - 241 and b < 401                   # the tail's length, not the tail
+    assert report['data']['validation_outside_training_range'] == 0.0
+    assert 'the tail after the split was refused: its training part is refused: the output' \
+        ' is not monotone in the input, nor related to it' in report['data']['validation']
+    assert f'validating on samples {a}..{b - 1} instead' in err
+    assert report['baseline']['rms_error'] < report['baseline']['linear_rms_error']
+    assert (tmp_path / 'report' / 'summary.md').exists()
 
 
 # --- Refusals and warnings name the cause the synthetic twin was built with ----------------
 
-def test_leakage_drift_twin_is_refused_as_drift_by_both_commands():
-    """FORC loops on a monotone drift (30 % of the range): 'drift', never 'butterfly'."""
-    import pytest
+def test_leakage_drift_twin_is_named_drift_by_both_commands():
+    """
+    FORC loops on a monotone drift (30 % of the range): 'drift', never 'butterfly'.
+
+    Both commands refused it while the model ran 35x too steep beyond the training range
+    (the fold or split that extrapolates was worse than a line).  With the outermost slopes
+    bounded the model is better than a line on the held-out blocks and on the split's
+    validation part; the drift is then a warning of both, naming it, not a refusal.
+    """
     from mpi_ros import identify
     from mpi_ros.diagnosis import diagnose
-    from mpi_ros.errors import IdentificationError
+    from mpi_ros.errors import IdentificationError, MPIWarning
     from mpi_ros.identification.dynamics import return_point_drift
     from mpi_ros.plant.synthetic import twin_record
     from mpi_ros.recordings import Recording
@@ -270,12 +316,25 @@ def test_leakage_drift_twin_is_refused_as_drift_by_both_commands():
     assert record.truth['drift'] == 0.3
     drift = return_point_drift(record.current, record.displacement)
     assert drift.drifts and drift.end == 'maximum' and drift.change > 0.2
-    with pytest.raises(IdentificationError, match=r"^the output drifts: at the input's maximum"):
-        identify(record.current, record.displacement, time=record.time, order=(6, 3))
-    with pytest.raises(IdentificationError, match=r'^the output drifts') as refused:
-        diagnose(Recording(record.time, record.current, record.displacement),
-                 order=(6, 3), causes=('creep',))
-    assert 'butterfly' not in str(refused.value)
+    words = r"the output drifts: at the input's maximum"
+    try:
+        with pytest.warns(MPIWarning, match=words):
+            result = identify(record.current, record.displacement, time=record.time,
+                              order=(6, 3))
+    except IdentificationError as err:
+        assert str(err).startswith(words), err
+    else:
+        assert result.held_out_error < result.line_held_out_error
+        assert any(note.startswith(f'warning: {drift.describe()}') for note in result.notes)
+    try:
+        report = diagnose(Recording(record.time, record.current, record.displacement),
+                          order=(6, 3), causes=('creep',))
+    except IdentificationError as err:
+        assert str(err).startswith('the output drifts') and 'butterfly' not in str(err)
+    else:
+        assert report.baseline['rms_error'] < report.baseline['linear_rms_error']
+        assert drift.describe() in report.warnings
+        assert not any('butterfly' in w for w in report.warnings)
     clean = twin_record('deepening FORC', 1)
     assert not return_point_drift(clean.current, clean.displacement).drifts
 
@@ -296,3 +355,96 @@ def test_deepening_forc_twin_warns_with_the_fraction_outside_the_training_range(
     [warning] = [w for w in report.warnings if 'leaves the training range' in w]
     assert f'{100 * fraction:.3g} % of the scored samples lie outside' in warning
     assert f'against {low:.4g} to' in warning
+
+
+# --- Order auto: lower orders before a refusal, a far table row explained ------------------
+
+def _far_from_its_row(result):
+    """Return whether the chosen order's held-out error is far from its order-table row."""
+    row = next(r for r in result.order_table if (r['n'], r['l']) == result.order)
+    return not 0.5 * row['rms_error'] <= result.held_out_error <= \
+        2.0 * row['rms_error'] + 0.005
+
+
+def test_order_auto_on_a_short_quasi_static_loop_lowers_the_order_instead_of_refusing():
+    """One major loop and two minor ones, 340 samples, no time base (a Terfenol-D capture)."""
+    from mpi_ros import identify
+    u = np.linspace(0.0, 1.0, 340)
+    x = 1.0 + 0.8 * np.sin(2.0 * np.pi * 3.0 * u) * np.where(u < 1.0 / 3.0, 1.0, 0.6)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=4).simulate(
+        np.arange(x.size) * 0.05, x)
+    result = identify(x, y, order='auto')
+    assert result.rms_error < result.linear_rms_error
+    n, l = result.order  # noqa: E741
+    assert x.size >= 10 * (n + 2 * l + 2)               # ten samples per weight
+    assert not _far_from_its_row(result) or any("the order table's row" in note
+                                                for note in result.notes)
+
+
+def test_order_auto_on_a_forc_record_says_why_its_held_out_error_is_far_from_its_row():
+    """The deepening FORC twin: a chosen order far from its table row carries the reason."""
+    import warnings
+    from mpi_ros import identify
+    from mpi_ros.plant.synthetic import twin_record
+    record = twin_record('deepening FORC', 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        result = identify(record.current, record.displacement, time=record.time,
+                          order='auto')
+    if _far_from_its_row(result):
+        [note] = [note for note in result.notes if "the order table's row" in note]
+        assert f'n={result.order[0]}, l={result.order[1]}' in note
+        assert 'contiguous folds' in note
+    assert result.held_out_error < result.line_held_out_error
+
+
+# --- Extrapolation beyond the identified range stays bounded ------------------------------
+
+def test_forc_twin_extrapolates_at_a_bounded_slope_and_simulate_warns(tmp_path, capsys):
+    """
+    Reversal curves that reach below the training part: Gamma's slope there stays bounded.
+
+    Fitted on the first 60 % (1.0-1.8 A), simulated on all of it (down to 0.2 A): at (14, 7)
+    the outermost slope of S' allowed Gamma 35x the record's mean slope there (590 % RMS off
+    outside the range); now at most ``OUTER_SLOPE`` times it.  ``simulate`` warns with the
+    fraction of the input outside the identified range.
+    """
+    import warnings
+    from mpi_ros import identify
+    from mpi_ros.identification.qp import OUTER_SLOPE
+    from mpi_ros.plant.synthetic import twin_record
+    record = twin_record('deepening FORC', 1)
+    x, y, t = record.current, record.displacement, record.time
+    n = int(0.6 * x.size)
+    chord = np.ptp(y[:n]) / np.ptp(x[:n])
+    outside = x < x[:n].min() - 0.01 * np.ptp(x[:n])
+    assert 0.1 < np.mean(outside) < 0.2
+    line = np.polyval(np.polyfit(x[:n], y[:n], 1), x) - y
+    for order in ((14, 7), 'auto'):
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore')
+            result = (identify(x[:n], y[:n], time=t[:n], n=14, l=7) if order != 'auto'
+                      else identify(x[:n], y[:n], time=t[:n], order='auto'))
+        sim = result.full_model.response(t, x)
+        step = np.diff(x)
+        moving = (np.abs(step) > 1e-3) & outside[1:] & outside[:-1]
+        slopes = np.abs(np.diff(sim)[moving] / step[moving])
+        assert slopes.max() <= OUTER_SLOPE * chord * 1.001, order
+        error = np.sqrt(np.mean((sim - y)[outside] ** 2)) / np.ptp(y)
+        assert error < 1.5, order                              # 5.9 (590 %) before
+        if order == 'auto':
+            assert error < np.sqrt(np.mean(line[outside] ** 2)) / np.ptp(y)
+    # The command line: identify the training part, simulate the whole input.
+    write_csv_columns(tmp_path / 'train.csv', {'time': t[:n], 'current': x[:n],
+                                               'displacement': y[:n]})
+    write_csv_columns(tmp_path / 'cmd.csv', {'time': t, 'current': x})
+    assert main(['identify', str(tmp_path / 'train.csv'), '--order', '6,3', '-o',
+                 str(tmp_path / 'p.yaml'), '--quiet']) == 0
+    capsys.readouterr()
+    assert main(['simulate', str(tmp_path / 'p.yaml'), '--input', str(tmp_path / 'cmd.csv'),
+                 '--output', str(tmp_path / 'sim.csv')]) == 0
+    err = capsys.readouterr().err
+    below = int(np.count_nonzero(x < x[:n].min()))
+    assert f'warning: {below} of {x.size} currents ({100 * below / x.size:.3g} %) lie outside' \
+        in err, err
+    assert 'the model extrapolates there' in err

@@ -67,6 +67,7 @@ Procedure (documented in ``docs/diagnosis.md``):
 from dataclasses import asdict, dataclass, field, replace
 import math
 from typing import Any, Callable
+from warnings import catch_warnings, simplefilter
 
 import numpy as np
 import numpy.typing as npt
@@ -75,7 +76,7 @@ from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .signatures import burst_signature, hold_segments, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
-from ..errors import DataError, IdentificationError, ModelError
+from ..errors import DataError, IdentificationError, ModelError, MPIWarning
 from ..extensions import EFFECTS, fit_composite
 from ..extensions.composite import check_combination, composite_cause
 from ..extensions.dead_time import DEAD_TIME
@@ -209,8 +210,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
              order: str | tuple[int, int] = 'auto', causes: tuple[str, ...] | None = None,
              min_gain: float = 0.05, z_critical: float = 1.645, alpha: float = 0.05,
              bandwidth: int | None = None, noise_factor: float = 1.2,
-             progress: Callable[[str], None] | None = None
-             ) -> DiagnosisReport:
+             progress: Callable[[str], None] | None = None,
+             validation_block: tuple[int, int] | None = None) -> DiagnosisReport:
     """
     Diagnose what the MPI model misses in a recording and fit the best extension.
 
@@ -243,6 +244,15 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     progress : callable, optional
         Called with one line per step (the CLI prints them to stderr); each of the
         report's ``warnings`` as ``warning: ...``.
+    validation_block : (int, int), optional
+        Without ``validation``: samples ``[a, b)`` of the record held out for validation
+        instead of the tail after ``split``; the rest, joined at a time gap, is the training
+        record.  By default the tail; when the tail's training part is refused or no
+        better than a straight line on the tail, and the tail leaves the training range,
+        the latest block of the same length whose input lies inside the range of the rest
+        is used instead (a record of one cycle: the tail holds an extreme of the input),
+        and the report says why; a record ``identify`` refuses whole is refused with its
+        message (the record's cause, not the split's).
 
     Returns
     -------
@@ -265,7 +275,37 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     if unknown:
         msg = f'unknown cause(s) {unknown}; the catalogue is {", ".join(catalogue)}'
         raise DataError(msg)
-    t, (tt, xt, yt), (tv, xv, yv), start, data = _records(recording, validation, split)
+    t, (tt, xt, yt), (tv, xv, yv), start, data = _records(recording, validation, split,
+                                                          validation_block)
+
+    def identify_whole() -> None:
+        # A record identify refuses whole is refused with identify's message (its cause).
+        tw, xw, yw = _arrays(recording, 'recording')
+        whole = {'order': 'auto'} if order == 'auto' else {'n': int(order[0]),
+                                                           'l': int(order[1])}
+        with catch_warnings():
+            simplefilter('ignore', MPIWarning)
+            identify(xw, yw, time=tw if timed else None, dynamics='off', **whole)
+
+    def inner_block(reason: str) -> DiagnosisReport | None:
+        # The tail of a split failed, for the split's sake: diagnose again on the latest block
+        # whose input lies inside the rest's range (None: none does, or not a split's tail).
+        if validation is not None or validation_block is not None:
+            return None
+        block = _inner_block(_arrays(recording, 'recording')[1], tv.size - start,
+                             int(data.get('leading_hold', 0)))
+        if block is None:
+            return None
+        identify_whole()                # the record's own cause, not the split's
+        say(f'the tail after the split is refused ({reason}); validating on samples'
+            f' {block[0]}..{block[1] - 1} instead, whose input lies inside the range of the'
+            ' rest of the record')
+        report = diagnose(recording, split=split, order=order, causes=causes,
+                          min_gain=min_gain, z_critical=z_critical, alpha=alpha,
+                          bandwidth=bandwidth, noise_factor=noise_factor, progress=progress,
+                          validation_block=block)
+        report.data['validation'] += f'; the tail after the split was refused: {reason}'
+        return report
     # The sensor may fall as the actuator extends: the class check (a rising map) and the
     # model (model.output_sign) use the sign detected on the training data.
     sign, _ = output_sign(xt, yt)
@@ -295,7 +335,10 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     # One analysis of the record, as `mpi-ros identify` makes it: the time base (when the
     # record has one), its segments, the ringing after steps left out, the start state.
     say(f'identifying the baseline MPI model on {tt.size} samples (order {order})')
-    prepared: dict[str, Any] = {'time': tt if timed else None, 'dynamics': 'off'}
+    # A block's training part is two experiments joined at a gap: segments need the time
+    # base (a record without one has its sample index).
+    prepared: dict[str, Any] = {'time': tt if timed or validation_block is not None else None,
+                                'dynamics': 'off'}
     try:
         if order == 'auto':
             base = identify(xt, yt, order='auto', **prepared)
@@ -305,15 +348,22 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         # A split's training part that holds only part of the record's loops is refused for
         # what that part shows; the cause is the split: say so, with the fraction outside.
         outside = (_outside_training(xt, xv[start:], {}) if validation is None else '')
+        if validation_block is not None and not return_point_drift(xt, yt).drifts:
+            msg = (f'the training part (the record without the validation block, samples'
+                   f' {start}..{tv.size - 1}) is refused: {err}')
+            raise IdentificationError(msg) from err
         if not outside or return_point_drift(xt, yt).drifts:
             raise                       # no split to blame, or a drift: the record's cause
+        retried = inner_block(f'its training part is refused: {err}')
+        if retried is not None:
+            return retried
         msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
                f' the likely cause is the split: {outside}; pass a record of several cycles,'
                ' another --split, or a separate --validate record')
         raise IdentificationError(msg) from err
     # The dynamics finding `mpi-ros identify` states for DATA (the training record, or the
     # whole record of a split), and the step response's onset that bounds a dead time.
-    td, xd, yd = (tt, xt, yt) if validation is not None else (tv, xv, yv)
+    td, xd, yd = (tt, xt, yt) if validation is not None else _arrays(recording, 'recording')
     finding = DynamicsFinding()
     onset = StepOnset()
     if timed:
@@ -367,10 +417,18 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         + (f'; validation output offset re-estimated: {shift0:+.4g} m' if reestimate else ''))
     outside = _outside_training(xt, xv[val], data)
     drift = return_point_drift(xd, yd)
+    if drift.drifts and validation is None:
+        identify_whole()                # a drift identify refuses the record for
     data['return_point_drift'] = {'visits': drift.visits, 'change': drift.change,
                                   'monotone': drift.monotone, 'end': drift.end,
                                   'drifts': drift.drifts}
     if not baseline['rms_error'] < baseline['linear_rms_error']:
+        retried = (inner_block(f'the baseline is no better than a straight line on it'
+                               f' ({100 * baseline["rms_error"]:.3g} % vs'
+                               f' {100 * baseline["linear_rms_error"]:.3g} %); {outside}')
+                   if outside and not drift.drifts else None)
+        if retried is not None:
+            return retried
         likely = [text for text in (drift.describe(), outside) if text]
         cause = (f'; the likely cause: {"; and ".join(likely)}' if likely else
                  '; check that both records come from the same actuator, with the same'
@@ -687,7 +745,8 @@ def _strength(decision: dict[str, Any], chosen: Candidate | None, baseline: dict
     return ' ' + reason[0].upper() + reason[1:] + '.'
 
 
-def _records(recording: Any, validation: Any, split: float) -> tuple[
+def _records(recording: Any, validation: Any, split: float,
+             block: tuple[int, int] | None = None) -> tuple[
         FloatArray, tuple[FloatArray, FloatArray, FloatArray],
         tuple[FloatArray, FloatArray, FloatArray], int, dict[str, Any]]:
     # The training and the validation record (a separate one, or the record's tail after
@@ -713,6 +772,24 @@ def _records(recording: Any, validation: Any, split: float) -> tuple[
                 'validation_scored': {'from_sample': n_train, 'samples': int(t.size - n_train),
                                       'left_out': 'the training part',
                                       'start_state': 'continues the training part'}}
+        if block is not None:
+            # A block inside the record: trained on the rest, joined at a time gap (a
+            # segment of its own); the models run from sample 0 to the block's end.
+            a, b = int(block[0]), int(block[1])
+            if not lead <= a < b <= t.size:
+                msg = (f'validation_block must lie in [{lead}, {t.size}] with a < b; found'
+                       f' {block!r}')
+                raise DataError(msg)
+            tt, xt, yt = (np.concatenate([v[:a], v[b:]]) for v in (t, x, y))
+            tv, xv, yv, start = t[:b], x[:b], y[:b], a
+            data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
+                    'training_samples': int(tt.size), 'leading_hold': lead,
+                    'validation_block': [a, b],
+                    'validation': f'samples {a}..{b - 1} of the same record',
+                    'validation_scored': {
+                        'from_sample': a, 'samples': b - a,
+                        'left_out': 'the rest of the record, the training part',
+                        'start_state': 'continues the training part before it'}}
     else:
         tt, xt, yt = t, x, y
         tv, xv, yv = _arrays(validation, 'validation')
@@ -725,6 +802,23 @@ def _records(recording: Any, validation: Any, split: float) -> tuple[
                ' for validation; record at least a few loops (>= 300 samples)')
         raise DataError(msg)
     return t, (tt, xt, yt), (tv, xv, yv), start, data
+
+
+def _inner_block(x: FloatArray, length: int, lead: int) -> tuple[int, int] | None:
+    # The latest block of `length` samples after the leading hold whose input lies inside
+    # the range of the rest of the record (1 % of its range to spare), leaving 200 samples
+    # to train on; None when no block does.
+    size = x.size
+    if length < 100 or size - length < 200:
+        return None
+    for a in range(size - length, lead, -max(size // 200, 1)):
+        rest = np.concatenate([x[:a], x[a + length:]])
+        lo, hi = float(rest.min()), float(rest.max())
+        block = x[a:a + length]
+        margin = 0.01 * (hi - lo)
+        if float(block.min()) >= lo - margin and float(block.max()) <= hi + margin:
+            return a, a + length
+    return None
 
 
 def _outside_training(xt: FloatArray, scored: FloatArray, data: dict[str, Any]) -> str:

@@ -5,7 +5,8 @@ The dynamics grid: dead time and lag of the input, each judged on held-out block
 With a time base, a grid over the dead time and the time constant of a first-order lag of
 the input, one QP each (:func:`~.fitter.fit_record`), scored on held-out blocks by the
 output's RMS error; the dynamics are kept when they beat the static model on them clearly
-(:data:`DYNAMICS_GAIN`), and a dead time and a lag within :data:`TIE` of each other tie.
+(:data:`DYNAMICS_GAIN`), and a dead time and a lag within the noise of the held-out blocks of
+each other tie (:func:`~mpi_ros.identification.ties.compare_on_blocks`).
 """
 
 from collections.abc import Callable
@@ -20,16 +21,14 @@ from .dynamics import InputDynamics
 from .fitter import fit_record, RecordFit
 from .qp import FloatArray
 from .record import PreparedRecord, Segment
+from .ties import block_errors, BlockComparison, compare_on_blocks
 from ..errors import DataError, IdentificationError
 
-__all__ = ['DYNAMICS_GAIN', 'DynamicsEstimate', 'TIE', 'estimate_dynamics']
+__all__ = ['DYNAMICS_GAIN', 'DynamicsEstimate', 'estimate_dynamics']
 
 
 #: Dynamics are kept when they cut the held-out RMS output error by this fraction.
 DYNAMICS_GAIN = 0.1
-
-#: A dead time and a lag whose held-out errors are within this fraction tie.
-TIE = 0.03
 
 
 @dataclass(frozen=True)
@@ -49,10 +48,17 @@ class DynamicsEstimate:
         Held-out RMS output errors of the static model and of the best of each kind
         [fraction of the output range].
     tie : bool
-        The dead time and the lag are within :data:`TIE` of each other: this record cannot
-        tell them apart (a record with bursts at two rates can).
+        The dead time and the lag both beat the static model beyond the noise of the
+        held-out blocks and are within it of each other
+        (:func:`~mpi_ros.identification.ties.compare_on_blocks`): this record cannot tell
+        them apart (a record with bursts at two rates can).
     trials : list of dict
         ``{'dead_time', 'lag_time_constant', 'held_error'}`` per trial.
+    block_sizes : tuple of int
+        Samples of each held-out block (empty when nothing was estimated).
+    static_blocks, dead_time_blocks, lag_blocks : tuple of float
+        Mean squared error per held-out block of the static model and of the best of each
+        kind [fraction of the output range, squared].
 
     """
 
@@ -64,6 +70,29 @@ class DynamicsEstimate:
     lag_error: float = math.nan
     tie: bool = False
     trials: list[dict[str, float]] = field(default_factory=list)
+    block_sizes: tuple[int, ...] = ()
+    static_blocks: tuple[float, ...] = ()
+    dead_time_blocks: tuple[float, ...] = ()
+    lag_blocks: tuple[float, ...] = ()
+
+    def compare(self, first: str, second: str) -> BlockComparison:
+        """
+        Compare two of ``'static'``, ``'dead_time'``, ``'lag'`` on the held-out blocks.
+
+        Parameters
+        ----------
+        first, second : str
+            The models compared (first minus second).
+
+        Returns
+        -------
+        BlockComparison
+            The paired block test (:func:`~mpi_ros.identification.ties.compare_on_blocks`).
+
+        """
+        blocks = {'static': self.static_blocks, 'dead_time': self.dead_time_blocks,
+                  'lag': self.lag_blocks}
+        return compare_on_blocks(blocks[first], blocks[second], self.block_sizes)
 
     def to_json(self) -> dict[str, Any]:
         """Return the JSON form (no trials)."""
@@ -115,8 +144,9 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
     is modelled when it cuts the static model's held-out error by :data:`DYNAMICS_GAIN` or
     more, also at the highest order the record supports (up to (14, 7); a delay that only
     stands in for hysteresis a low order misses loses its gain there); when the two kinds
-    are within :data:`TIE` of each other the record cannot tell them apart (one rate), and
-    the lag is modelled (its inverse is causal).
+    are within the noise of each other on the held-out blocks (a paired test,
+    :func:`~mpi_ros.identification.ties.compare_on_blocks`) the record cannot tell them
+    apart (one rate), and the lag is modelled (its inverse is causal).
 
     Parameters
     ----------
@@ -144,6 +174,7 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
     """
     t = record.time
     trials: list[dict[str, float]] = []
+    blocks: dict[InputDynamics, tuple[tuple[float, ...], tuple[int, ...]]] = {}
     if t is None:
         return DynamicsEstimate()
     dt = float(np.median(np.diff(t)))
@@ -161,6 +192,8 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
                              choose=False, burn_in=burn_in, rule=rule)
         except (IdentificationError, DataError):
             return math.inf
+        residual = (fit.simulate() - record.displacement) / np.ptp(record.displacement)
+        blocks[dyn] = block_errors(residual, held)
         error = _held_output_error(fit, record.displacement, held)
         trials.append({'dead_time': dyn.dead_time, 'lag_time_constant': dyn.lag_time_constant,
                        'held_error': error})
@@ -180,9 +213,22 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
         error, dyn = _refine(score, (errors[i], InputDynamics(**{kind: float(grid[i])})), dt)
         best[kind] = (error, float(getattr(dyn, kind)))
     dead, lag = best['dead_time'], best['lag_time_constant']
-    tie = abs(dead[0] - lag[0]) <= TIE * min(dead[0], lag[0])
+    none: tuple[tuple[float, ...], tuple[int, ...]] = ((), ())
+    sizes = blocks.get(InputDynamics(), none)[1]
+    per_block = {kind: blocks.get(InputDynamics(**{kind: value}), none)[0]
+                 for kind, value in (('dead_time', dead[1]), ('lag_time_constant', lag[1]))}
+    static_blocks = blocks.get(InputDynamics(), none)[0]
+    # Which kinds beat the static model beyond the noise of the blocks; a tie is two that do
+    # and are within the noise of each other (the rule of the dynamics finding).
+    beats = {kind: compare_on_blocks(per_block[kind], static_blocks, sizes).first_better
+             for kind in per_block}
+    tie = (beats['dead_time'] and beats['lag_time_constant'] and compare_on_blocks(
+        per_block['dead_time'], per_block['lag_time_constant'], sizes).tie)
     # A tie models the lag: its inverse (a lead) is causal, a dead time's is not.
-    kind = 'lag_time_constant' if tie or lag[0] < dead[0] else 'dead_time'
+    kind = ('lag_time_constant' if tie else
+            'dead_time' if beats['dead_time'] and not beats['lag_time_constant'] else
+            'lag_time_constant' if beats['lag_time_constant'] and not beats['dead_time'] else
+            'lag_time_constant' if lag[0] < dead[0] else 'dead_time')
     chosen = best[kind]
     modelled = (InputDynamics(**{kind: chosen[1]})
                 if chosen[0] <= (1.0 - DYNAMICS_GAIN) * static_error else InputDynamics())
@@ -190,7 +236,10 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
         modelled = InputDynamics()
     return DynamicsEstimate(modelled, dead_time=dead[1], lag_time_constant=lag[1],
                             static_error=static_error, dead_time_error=dead[0],
-                            lag_error=lag[0], tie=tie, trials=trials)
+                            lag_error=lag[0], tie=tie, trials=trials, block_sizes=sizes,
+                            static_blocks=static_blocks,
+                            dead_time_blocks=per_block['dead_time'],
+                            lag_blocks=per_block['lag_time_constant'])
 
 
 def _persists(record: PreparedRecord, dynamics: InputDynamics,

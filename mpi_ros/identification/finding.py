@@ -11,18 +11,19 @@ check of the step response (:func:`~mpi_ros.identification.dynamics.step_onset`)
 two commands give the same finding on the same record; the diagnosis' validation then tests
 the candidate effects on data the fit did not see, and states a tie when it disagrees.
 
-The rule (:func:`dynamics_finding`):
+The rule (:func:`dynamics_finding`), on the held-out blocks both commands score:
 
-- a kind *explains* the record when its held-out error is below the static model's by more
-  than :data:`TIE_FRACTION` (smaller differences are within the noise of the held-out
-  error);
+- a kind *explains* the record when it beats the static model beyond the noise (a paired
+  test over the held-out blocks, :func:`~mpi_ros.identification.ties.compare_on_blocks`)
+  and by at least :data:`EXPLAIN_FLOOR` of its error (a consistent gain smaller than that
+  is not worth a finding);
 - a dead time must show in the step response: after an input step the output stays still
   for the dead time.  A fitted dead time longer than the onset the record's steps show (plus
   one sample for the step's place between two samples) is not physical, and does not
   explain anything;
-- both kinds explain and their held-out errors are within :data:`TIE_FRACTION` of each
-  other: a **tie** (one excitation rate cannot tell a lag from a dead time; a step or
-  bursts at two rates can);
+- both kinds explain and their held-out errors are within the noise of each other (the same
+  paired test between the two): a **tie** (one excitation rate cannot tell a lag from a
+  dead time; a step or bursts at two rates can);
 - else the kind that explains better; ``none`` when neither does; ``unavailable`` without
   a time base.
 """
@@ -40,17 +41,17 @@ from .dynamics_grid import DynamicsEstimate, estimate_dynamics
 from .fitter import fit_record
 from .folds import held_out_rows
 from .record import prepare_record, PreparedRecord
+from .ties import BlockComparison
 
 __all__ = ['DYNAMICS_WINDOW', 'DynamicsFinding', 'dynamics_finding', 'estimate_record_dynamics',
-           'FINDING_KINDS', 'finding_of', 'MODEL_GAIN', 'record_dynamics', 'reference_order',
-           'SEPARATE_LAG_AND_DEAD_TIME', 'TIE_FRACTION']
+           'EXPLAIN_FLOOR', 'FINDING_KINDS', 'finding_of', 'MODEL_GAIN', 'record_dynamics',
+           'reference_order', 'SEPARATE_LAG_AND_DEAD_TIME']
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Held-out errors within this fraction of each other tie (the identification's own rule,
-#: :data:`mpi_ros.identification.dynamics_grid.TIE`), and a kind explains the record only when
-#: it beats the static model by more.
-TIE_FRACTION = 0.03
+#: A kind explains the record only when it beats the static model's held-out error by at
+#: least this fraction, besides beating it beyond the noise of the held-out blocks.
+EXPLAIN_FLOOR = 0.03
 
 #: The identification models a kind when it cuts the static model's held-out error by this
 #: fraction (the bar of :func:`~mpi_ros.identification.dynamics_grid.estimate_dynamics`).
@@ -162,28 +163,39 @@ def dynamics_finding(estimate: DynamicsEstimate, onset: StepOnset,
         'dead_time': estimate.dead_time, 'lag_time_constant': estimate.lag_time_constant,
         'static_error': static, 'dead_time_error': dead, 'lag_error': lag, 'onset': onset}
     physical = not estimate.dead_time > onset.bound + sample_period
-    bar = (1.0 - TIE_FRACTION) * static
-    explains = {'dead_time': physical and dead < bar, 'lag': lag < bar}
+    bar = (1.0 - EXPLAIN_FLOOR) * static
+    against: dict[str, BlockComparison] = {
+        'dead_time': estimate.compare('dead_time', 'static'),
+        'lag': estimate.compare('lag', 'static')}
+    explains = {'dead_time': physical and dead < bar and against['dead_time'].first_better,
+                'lag': lag < bar and against['lag'].first_better}
+    between = estimate.compare('dead_time', 'lag')
     errors = (f'held-out RMS: dead time {1e3 * estimate.dead_time:.3g} ms'
               f' {100 * dead:.3g} %, lag {1e3 * estimate.lag_time_constant:.3g} ms'
               f' {100 * lag:.3g} %, static {100 * static:.3g} %')
     unphysical = ('' if physical else
                   f'; a dead time of {1e3 * estimate.dead_time:.3g} ms is not physical:'
                   f' {onset.describe()}')
-    tie = abs(dead - lag) <= TIE_FRACTION * min(dead, lag)
-    if explains['dead_time'] and explains['lag'] and tie:
+    floor = f'{100 * EXPLAIN_FLOOR:.0f} %'
+    if explains['dead_time'] and explains['lag'] and between.tie:
         kind = 'tie'
-        reason = (f'within {100 * TIE_FRACTION:.0f} % of each other, both better than the'
-                  f' static model; {errors}')
+        reason = (f'within the noise of each other ({between.describe()}), both better than'
+                  f' the static model; {errors}')
     elif explains['dead_time'] or explains['lag']:
         kind = ('lag' if not explains['dead_time'] else 'dead_time' if not explains['lag']
                 else 'lag' if lag < dead else 'dead_time')
         other = 'dead time' if kind == 'lag' else 'lag'
-        reason = (f'better than the {other} by more than {100 * TIE_FRACTION:.0f} %, or the'
-                  f' {other} does not beat the static model; {errors}{unphysical}')
+        name = 'dead_time' if other == 'dead time' else 'lag'
+        why = (f'better than the {other} beyond the noise ({between.describe()})'
+               if explains[name] else 'the dead time is ruled out by the step onset'
+               if name == 'dead_time' and not physical else
+               f'the {other} does not beat the static model beyond the noise and by {floor}'
+               f' ({against[name].describe()})')
+        reason = f'{why}; {errors}{unphysical}'
     else:
         kind = 'none'
-        reason = (f'neither beats the static model by more than {100 * TIE_FRACTION:.0f} %;'
+        reason = (f'neither beats the static model beyond the noise and by {floor} (dead'
+                  f' time {against["dead_time"].describe()}; lag {against["lag"].describe()});'
                   f' {errors}{unphysical}')
     modelled = estimate.modelled
     if modelled.dead_time > 0.0 and not physical:

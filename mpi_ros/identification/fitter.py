@@ -18,8 +18,8 @@ import numpy.typing as npt
 
 from .dynamics import InputDynamics
 from .folds import better_on_folds, fold_index, FoldErrors, RECORD_FOLDS
-from .qp import fit_generalized_error, FloatArray, GramParts, IDLE_PLAY, regressor_gram, \
-    scaled_design, ScaledDesign
+from .qp import fit_generalized_error, FloatArray, GramParts, IDLE_PLAY, OUTER_SLOPE, \
+    regressor_gram, scaled_design, ScaledDesign
 from .record import PreparedRecord, Segment
 from .start_states import determined_from, end_state, refine_memory, start_candidates, \
     StartState, turning_point_candidates
@@ -450,7 +450,7 @@ class _Fitter:
         w_h, w_s, _, info = fit_generalized_error(
             gram, 1.0 - self.r_h, n_hysteresis=n1, n_superposition=self.r_s.size,
             superposition_center=self.design.center, epsilon=self.epsilon, fixed_zero=idle,
-            tolerance=tolerance)
+            tolerance=tolerance, outer_slope=OUTER_SLOPE)
         constant = (-float(mean @ np.concatenate([w_h, w_s])) if self.design.constant
                     else 0.0)
         return w_h, w_s, constant, info

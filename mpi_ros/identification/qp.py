@@ -26,8 +26,8 @@ from ..operators.model import MPIModel
 from ..operators.play import play_clamp, play_operator
 from ..operators.superposition import PISuperpositionOperator
 
-__all__ = ['ANCHORS', 'DEFAULT_ORDERS', 'IDLE_PLAY', 'SLOPE_FLOOR', 'GramParts', 'ScaledDesign',
-           'burn_in', 'check_excitation', 'check_quality', 'check_signals',
+__all__ = ['ANCHORS', 'DEFAULT_ORDERS', 'IDLE_PLAY', 'OUTER_SLOPE', 'SLOPE_FLOOR', 'GramParts',
+           'ScaledDesign', 'burn_in', 'check_excitation', 'check_quality', 'check_signals',
            'fit_generalized_error', 'fit_model', 'fit_plain', 'generalized_error_gram',
            'hysteresis_thresholds', 'identify_weights', 'inverse_superposition_thresholds',
            'output_sign', 'range_errors', 'regressor_gram', 'scaled_design']
@@ -491,6 +491,18 @@ _SMALL_PASS = 4096
 #: S' slope of 1e-6, an S that multiplies there by 1e6, and simulations 1e5 % off.
 SLOPE_FLOOR = 0.1
 
+#: Upper bound of Gamma's slope beyond the outermost thresholds of S' (where the model
+#: extrapolates past the identified output range, and on the major loop's tips), over the
+#: record's mean slope (its range over the input's: 1 in the QP's scaled units).  With all
+#: plays moving, H's slope is ``sum w_H`` and Gamma's is ``sum w_H / s'`` for the outermost
+#: slope ``s'`` of S'; the QP keeps ``s' >= sum w_H / OUTER_SLOPE`` on both branches (orders
+#: with l >= 1).  Without it the fitted tips reached 27x the mean slope (PNZT table 7, the
+#: input's lower end), and a FORC record extrapolated 35x too steep.  A saturating actuator's
+#: tips are flatter than its mean slope (measured 2026-11-26, order auto: SMA 0.3-0.6, TUM
+#: 0.8-1.5); a piezoceramic's steepen below its coercive field (PNZT loops and tables
+#: 1.2-2.3, one 3.1, one 4.8): 3 leaves those alone but the two largest.
+OUTER_SLOPE = 3.0
+
 
 def generalized_error_gram(*blocks: FloatArray) -> FloatArray:
     """
@@ -520,7 +532,8 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
                           tolerance: float = 1e-9,
                           slope_floor: float | None = None,
                           linear: FloatArray | None = None,
-                          warm_start: FloatArray | None = None) -> tuple[
+                          warm_start: FloatArray | None = None,
+                          outer_slope: float = math.inf) -> tuple[
                               FloatArray, FloatArray, FloatArray, Any]:
     """
     Solve the QP (34)-(36) for the weights ``w_H``, ``w'_S`` (and optional extras).
@@ -560,6 +573,10 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
         towards prior weights in the recursive identification); none by default.
     warm_start : ndarray of float, shape (nv,), optional
         Weights to start OSQP from (the previous solution of a recursive fit).
+    outer_slope : float
+        Upper bound of Gamma's slope beyond the outermost thresholds of S', over the mean
+        slope of the scaled data (``inf``, the default: no bound; the identification passes
+        :data:`OUTER_SLOPE`).  Only for ``n_superposition >= 3`` (l >= 1).
 
     Returns
     -------
@@ -585,7 +602,9 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     zero = set() if fixed_zero is None else {int(i) for i in np.ravel(fixed_zero)} - {0}
     x_lower = np.zeros(k) if extra_lower is None else np.asarray(extra_lower, dtype=float)
     c = superposition_center
-    a_mat = _constraint_matrix(np.asarray(equality_row, dtype=np.float64), n1, m, k, c)
+    outer = float(outer_slope)
+    a_mat = _constraint_matrix(np.asarray(equality_row, dtype=np.float64), n1, m, k, c,
+                               1.0 / outer if m >= 3 and math.isfinite(outer) else 0.0)
     # Bounds: (36), then (8) on w_H, then (19) on w'_S, then bounds on extras.
     lo = np.concatenate([[1.0], np.zeros(n1), np.full(m, floor), x_lower])
     lo[1 + hysteresis_center] = epsilon
@@ -641,13 +660,15 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
 
 #: Constraint matrices of the QP by (equality row, n+1, m, extras, centre of S'): the trial
 #: fits of one order share one.
-_CONSTRAINTS: dict[tuple[bytes, int, int, int, int], Any] = {}
+_CONSTRAINTS: dict[tuple[bytes, int, int, int, int, float], Any] = {}
 
 
-def _constraint_matrix(equality_row: FloatArray, n1: int, m: int, k: int, c: int) -> Any:
+def _constraint_matrix(equality_row: FloatArray, n1: int, m: int, k: int, c: int,
+                       inverse_outer: float = 0.0) -> Any:
     # Rows (36), (8) on w_H, (19) on w'_S (slopes outward from the zero threshold), bounds
-    # on the extras; a CSC matrix (read only), built once per shape.
-    key = (equality_row.tobytes(), n1, m, k, c)
+    # on the extras; a CSC matrix (read only), built once per shape.  The outermost slopes
+    # of S' less sum w_H times `inverse_outer` (Gamma's outer slope bound, OUTER_SLOPE).
+    key = (equality_row.tobytes(), n1, m, k, c, inverse_outer)
     cached = _CONSTRAINTS.get(key)
     if cached is not None:
         return cached
@@ -661,6 +682,9 @@ def _constraint_matrix(equality_row: FloatArray, n1: int, m: int, k: int, c: int
         else:
             rows[1 + n1 + i, n1 + i:n1 + c + 1] = 1.0
     rows[1 + n1 + m:, n1 + m:] = np.eye(k)
+    if inverse_outer > 0.0:
+        rows[1 + n1, :n1] -= inverse_outer
+        rows[n1 + m, :n1] -= inverse_outer
     if len(_CONSTRAINTS) >= 64:
         _CONSTRAINTS.clear()
     matrix = _CONSTRAINTS[key] = sp.csc_matrix(rows)
@@ -949,7 +973,7 @@ def identify_weights(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E
     w_h, w_s_inv, w_extra, info = fit_generalized_error(
         gram, 1.0 - r_h, n_hysteresis=n + 1, n_superposition=r_s_inv.size,    # (36), scaled
         superposition_center=design.center, epsilon=epsilon, extra_lower=extra_lower,
-        fixed_zero=idle)
+        fixed_zero=idle, outer_slope=OUTER_SLOPE)
     constant = (-float(mean @ np.concatenate([w_h, w_s_inv, w_extra]))
                 if design.constant else 0.0)
     return design, w_h, w_s_inv, w_extra, constant, info
