@@ -195,7 +195,7 @@ def plot(rows, path):
         ax.set_title(f'{scenario}: {DESCRIPTIONS[scenario]}', fontsize=9)
         ax.set_ylabel('RMS error per 10 s [% of range]', fontsize=8)
         ax.grid(True, which='both', alpha=0.3)
-        ax.legend(fontsize=6.5, loc='lower right')
+        ax.legend(fontsize=6.5, loc='best')
     for ax in axes[-1]:
         ax.set_xlabel('time since the start of tracking [s]', fontsize=8)
     for ax in axes.ravel()[len(scenarios):]:

@@ -274,7 +274,7 @@ class RecursiveFit:
         w_h, w_s, _, _ = fit_generalized_error(
             cov, equality, n_hysteresis=equality.size,
             n_superposition=nv - n1, superposition_center=d.center,
-            linear=-2.0 * rho * start, warm_start=start)
+            linear=-rho * start, warm_start=start)
         weights = (np.concatenate([w_h, w_s]) if hysteresis
                    else np.concatenate([prior.weights[:n1] * w_h[0], w_s]))
         recent = self._fast_sums / max(float(self._fast_count[0]), 1.0)
