@@ -12,8 +12,10 @@ the fit has not seen.  The node applies a candidate through its ordinary paramet
 (the same validation as a push), so an adapted model is what ``ros2 param get`` and
 ``ros2 param dump`` show.
 
-The work runs in :class:`AdaptationWorker`'s thread; the command path only appends a
-float to a deque.
+The work runs in a child process (:class:`AdaptationProcess`: its own interpreter, so the
+command path never waits for the interpreter lock while a step runs) or in a thread of the
+node's process (:class:`AdaptationWorker`); either way the command path only appends a float
+to a list.
 
 Rules, in the order they are checked on each batch of paired samples:
 
@@ -33,10 +35,15 @@ Rules, in the order they are checked on each batch of paired samples:
   towards the QP's solution, which the linear constraints allow).
 """
 
+from array import array
 from collections import deque
 from dataclasses import dataclass, field
 import math
+import multiprocessing
+import multiprocessing.connection
+import pickle
 import threading
+import time
 from typing import Any, Callable
 
 import numpy as np
@@ -48,9 +55,13 @@ from ..operators.hysteresis import PIHysteresisOperator
 from ..operators.model import MPIModel
 from ..operators.play import play_end_state
 
-__all__ = ['Adaptation', 'AdaptationSettings', 'AdaptationWorker', 'Candidate']
+__all__ = ['Adaptation', 'AdaptationProcess', 'AdaptationSettings', 'AdaptationWorker',
+           'Candidate']
 
 FloatArray = npt.NDArray[np.float64]
+
+#: First 8 bytes of a message of pairs to the child (the others are pickled tuples).
+_PAIRS = b'pairs\x00\x00\x00'
 
 
 @dataclass(frozen=True)
@@ -146,8 +157,9 @@ class AdaptationSettings:
 
         """
         prefix = 'adaptation.'
+        switches = ('adaptation.enabled', 'adaptation.process')
         fields = {key[len(prefix):]: value for key, value in values.items()
-                  if key.startswith(prefix) and key != 'adaptation.enabled'}
+                  if key.startswith(prefix) and key not in switches}
         return cls(sample_period=sample_period, **fields)
 
     def samples(self, seconds: float) -> int:
@@ -259,6 +271,11 @@ class Adaptation:
     def record_measurement(self, displacement: float) -> None:
         """Record a displacement reading [m], in the order they arrive."""
         self._readings.append(displacement)
+
+    def record_pairs(self, currents: npt.ArrayLike, displacements: npt.ArrayLike) -> None:
+        """Record published commands [A] and readings [m] in bulk, each in order."""
+        self._commands.extend(np.asarray(currents, dtype=np.float64).tolist())
+        self._readings.extend(np.asarray(displacements, dtype=np.float64).tolist())
 
     def take_candidate(self) -> Candidate | None:
         """Return the candidate ready to apply, once (None when there is none)."""
@@ -649,6 +666,217 @@ class AdaptationWorker:
                 self.errors += 1
                 if self._on_error is not None:
                     self._on_error(f'{type(err).__name__}: {err}')
+
+
+class AdaptationProcess:
+    """
+    Run an :class:`Adaptation` in a child process; the node's side of it, in the node.
+
+    The node's interpreter runs nothing of a step: the command path appends each command
+    and each reading to a list, and :meth:`exchange` (the node's 10 Hz timer) sends what
+    arrived to the child in one message and takes back the child's candidate, status and
+    events.  The child (started with ``spawn``: a fork of a process with DDS threads is
+    unsafe) drains its end of the pipe in a thread of its own, so a long solve never
+    fills the pipe, and steps every ``period`` seconds.  Its methods mirror
+    :class:`Adaptation`'s node side, so the node treats both alike.
+
+    Parameters
+    ----------
+    model : MPIModel
+        The running forward model Gamma (n >= 1).
+    settings : AdaptationSettings
+        See :class:`AdaptationSettings`.
+    on_error : callable, optional
+        Called with the text of an exception a step raised in the child.
+
+    """
+
+    def __init__(self, model: MPIModel, settings: AdaptationSettings, *,
+                 on_error: Callable[[str], None] | None = None) -> None:
+        self.settings = settings
+        self._model = model
+        self._on_error = on_error
+        self.errors = 0
+        self._commands: list[float] = []
+        self._readings: list[float] = []
+        self._ready = False
+        self._candidate: Candidate | None = None
+        self._sequence: dict[int, int] = {}
+        self._status: dict[str, Any] = {'adaptation_state': 'starting the adaptation process'}
+        self._events: list[str] = []
+        context = multiprocessing.get_context('spawn')
+        self._conn, child = context.Pipe()
+        self._process = context.Process(
+            target=_serve, args=(child, model.to_params(), settings),
+            name='mpi_ros adaptation', daemon=True)
+
+    @property
+    def model(self) -> MPIModel:
+        """Return the running model the adaptation starts its candidates from."""
+        return self._model
+
+    @property
+    def pid(self) -> int | None:
+        """Return the child's process id (None before :meth:`start`)."""
+        return self._process.pid
+
+    @property
+    def running(self) -> bool:
+        """Return whether the child process is alive."""
+        return self._process.is_alive()
+
+    def start(self) -> None:
+        """Start the child process."""
+        self._process.start()
+
+    def stop(self, timeout: float = 1.0) -> None:
+        """Stop the child (asked first, terminated after ``timeout`` seconds)."""
+        if self._process.pid is None:
+            return
+        try:
+            self._conn.send(('stop',))
+        except (OSError, ValueError):
+            pass
+        self._process.join(timeout)
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join(timeout)
+        self._conn.close()
+
+    def record_command(self, current: float) -> None:
+        """Record a published command [A] (cheap: the command path calls it)."""
+        self._commands.append(current)
+
+    def record_measurement(self, displacement: float) -> None:
+        """Record a displacement reading [m], in the order they arrive."""
+        self._readings.append(displacement)
+
+    def exchange(self) -> None:
+        """Send the pairs that arrived to the child; take back what it sent (non-blocking)."""
+        try:
+            while self._conn.poll():
+                self._receive(self._conn.recv())
+        except (EOFError, OSError):
+            self._status['adaptation_state'] = 'stopped: the adaptation process ended'
+            return
+        limit = 20 * self.settings.samples(self.settings.holdout)
+        if not self._ready:
+            # Until the child listens, keep the newest pairs only: as many dropped from
+            # both lists, so the k-th reading still answers the k-th command.
+            drop = max(0, min(len(self._commands), len(self._readings)) - limit)
+            del self._commands[:drop]
+            del self._readings[:drop]
+            return
+        commands, self._commands = self._commands, []
+        readings, self._readings = self._readings, []
+        if commands or readings:
+            self._conn.send_bytes(
+                _PAIRS + array('q', [len(commands)]).tobytes() + array('d', commands).tobytes()
+                + array('d', readings).tobytes())
+
+    def take_candidate(self) -> Candidate | None:
+        """Return the candidate ready to apply, once (None when there is none)."""
+        candidate, self._candidate = self._candidate, None
+        return candidate
+
+    def applied(self, candidate: Candidate, accepted: bool, reason: str = '') -> None:
+        """Tell the child whether the node's validation took the candidate."""
+        number = self._sequence.pop(id(candidate), None)
+        if accepted:
+            self._model = candidate.model
+        if number is not None:
+            self._conn.send(('applied', number, accepted, reason))
+
+    def reset(self, model: MPIModel) -> None:
+        """Start again from a model pushed from outside."""
+        self._model = model
+        self._candidate = None
+        self._sequence.clear()
+        self._conn.send(('reset', model.to_params()))
+
+    def status(self) -> dict[str, Any]:
+        """Return the values /diagnostics shows (``adaptation_*``), as the child last sent."""
+        return dict(self._status)
+
+    def events(self) -> list[str]:
+        """Return and clear the events to log."""
+        events, self._events = self._events, []
+        return events
+
+    def _receive(self, message: Any) -> None:
+        kind = message[0]
+        if kind == 'ready':
+            self._ready = True
+        elif kind == 'candidate':
+            _, number, candidate = message
+            self._sequence = {id(candidate): number}
+            self._candidate = candidate
+        elif kind == 'status':
+            self._status, events = message[1], message[2]
+            self._events.extend(events)
+        elif kind == 'error':
+            self.errors += 1
+            if self._on_error is not None:
+                self._on_error(message[1])
+
+
+def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
+           settings: AdaptationSettings) -> None:
+    # The child's loop: a thread moves the pairs from the pipe into the adaptation (so a
+    # long solve never fills the pipe); this thread steps every period and answers.
+    adaptation = Adaptation(MPIModel.from_params(params), settings)
+    candidates: dict[int, Candidate] = {}
+    stop = threading.Event()
+    send = threading.Lock()
+
+    def reply(message: Any) -> None:
+        with send:
+            conn.send(message)
+
+    def listen() -> None:
+        try:
+            while True:
+                data = conn.recv_bytes()
+                if data[:8] == _PAIRS:
+                    count = array('q', data[8:16])[0]
+                    values = np.frombuffer(data, dtype=np.float64, offset=16)
+                    adaptation.record_pairs(values[:count], values[count:])
+                    continue
+                message = pickle.loads(data)
+                if message[0] == 'stop':
+                    break
+                if message[0] == 'applied':
+                    candidate = candidates.pop(message[1], None)
+                    if candidate is not None:
+                        adaptation.applied(candidate, message[2], message[3])
+                elif message[0] == 'reset':
+                    candidates.clear()
+                    adaptation.reset(MPIModel.from_params(message[1]))
+        except (EOFError, OSError):
+            pass
+        stop.set()
+
+    listener = threading.Thread(target=listen, name='pipe', daemon=True)
+    listener.start()
+    reply(('ready',))
+    number = 0
+    deadline = time.monotonic() + settings.period
+    while not stop.wait(max(0.0, deadline - time.monotonic())):
+        deadline += settings.period
+        try:
+            adaptation.step()
+        except Exception as err:  # noqa: B902 - reported to the node, never raised there
+            reply(('error', f'{type(err).__name__}: {err}'))
+        candidate = adaptation.take_candidate()
+        try:
+            if candidate is not None:
+                number += 1
+                candidates[number] = candidate
+                reply(('candidate', number, candidate))
+            reply(('status', adaptation.status(), adaptation.events()))
+        except (BrokenPipeError, OSError):
+            break
+    conn.close()
 
 
 def _with_start(candidate: MPIModel, running: MPIModel) -> MPIModel:
