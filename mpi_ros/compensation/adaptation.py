@@ -37,11 +37,14 @@ Rules, in the order they are checked on each batch of paired samples:
 
 from array import array
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
-import multiprocessing
 import multiprocessing.connection
+import os
 import pickle
+import socket
+import subprocess
+import sys
 import threading
 import time
 from typing import Any, Callable
@@ -50,18 +53,28 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import ModelError, MPIError
-from ..identification.recursive import RecursiveFit, WeightPoint
+from ..extensions import extended_model_from_params
+from ..extensions.thermal_drift import ThermalDriftModel
+from ..identification.recursive import heating, RecursiveFit, WeightPoint
 from ..operators.hysteresis import PIHysteresisOperator
 from ..operators.model import MPIModel
 from ..operators.play import play_end_state
 
 __all__ = ['Adaptation', 'AdaptationProcess', 'AdaptationSettings', 'AdaptationWorker',
-           'Candidate']
+           'adaptable', 'Candidate', 'serve_socket']
 
 FloatArray = npt.NDArray[np.float64]
 
+#: The models the adaptation adapts: Gamma, or Gamma with a thermal drift (its weight
+#: ``w_T`` re-fitted, its thermal state following the commands, ``tau_T`` kept).
+AdaptedModel = MPIModel | ThermalDriftModel
+
 #: First 8 bytes of a message of pairs to the child (the others are pickled tuples).
 _PAIRS = b'pairs\x00\x00\x00'
+#: Most pairs per message, and most messages of pairs the child has not acknowledged:
+#: 4 x 32 KiB stay below a socket pair's buffer (208 KiB by default on Linux).
+_CHUNK = 2048
+_IN_FLIGHT = 4
 
 
 @dataclass(frozen=True)
@@ -174,8 +187,8 @@ class Candidate:
 
     Attributes
     ----------
-    model : MPIModel
-        The candidate Gamma (same thresholds as the running one).
+    model : MPIModel or ThermalDriftModel
+        The candidate (same thresholds, and time constant, as the running one).
     point : WeightPoint
         Its point in the recursive fit's design.
     running_error, candidate_error : float
@@ -186,7 +199,7 @@ class Candidate:
 
     """
 
-    model: MPIModel
+    model: AdaptedModel
     point: WeightPoint
     running_error: float
     candidate_error: float
@@ -198,9 +211,11 @@ class Candidate:
 
     def describe(self) -> str:
         """Return one log line: the held-out errors and the step."""
+        thermal = (f'; thermal weight {self.model.weight:.4g} 1/A'
+                   if isinstance(self.model, ThermalDriftModel) else '')
         return (f'held-out RMS {100 * self.running_error:.3g} % -> '
                 f'{100 * self.candidate_error:.3g} % of the displacement range '
-                f'(step {100 * self.step:.2g} %)')
+                f'(step {100 * self.step:.2g} %){thermal}')
 
 
 @dataclass
@@ -222,8 +237,9 @@ class Adaptation:
 
     Parameters
     ----------
-    model : MPIModel
-        The running forward model Gamma (n >= 1).
+    model : MPIModel or ThermalDriftModel
+        The running forward model: Gamma (n >= 1), or Gamma with a thermal drift, whose
+        weight ``w_T`` is adapted with Gamma and whose thermal state follows the commands.
     settings : AdaptationSettings
         See :class:`AdaptationSettings`.
 
@@ -234,7 +250,7 @@ class Adaptation:
 
     """
 
-    def __init__(self, model: MPIModel, settings: AdaptationSettings) -> None:
+    def __init__(self, model: AdaptedModel, settings: AdaptationSettings) -> None:
         self.settings = settings
         self._commands: deque[float] = deque()
         self._readings: deque[float] = deque()
@@ -258,7 +274,7 @@ class Adaptation:
         play_end_state(np.zeros(2), np.zeros(1))
 
     @property
-    def model(self) -> MPIModel:
+    def model(self) -> AdaptedModel:
         """Return the running model the adaptation starts its candidates from."""
         with self._lock:
             return self._model
@@ -308,7 +324,7 @@ class Adaptation:
                 self._counts.refused += 1
                 self._remember(f'candidate refused by validation: {reason}')
 
-    def reset(self, model: MPIModel) -> None:
+    def reset(self, model: AdaptedModel) -> None:
         """Start again from a model pushed from outside (the Gram matrices are dropped)."""
         with self._lock:
             self._reset(model)
@@ -380,19 +396,28 @@ class Adaptation:
         return candidate
 
     # -- internals ---------------------------------------------------------------------
-    def _reset(self, model: MPIModel) -> None:
+    def _reset(self, model: AdaptedModel) -> None:
         s = self.settings
+        gamma = _gamma(model)
+        drift = model if isinstance(model, ThermalDriftModel) else None
         self._fit = RecursiveFit(
-            model, forgetting=math.exp(-s.sample_period / s.forgetting_time),
-            offset_forgetting=math.exp(-s.sample_period / s.offset_time))
+            gamma, forgetting=math.exp(-s.sample_period / s.forgetting_time),
+            offset_forgetting=math.exp(-s.sample_period / s.offset_time),
+            thermal_time_constant=None if drift is None else drift.time_constant,
+            thermal_weight=0.0 if drift is None else drift.weight,
+            sample_period=s.sample_period)
         self._model = model
         self._point = self._fit.start
         d = self._fit.design
         self._input_span = 2.0 * d.x_scale
         sweep = d.input_offset + d.x_scale * np.concatenate(
             [np.linspace(-1.0, 1.0, 201), np.linspace(1.0, -1.0, 201)])
-        state = np.full(model.n + 1, float(sweep[0]) - model.input_offset)
-        self._output_span = float(np.ptp(model.run(sweep, state)[0]))
+        state = np.full(gamma.n + 1, float(sweep[0]) - gamma.input_offset)
+        self._output_span = float(np.ptp(gamma.run(sweep, state)[0]))
+        # The thermal state (T, x of the last sample) at the newest reading screened and
+        # at the first pair of the recent window (NaN: settles at the first sample).
+        self._heat_now = np.full(2, math.nan)
+        self._heat_window = np.full(2, math.nan)
         self._bx = np.empty(0)
         self._by = np.empty(0)
         self._bok = np.empty(0, dtype=bool)
@@ -409,7 +434,7 @@ class Adaptation:
         # Play outputs on the raw input [A] (every model of the design shares the
         # thresholds; a model with input offset x0 has the states minus x0): at the
         # newest reading screened, and at the first pair of the recent window.
-        self._thresholds = np.asarray(model.hysteresis.thresholds, dtype=np.float64)
+        self._thresholds = np.asarray(gamma.hysteresis.thresholds, dtype=np.float64)
         self._plays_now: FloatArray | None = None
         self._plays_window: FloatArray | None = None
 
@@ -428,13 +453,14 @@ class Adaptation:
         self._counts.pairs += k
         return x, y
 
-    def _screen(self, model: MPIModel, x: FloatArray, y: FloatArray) -> npt.NDArray[np.bool_]:
+    def _screen(self, model: AdaptedModel, x: FloatArray,
+                y: FloatArray) -> npt.NDArray[np.bool_]:
         # Garbage readings: non-finite, stuck, or a residual jump.  Any of them freezes.
         s = self.settings
         if self._plays_now is None:
             self._plays_now = np.full(self._thresholds.size, float(x[0]))
-        prediction, end = model.run(x, self._plays_now - model.input_offset)
-        self._plays_now = end + model.input_offset
+        prediction, self._plays_now, self._heat_now = self._run(
+            model, x, self._plays_now, self._heat_now)
         finite = np.isfinite(y)
         residual = np.where(finite, y - prediction, np.nan)
         previous = np.concatenate([[self._last_residual], residual[:-1]])
@@ -514,6 +540,10 @@ class Adaptation:
         if start and self._plays_window is not None:
             self._plays_window = play_end_state(self._bx[:start], self._thresholds,
                                                 self._plays_window)
+            if self._fit.heating_coefficient is not None:
+                _, self._heat_window = heating(self._bx[:start],
+                                               coefficient=self._fit.heating_coefficient,
+                                               state=self._heat_window)
         self._bx, self._by, self._bok = (self._bx[start:], self._by[start:],
                                          self._bok[start:])
         self._in_gram = max(0, self._in_gram - start)
@@ -553,7 +583,7 @@ class Adaptation:
     def _excitation_mask(self) -> bool:
         return self._commands_span() >= self.settings.min_excitation * self._input_span
 
-    def _candidate(self, model: MPIModel, point: WeightPoint,
+    def _candidate(self, model: AdaptedModel, point: WeightPoint,
                    solution: WeightPoint) -> Candidate | None:
         s = self.settings
         held = s.samples(s.holdout)
@@ -562,7 +592,7 @@ class Adaptation:
             return None
         test = slice(x.size - held, x.size)
         running = self._simulate(model, x)
-        proposed = self._fit.model(solution)
+        proposed = self._build(solution)
         # The output offset follows the newest training readings (a drifting zero): the
         # last held-out length before the held-out part.
         recent = slice(max(0, x.size - 2 * held), x.size - held)
@@ -572,7 +602,7 @@ class Adaptation:
         fraction = 1.0
         for _ in range(6):
             target = point.toward(solution, fraction)
-            candidate_model = self._fit.model(target)
+            candidate_model = self._build(target)
             simulated = self._simulate(candidate_model, x)
             step = float(np.max(np.abs(simulated - running))) / self._output_span
             if step <= s.max_step * (1.0 + 1e-9):
@@ -594,20 +624,41 @@ class Adaptation:
                 and candidate_error <= (1.0 - s.margin) * running_error):
             self._counts.not_better += 1
             return None
-        if not (candidate_model.hysteresis.satisfies_constraints()
-                and candidate_model.superposition.satisfies_constraints()):
+        gamma = _gamma(candidate_model)
+        if not (gamma.hysteresis.satisfies_constraints()
+                and gamma.superposition.satisfies_constraints()):
             self._counts.refused += 1
             self._remember('candidate violates (8)/(19): not proposed')
             return None
         return Candidate(_with_start(candidate_model, model), target, running_error,
                          candidate_error, step)
 
-    def _simulate(self, model: MPIModel, x: FloatArray) -> FloatArray:
+    def _simulate(self, model: AdaptedModel, x: FloatArray) -> FloatArray:
         # From the plays' state before the window's first pair (shared by the design's
-        # models, shifted by each one's input offset).
+        # models, shifted by each one's input offset) and the thermal state there.
         if self._plays_window is None:
             self._plays_window = np.full(self._thresholds.size, float(x[0]))
-        return model.run(x, self._plays_window - model.input_offset)[0]
+        return self._run(model, x, self._plays_window, self._heat_window)[0]
+
+    def _run(self, model: AdaptedModel, x: FloatArray, plays: FloatArray,
+             heat: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        # The model's displacement from the plays' outputs on the raw input [A] and the
+        # thermal state; returns both states after the last sample.
+        gamma = _gamma(model)
+        a = self._fit.heating_coefficient
+        if not isinstance(model, ThermalDriftModel) or a is None:
+            y, end = gamma.run(x, plays - gamma.input_offset)
+            return y, end + gamma.input_offset, heat
+        h, end = gamma.hysteresis_output(x, plays - gamma.input_offset)
+        thermal, heat = heating(x, coefficient=a, state=heat)
+        return gamma.output(h + model.weight * thermal), end + gamma.input_offset, heat
+
+    def _build(self, point: WeightPoint) -> AdaptedModel:
+        # The model of a point of the fit's design, of the running model's kind.
+        gamma = self._fit.model(point)
+        if isinstance(self._model, ThermalDriftModel):
+            return replace(self._model, model=gamma, weight=self._fit.thermal_weight(point))
+        return gamma
 
     def _set_state(self, state: str) -> None:
         with self._lock:
@@ -682,8 +733,8 @@ class AdaptationProcess:
 
     Parameters
     ----------
-    model : MPIModel
-        The running forward model Gamma (n >= 1).
+    model : MPIModel or ThermalDriftModel
+        The running forward model (see :class:`Adaptation`).
     settings : AdaptationSettings
         See :class:`AdaptationSettings`.
     on_error : callable, optional
@@ -691,7 +742,7 @@ class AdaptationProcess:
 
     """
 
-    def __init__(self, model: MPIModel, settings: AdaptationSettings, *,
+    def __init__(self, model: AdaptedModel, settings: AdaptationSettings, *,
                  on_error: Callable[[str], None] | None = None) -> None:
         self.settings = settings
         self._model = model
@@ -700,48 +751,69 @@ class AdaptationProcess:
         self._commands: list[float] = []
         self._readings: list[float] = []
         self._ready = False
+        self._in_flight = 0
         self._candidate: Candidate | None = None
         self._sequence: dict[int, int] = {}
         self._status: dict[str, Any] = {'adaptation_state': 'starting the adaptation process'}
         self._events: list[str] = []
-        context = multiprocessing.get_context('spawn')
-        self._conn, child = context.Pipe()
-        self._process = context.Process(
-            target=_serve, args=(child, model.to_params(), settings),
-            name='mpi_ros adaptation', daemon=True)
+        self._params = model.to_params()
+        self._process: subprocess.Popen[bytes] | None = None
+        self._conn: multiprocessing.connection.Connection | None = None
 
     @property
-    def model(self) -> MPIModel:
+    def model(self) -> AdaptedModel:
         """Return the running model the adaptation starts its candidates from."""
         return self._model
 
     @property
     def pid(self) -> int | None:
         """Return the child's process id (None before :meth:`start`)."""
-        return self._process.pid
+        return None if self._process is None else self._process.pid
 
     @property
     def running(self) -> bool:
         """Return whether the child process is alive."""
-        return self._process.is_alive()
+        return self._process is not None and self._process.poll() is None
 
     def start(self) -> None:
-        """Start the child process."""
-        self._process.start()
+        """
+        Start the child: this interpreter, on this one's import path, serving a socket pair.
+
+        Not ``multiprocessing``'s spawn, which imports the parent's main module again in
+        the child: a script that builds the node without a ``__main__`` guard would start
+        it twice.
+        """
+        ours, theirs = socket.socketpair()
+        with ours, theirs:
+            code = ('import sys; from mpi_ros.compensation.adaptation import serve_socket;'
+                    ' serve_socket(int(sys.argv[1]))')
+            path = os.pathsep.join(p for p in sys.path if p)
+            self._process = subprocess.Popen(
+                [sys.executable, '-c', code, str(theirs.fileno())],
+                pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
+                env=dict(os.environ, PYTHONPATH=path))
+            self._conn = multiprocessing.connection.Connection(ours.detach())
+        self._conn.send((self._params, self.settings))
 
     def stop(self, timeout: float = 1.0) -> None:
         """Stop the child (asked first, terminated after ``timeout`` seconds)."""
-        if self._process.pid is None:
+        process, conn = self._process, self._conn
+        if process is None or conn is None:
             return
         try:
-            self._conn.send(('stop',))
+            conn.send(('stop',))
         except (OSError, ValueError):
             pass
-        self._process.join(timeout)
-        if self._process.is_alive():
-            self._process.terminate()
-            self._process.join(timeout)
-        self._conn.close()
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            process.terminate()
+            try:
+                process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(timeout)
+        conn.close()
 
     def record_command(self, current: float) -> None:
         """Record a published command [A] (cheap: the command path calls it)."""
@@ -753,26 +825,32 @@ class AdaptationProcess:
 
     def exchange(self) -> None:
         """Send the pairs that arrived to the child; take back what it sent (non-blocking)."""
+        conn = self._conn
+        if conn is None:
+            return
         try:
-            while self._conn.poll():
-                self._receive(self._conn.recv())
+            while conn.poll():
+                self._receive(conn.recv())
         except (EOFError, OSError):
             self._status['adaptation_state'] = 'stopped: the adaptation process ended'
             return
+        # The pipe never fills, so a send never blocks the node: at most _IN_FLIGHT
+        # messages of at most _CHUNK pairs each are unacknowledged; the rest waits here.
+        commands, readings = self._commands, self._readings
+        while self._ready and self._in_flight < _IN_FLIGHT and (commands or readings):
+            a, b = commands[:_CHUNK], readings[:_CHUNK]
+            del commands[:_CHUNK]
+            del readings[:_CHUNK]
+            conn.send_bytes(_PAIRS + array('q', [len(a)]).tobytes()
+                            + array('d', a).tobytes() + array('d', b).tobytes())
+            self._in_flight += 1
+        # A child that does not keep up (or not yet listening): the newest pairs are kept,
+        # as many dropped from both lists, so the k-th reading still answers the k-th
+        # command.
         limit = 20 * self.settings.samples(self.settings.holdout)
-        if not self._ready:
-            # Until the child listens, keep the newest pairs only: as many dropped from
-            # both lists, so the k-th reading still answers the k-th command.
-            drop = max(0, min(len(self._commands), len(self._readings)) - limit)
-            del self._commands[:drop]
-            del self._readings[:drop]
-            return
-        commands, self._commands = self._commands, []
-        readings, self._readings = self._readings, []
-        if commands or readings:
-            self._conn.send_bytes(
-                _PAIRS + array('q', [len(commands)]).tobytes() + array('d', commands).tobytes()
-                + array('d', readings).tobytes())
+        drop = max(0, min(len(commands), len(readings)) - limit)
+        del commands[:drop]
+        del readings[:drop]
 
     def take_candidate(self) -> Candidate | None:
         """Return the candidate ready to apply, once (None when there is none)."""
@@ -784,15 +862,17 @@ class AdaptationProcess:
         number = self._sequence.pop(id(candidate), None)
         if accepted:
             self._model = candidate.model
-        if number is not None:
+        if number is not None and self._conn is not None:
             self._conn.send(('applied', number, accepted, reason))
 
-    def reset(self, model: MPIModel) -> None:
+    def reset(self, model: AdaptedModel) -> None:
         """Start again from a model pushed from outside."""
         self._model = model
         self._candidate = None
         self._sequence.clear()
-        self._conn.send(('reset', model.to_params()))
+        self._params = model.to_params()
+        if self._conn is not None:
+            self._conn.send(('reset', self._params))
 
     def status(self) -> dict[str, Any]:
         """Return the values /diagnostics shows (``adaptation_*``), as the child last sent."""
@@ -805,7 +885,9 @@ class AdaptationProcess:
 
     def _receive(self, message: Any) -> None:
         kind = message[0]
-        if kind == 'ready':
+        if kind == 'taken':
+            self._in_flight -= 1
+        elif kind == 'ready':
             self._ready = True
         elif kind == 'candidate':
             _, number, candidate = message
@@ -820,11 +902,30 @@ class AdaptationProcess:
                 self._on_error(message[1])
 
 
+def serve_socket(descriptor: int) -> None:
+    """
+    Serve an :class:`AdaptationProcess` on an inherited socket (the child's entry point).
+
+    Parameters
+    ----------
+    descriptor : int
+        The child's end of the socket pair; the first message is the model's parameters
+        and the settings.
+
+    """
+    conn = multiprocessing.connection.Connection(descriptor)
+    try:
+        params, settings = conn.recv()
+    except (EOFError, OSError):
+        return
+    _serve(conn, params, settings)
+
+
 def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
            settings: AdaptationSettings) -> None:
     # The child's loop: a thread moves the pairs from the pipe into the adaptation (so a
     # long solve never fills the pipe); this thread steps every period and answers.
-    adaptation = Adaptation(MPIModel.from_params(params), settings)
+    adaptation = Adaptation(_adapted(params), settings)
     candidates: dict[int, Candidate] = {}
     stop = threading.Event()
     send = threading.Lock()
@@ -841,6 +942,7 @@ def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
                     count = array('q', data[8:16])[0]
                     values = np.frombuffer(data, dtype=np.float64, offset=16)
                     adaptation.record_pairs(values[:count], values[count:])
+                    reply(('taken',))
                     continue
                 message = pickle.loads(data)
                 if message[0] == 'stop':
@@ -851,7 +953,7 @@ def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
                         adaptation.applied(candidate, message[2], message[3])
                 elif message[0] == 'reset':
                     candidates.clear()
-                    adaptation.reset(MPIModel.from_params(message[1]))
+                    adaptation.reset(_adapted(message[1]))
         except (EOFError, OSError):
             pass
         stop.set()
@@ -879,9 +981,46 @@ def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
     conn.close()
 
 
-def _with_start(candidate: MPIModel, running: MPIModel) -> MPIModel:
+def adaptable(model: object) -> bool:
+    """
+    Return whether the adaptation adapts ``model``.
+
+    Parameters
+    ----------
+    model : object
+        A model of any kind.
+
+    Returns
+    -------
+    bool
+        True for a forward Gamma with n >= 1, alone or with a thermal drift.
+
+    """
+    gamma = model.model if isinstance(model, ThermalDriftModel) else model
+    return isinstance(gamma, MPIModel) and not gamma.is_inverse and gamma.n >= 1
+
+
+def _adapted(params: dict[str, Any]) -> AdaptedModel:
+    model = extended_model_from_params(params)
+    if not isinstance(model, (MPIModel, ThermalDriftModel)):
+        msg = f'the adaptation adapts Gamma or Gamma with a thermal drift; found {model!r}'
+        raise ModelError(msg)
+    return model
+
+
+def _gamma(model: AdaptedModel) -> MPIModel:
+    return model.model if isinstance(model, ThermalDriftModel) else model
+
+
+def _with_start(candidate: AdaptedModel, running: AdaptedModel) -> AdaptedModel:
     # The candidate keeps the running model's start state (its plays' initial states,
     # moved with the input offset): only what the adaptation fitted changes.
+    if isinstance(candidate, ThermalDriftModel):
+        return replace(candidate, model=_gamma_with_start(candidate.model, _gamma(running)))
+    return _gamma_with_start(candidate, _gamma(running))
+
+
+def _gamma_with_start(candidate: MPIModel, running: MPIModel) -> MPIModel:
     h = candidate.hysteresis
     states = running.hysteresis.initial_states + (running.input_offset
                                                   - candidate.input_offset)

@@ -115,7 +115,7 @@ from .spinning import run_node_main
 from ..array_layout import FLOAT64_SIZE, malformed_float64
 from ..compensation import Compensator
 from ..compensation.adaptation import (
-    Adaptation, AdaptationProcess, AdaptationSettings, AdaptationWorker,
+    adaptable, Adaptation, AdaptationProcess, AdaptationSettings, AdaptationWorker,
 )
 from ..compensation.message_time import MessageClock
 from ..compensation.multi_axis import InputCounts
@@ -124,7 +124,6 @@ from ..compensation.status import single_axis_status, single_axis_values
 from ..compensation.updates import (
     apply, LIMIT_KEYS, limits_of, load, model_keys, Prepared, refusal,
 )
-from ..operators.model import MPIModel
 from ..units import INPUT_QUANTITY_KEY
 
 __all__ = ['CompensatorNode', 'main', 'make_node']
@@ -386,11 +385,11 @@ class CompensatorNode(CompensatorNodeBase):
     def _start_adaptation(self, model: Any) -> None:
         # A model that arrives from outside (configure, a push) starts the adaptation
         # afresh; the adaptation's own updates continue it.
-        if not isinstance(model, MPIModel) or model.n < 1:
+        if not adaptable(model):
             self._stop_adaptation()
             self.get_logger().warning(
-                f'adaptation.enabled: adaptation adapts a plain Gamma with n >= 1 only; off'
-                f' for this model ({self._model_kind})')
+                f'adaptation.enabled: adaptation adapts Gamma with n >= 1, alone or with a'
+                f' thermal drift; off for this model ({self._model_kind})')
             return
         if self._adaptation is not None:
             self._adaptation.reset(model)

@@ -16,6 +16,7 @@ import time
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
 from mpi_ros.compensation.adaptation import AdaptationProcess, AdaptationWorker
+from mpi_ros.extensions.thermal_drift import ThermalDriftModel
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.spinning import events_executor
 from mpi_ros.operators.model import MPIModel
@@ -136,3 +137,49 @@ def test_the_adaptation_process_updates_the_nodes_model_and_stops_with_it(node_a
     assert MPIModel.from_params(dumped).to_params() == running.to_params()
     node.destroy_node()
     assert not adaptation.running
+
+
+def test_a_thermal_drift_model_is_adapted_with_its_weight(ros_context, monkeypatch):
+    # The node adapts Gamma with a thermal drift too: a model whose w_T is a sixth of the
+    # plant's drift (tau_T right) on a plant drifting 3 um/A^2; the node applies whole
+    # thermal models through its own set_parameters, w_T grows, tau_T stays.
+    monkeypatch.setattr(AdaptationWorker, 'start', lambda self: None)
+    t, x = identification_excitation(30.0, sample_rate=RATE, seed=12)
+    config = {'noise_std_m': 2e-8}
+    y = MagnetostrictiveActuator(ActuatorConfig(**config), seed=12).simulate(t, x)
+    model = ThermalDriftModel(identify(x, y, n=10, l=5).model, 30.0, 0.02)
+    overrides = [Parameter(k, value=v) for k, v in model.to_params().items()] + [
+        Parameter('output.min', value=0.0), Parameter('output.max', value=2.0),
+        Parameter('sample_period', value=1 / RATE),
+        Parameter('adaptation.enabled', value=True),
+        Parameter('adaptation.process', value=False)]
+    node = CompensatorNode(context=ros_context, parameter_overrides=overrides)
+    executor = events_executor(ros_context)
+    executor.add_node(node)
+    plant = MagnetostrictiveActuator(ActuatorConfig(
+        thermal_gain_m_per_a2=3e-6, thermal_time_constant_s=30.0, **config), seed=112)
+    try:
+        adaptation = node.adaptation
+        assert adaptation is not None and isinstance(adaptation.model, ThermalDriftModel)
+        lo, hi = float(np.min(y)), float(np.max(y))
+        span = hi - lo
+        t, desired = tracking_trajectory(60.0, sample_rate=RATE, low=lo + 0.15 * span,
+                                         high=hi - 0.15 * span, final_envelope=1.0)
+        for k in range(t.size):
+            current = node.command(float(desired[k]))
+            adaptation.record_measurement(plant.step(float(t[k]), current))
+            if k and k % int(RATE) == 0:
+                adaptation.step()
+                for _ in range(3):
+                    executor.spin_once(timeout_sec=0.05)
+        status = adaptation.status()
+        assert status['adaptation_updates_accepted'] >= 1, status
+        running = node.compensator.model
+        assert isinstance(running, ThermalDriftModel)
+        assert running.time_constant == 30.0
+        assert node.get_parameter('model.thermal_drift.weight').value == running.weight
+        assert running.weight > model.weight
+    finally:
+        executor.remove_node(node)
+        executor.shutdown()
+        node.destroy_node()
