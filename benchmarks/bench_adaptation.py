@@ -141,6 +141,10 @@ def offline_run(scenario, seed, rate, duration, adaptive):
 class AdaptationLoop(DDSLoop):
     """The node processes of one benchmark run (the effects benchmark's), stopped by PID."""
 
+    def __init__(self, out, rate):
+        super().__init__(out)
+        self.rate = rate
+
     def identify(self, scenario, seed):
         """Record the undrifted plant's excitation, identify; return params file and range."""
         from mpi_ros import identify
