@@ -10,6 +10,8 @@ of the range for three minutes on the same actuator drifting ("in the afternoon"
 """
 
 import math
+import os
+import signal
 import time
 
 from mpi_ros import identify
@@ -341,3 +343,34 @@ def test_the_thermal_weight_is_adapted_when_the_drift_grows(thermal_model):
         assert candidate.model.superposition.satisfies_constraints()        # (19)
         ThermalDriftModel.from_params(candidate.to_params())               # validates whole
     assert abs(accepted[-1].weight) > abs(model.weight)
+
+
+def test_an_adaptation_process_that_ends_says_so_and_keeps_nothing():
+    # The child killed from outside: the node's side reports it once (on_error and the
+    # state), and drops what the command path records from then on.
+    model, _, _ = _model(SEEDS[0])
+    errors = []
+    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE),
+                                on_error=errors.append)
+    process.start()
+    try:
+        deadline = time.monotonic() + 120.0
+        while not process.status().get('adaptation_pairs') == 0:
+            assert time.monotonic() < deadline, process.status()
+            time.sleep(0.05)
+            process.exchange()
+        os.kill(process.pid, signal.SIGKILL)
+        while process.running:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        for _ in range(3):
+            for k in range(1000):
+                process.record_command(1.0)
+                process.record_measurement(1e-5)
+            process.exchange()
+    finally:
+        process.stop()
+    assert process.status()['adaptation_state'] == 'stopped: the adaptation process ended'
+    assert errors == ['stopped: the adaptation process ended']
+    assert process.take_candidate() is None
+    assert process.pending == (0, 0)

@@ -75,6 +75,8 @@ _PAIRS = b'pairs\x00\x00\x00'
 #: 4 x 32 KiB stay below a socket pair's buffer (208 KiB by default on Linux).
 _CHUNK = 2048
 _IN_FLIGHT = 4
+#: The state a node shows when its adaptation's child process has ended.
+_ENDED = 'stopped: the adaptation process ended'
 
 
 @dataclass(frozen=True)
@@ -775,6 +777,11 @@ class AdaptationProcess:
         """Return whether the child process is alive."""
         return self._process is not None and self._process.poll() is None
 
+    @property
+    def pending(self) -> tuple[int, int]:
+        """Return how many commands and readings are recorded here and not yet sent."""
+        return len(self._commands), len(self._readings)
+
     def start(self) -> None:
         """
         Start the child: this interpreter, on this one's import path, serving a socket pair.
@@ -832,7 +839,14 @@ class AdaptationProcess:
             while conn.poll():
                 self._receive(conn.recv())
         except (EOFError, OSError):
-            self._status['adaptation_state'] = 'stopped: the adaptation process ended'
+            # The child ended: say so once; what the node records is dropped from now on.
+            self._commands.clear()
+            self._readings.clear()
+            if self._status.get('adaptation_state') != _ENDED:
+                self._status['adaptation_state'] = _ENDED
+                self.errors += 1
+                if self._on_error is not None:
+                    self._on_error(_ENDED)
             return
         # The pipe never fills, so a send never blocks the node: at most _IN_FLIGHT
         # messages of at most _CHUNK pairs each are unacknowledged; the rest waits here.
