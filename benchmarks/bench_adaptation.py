@@ -17,7 +17,8 @@ must not make it worse), ``poor`` (thermal drift, starting from a model of order
 and offline only ``gain`` (the reading's gain grows 8 % and its zero 2 um over 120 s),
 ``thermal_model`` (a thermal-drift model identified on a record drifting 3 um/A^2 tracks an
 actuator drifting 6 um/A^2: its weight w_T is adapted with Gamma) and ``thermal_gamma``
-(the same, with Gamma alone identified on that record).
+(the same, with Gamma alone identified on that record), ``thermal_same`` (the thermal
+model on an actuator drifting as identified: adapting w_T must not make it worse).
 
 Reports the RMS tracking error per 10 s window (% of the recorded range), the ratio
 adaptive / static in the last window and over the last three, the updates accepted, and
@@ -51,11 +52,13 @@ DRIFTS = {
     'gain': {},
     'thermal_model': {'thermal_gain_m_per_a2': 6e-6, 'thermal_time_constant_s': 30.0},
     'thermal_gamma': {'thermal_gain_m_per_a2': 6e-6, 'thermal_time_constant_s': 30.0},
+    'thermal_same': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
 }
 #: The drift of the identification record ("in the morning"); none by default.
 IDENTIFY_DRIFT = {
     'thermal_model': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
     'thermal_gamma': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
+    'thermal_same': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
 }
 DESCRIPTIONS = {
     'thermal': 'thermal drift 3 um/A^2, tau 30 s; model (14, 7)',
@@ -64,9 +67,10 @@ DESCRIPTIONS = {
     'gain': 'reading gain +8 %, zero +2 um over 120 s; model (14, 7)',
     'thermal_model': 'drift 3 -> 6 um/A^2; thermal model (14, 7), w_T adapted',
     'thermal_gamma': 'drift 3 -> 6 um/A^2; Gamma (14, 7) alone, same record',
+    'thermal_same': 'drift 3 um/A^2 as identified; thermal model (14, 7), w_T adapted',
 }
 ORDERS = {'thermal': (14, 7), 'none': (14, 7), 'poor': (4, 2), 'gain': (14, 7),
-          'thermal_model': (14, 7), 'thermal_gamma': (14, 7)}
+          'thermal_model': (14, 7), 'thermal_gamma': (14, 7), 'thermal_same': (14, 7)}
 _MODELS = {}
 WINDOW = 10.0
 
@@ -102,7 +106,8 @@ def offline_model(scenario, seed):
         y = MagnetostrictiveActuator(ActuatorConfig(
             noise_std_m=NOISE, **IDENTIFY_DRIFT.get(scenario, {})), seed=seed).simulate(t, x)
         n, l = ORDERS[scenario]  # noqa: E741
-        model = (fit_thermal_drift(t, x, y, order=(n, l)) if scenario == 'thermal_model'
+        model = (fit_thermal_drift(t, x, y, order=(n, l))
+                 if scenario in ('thermal_model', 'thermal_same')
                  else identify(x, y, n=n, l=l).model)
         _MODELS[scenario, seed] = model, float(np.min(y)), float(np.max(y))
     return _MODELS[scenario, seed]
@@ -267,7 +272,7 @@ def main():
                     adaptive, updates = offline_run(scenario, seed, args.rate, args.duration,
                                                     True)
                 else:
-                    if scenario in ('gain', 'thermal_model', 'thermal_gamma'):
+                    if scenario in ('gain', 'thermal_model', 'thermal_gamma', 'thermal_same'):
                         continue
                     params, lo, hi = loop.identify(scenario, seed)
                     times, desired = trajectory(lo, hi, args.duration, args.rate)
