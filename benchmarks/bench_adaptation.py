@@ -14,7 +14,11 @@ simulator's ``displacement`` readings itself).
 
 Scenarios: ``thermal`` (thermal drift, 3 um/A^2, tau 30 s), ``none`` (no drift: adaptation
 must not make it worse), ``poor`` (thermal drift, starting from a model of order (4, 2)),
-and offline only ``gain`` (the reading's gain grows 8 % and its zero 2 um over 120 s).
+and offline only ``gain`` (the reading's gain grows 8 % and its zero 2 um over 120 s),
+``thermal_model`` (a thermal-drift model identified on a record drifting 3 um/A^2 tracks an
+actuator drifting 6 um/A^2: its weight w_T is adapted with Gamma) and ``thermal_gamma``
+(the same, with Gamma alone identified on that record), ``thermal_same`` (the thermal
+model on an actuator drifting as identified: adapting w_T must not make it worse).
 
 Reports the RMS tracking error per 10 s window (% of the recorded range), the ratio
 adaptive / static in the last window and over the last three, the updates accepted, and
@@ -46,14 +50,28 @@ DRIFTS = {
     'none': {},
     'poor': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
     'gain': {},
+    'thermal_model': {'thermal_gain_m_per_a2': 6e-6, 'thermal_time_constant_s': 30.0},
+    'thermal_gamma': {'thermal_gain_m_per_a2': 6e-6, 'thermal_time_constant_s': 30.0},
+    'thermal_same': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
+}
+#: The drift of the identification record ("in the morning"); none by default.
+IDENTIFY_DRIFT = {
+    'thermal_model': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
+    'thermal_gamma': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
+    'thermal_same': {'thermal_gain_m_per_a2': 3e-6, 'thermal_time_constant_s': 30.0},
 }
 DESCRIPTIONS = {
     'thermal': 'thermal drift 3 um/A^2, tau 30 s; model (14, 7)',
     'none': 'no drift; model (14, 7)',
     'poor': 'thermal drift; model (4, 2)',
     'gain': 'reading gain +8 %, zero +2 um over 120 s; model (14, 7)',
+    'thermal_model': 'drift 3 -> 6 um/A^2; thermal model (14, 7), w_T adapted',
+    'thermal_gamma': 'drift 3 -> 6 um/A^2; Gamma (14, 7) alone, same record',
+    'thermal_same': 'drift 3 um/A^2 as identified; thermal model (14, 7), w_T adapted',
 }
-ORDERS = {'thermal': (14, 7), 'none': (14, 7), 'poor': (4, 2), 'gain': (14, 7)}
+ORDERS = {'thermal': (14, 7), 'none': (14, 7), 'poor': (4, 2), 'gain': (14, 7),
+          'thermal_model': (14, 7), 'thermal_gamma': (14, 7), 'thermal_same': (14, 7)}
+_MODELS = {}
 WINDOW = 10.0
 
 
@@ -77,18 +95,30 @@ def trajectory(lo, hi, duration, rate):
                                high=hi - 0.15 * span, final_envelope=1.0)
 
 
+def offline_model(scenario, seed):
+    """Identify the scenario's model on its record (once per scenario and seed)."""
+    from mpi_ros import identify
+    from mpi_ros.extensions.thermal_drift import fit_thermal_drift
+    from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
+    from mpi_ros.plant.excitation import identification_excitation
+    if (scenario, seed) not in _MODELS:
+        t, x = identification_excitation(RECORD_DURATION, sample_rate=RECORD_RATE, seed=seed)
+        y = MagnetostrictiveActuator(ActuatorConfig(
+            noise_std_m=NOISE, **IDENTIFY_DRIFT.get(scenario, {})), seed=seed).simulate(t, x)
+        n, l = ORDERS[scenario]  # noqa: E741
+        model = (fit_thermal_drift(t, x, y, order=(n, l))
+                 if scenario in ('thermal_model', 'thermal_same')
+                 else identify(x, y, n=n, l=l).model)
+        _MODELS[scenario, seed] = model, float(np.min(y)), float(np.max(y))
+    return _MODELS[scenario, seed]
+
+
 def offline_run(scenario, seed, rate, duration, adaptive):
     """Run one loop without DDS (core objects); return windows and updates."""
-    from mpi_ros import identify
     from mpi_ros.compensation import Compensator
     from mpi_ros.compensation.adaptation import Adaptation, AdaptationSettings
     from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-    from mpi_ros.plant.excitation import identification_excitation
-    t, x = identification_excitation(RECORD_DURATION, sample_rate=RECORD_RATE, seed=seed)
-    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=NOISE), seed=seed).simulate(t, x)
-    n, l = ORDERS[scenario]  # noqa: E741
-    model = identify(x, y, n=n, l=l).model
-    lo, hi = float(np.min(y)), float(np.max(y))
+    model, lo, hi = offline_model(scenario, seed)
     times, desired = trajectory(lo, hi, duration, rate)
     plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=NOISE, **DRIFTS[scenario]),
                                      seed=seed + 2)
@@ -115,6 +145,10 @@ def offline_run(scenario, seed, rate, duration, adaptive):
 
 class AdaptationLoop(DDSLoop):
     """The node processes of one benchmark run (the effects benchmark's), stopped by PID."""
+
+    def __init__(self, out, rate):
+        super().__init__(out)
+        self.rate = rate
 
     def identify(self, scenario, seed):
         """Record the undrifted plant's excitation, identify; return params file and range."""
@@ -195,7 +229,7 @@ def plot(rows, path):
         ax.set_title(f'{scenario}: {DESCRIPTIONS[scenario]}', fontsize=9)
         ax.set_ylabel('RMS error per 10 s [% of range]', fontsize=8)
         ax.grid(True, which='both', alpha=0.3)
-        ax.legend(fontsize=6.5, loc='lower right')
+        ax.legend(fontsize=6.5, loc='best')
     for ax in axes[-1]:
         ax.set_xlabel('time since the start of tracking [s]', fontsize=8)
     for ax in axes.ravel()[len(scenarios):]:
@@ -238,7 +272,7 @@ def main():
                     adaptive, updates = offline_run(scenario, seed, args.rate, args.duration,
                                                     True)
                 else:
-                    if scenario == 'gain':
+                    if scenario in ('gain', 'thermal_model', 'thermal_gamma', 'thermal_same'):
                         continue
                     params, lo, hi = loop.identify(scenario, seed)
                     times, desired = trajectory(lo, hi, args.duration, args.rate)

@@ -10,12 +10,16 @@ of the range for three minutes on the same actuator drifting ("in the afternoon"
 """
 
 import math
+import os
+import signal
+import time
 
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
-from mpi_ros.compensation.adaptation import Adaptation, AdaptationSettings
+from mpi_ros.compensation.adaptation import Adaptation, AdaptationProcess, AdaptationSettings
 from mpi_ros.errors import ModelError
-from mpi_ros.identification.recursive import RecursiveFit
+from mpi_ros.extensions.thermal_drift import fit_thermal_drift, ThermalDriftModel
+from mpi_ros.identification.recursive import heating, RecursiveFit
 from mpi_ros.operators.model import MPIModel
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
@@ -83,6 +87,24 @@ def test_recursive_fit_keeps_the_running_model_exactly():
                                rtol=0, atol=1e-12 * np.ptp(model.run(x, z)[0]))
 
 
+def test_a_solve_on_the_running_models_own_readings_returns_the_running_model():
+    # The pull towards the running weights pulls towards them, not elsewhere: on readings
+    # the running model explains exactly (its own output, over a third of the range, so
+    # most dead zones of S' see nothing) the QP's solution is the running point.  (The
+    # pull's linear term was once twice too large: it aimed at twice the running weights,
+    # so every solve doubled the weights the data left free, and a drifting plant's
+    # candidates grew worse than the model they started from.)
+    model, lo, hi = _model(SEEDS[0])
+    fit = RecursiveFit(model, forgetting=1.0)
+    x = identification_excitation(20.0, sample_rate=RATE, seed=4)[1]
+    x = float(np.min(x)) + (x - float(np.min(x))) / 3.0
+    y = model.run(x, np.full(model.n + 1, float(x[0]) - model.input_offset))[0]
+    fit.advance(x, y)
+    solved = fit.solve(fit.start)
+    scale = float(np.max(np.abs(fit.start.weights)))
+    np.testing.assert_allclose(solved.weights, fit.start.weights, rtol=0, atol=1e-6 * scale)
+
+
 def test_recursive_fit_refuses_what_it_cannot_adapt():
     model, _, _ = _model(SEEDS[0])
     with pytest.raises(ModelError, match='forward model Gamma with n >= 1'):
@@ -101,6 +123,7 @@ def test_adaptation_tracks_a_drifting_plant_better_than_the_static_model(seed):
         static, _, _, _ = _loop(seed, adaptive=False, **drift)
         adapted, accepted, status, commands = _loop(seed, adaptive=True, **drift)
         assert adapted[-1] < static[-1], (drift, adapted, static)
+        assert adapted[-1] <= 0.5 * static[-1], (drift, adapted, static)   # the issue's goal
         assert accepted and status['adaptation_updates_accepted'] == len(accepted)
         assert np.all(np.isfinite(commands))
         for model in accepted:
@@ -168,3 +191,186 @@ def test_readings_that_lag_by_a_known_delay_are_paired_with_their_commands():
             adaptation.step()
         errors[delay] = adaptation.status()['adaptation_recent_rms_percent']
     assert errors[5] < 0.01 < errors[0], errors
+
+
+def test_the_adaptation_in_its_own_process_proposes_what_it_does_in_this_one():
+    # The child process steps on its own clock; each simulated second is sent once the
+    # child has taken the previous one (its status counts the pairs), so it steps on the
+    # same batches as the adaptation stepped here, and every candidate is applied before
+    # the next batch in both.  The accepted models agree to round-off.
+    seed = SEEDS[0]
+    model, lo, hi = _model(seed)
+    span = hi - lo
+    t, desired = tracking_trajectory(40.0, sample_rate=RATE, low=lo + 0.15 * span,
+                                     high=hi - 0.15 * span, final_envelope=1.0)
+    actuator = MagnetostrictiveActuator(ActuatorConfig(
+        noise_std_m=2e-8, sensor_zero_current_a=0.2, thermal_gain_m_per_a2=3e-6,
+        thermal_time_constant_s=30.0), seed=seed + 100)
+    settings = AdaptationSettings(sample_period=1 / RATE)
+    here = Adaptation(model, settings)
+    there = AdaptationProcess(model, settings)
+    compensator = Compensator(model, output_min=0.0, output_max=2.0, sample_period=1 / RATE)
+    accepted = {'here': [], 'there': []}
+    there.start()
+    try:
+        block = int(RATE)
+        for start in range(0, t.size - block + 1, block):
+            for k in range(start, start + block):
+                current = compensator.command(float(desired[k]))
+                reading = actuator.step(float(t[k]), current)
+                for adaptation in (here, there):
+                    adaptation.record_command(current)
+                    adaptation.record_measurement(reading)
+            here.step()
+            candidate = here.take_candidate()
+            if candidate is not None:
+                here.applied(candidate, True)
+                compensator.install(candidate.model)
+                accepted['here'].append(candidate.model.to_params())
+            deadline = time.monotonic() + 120.0
+            there.exchange()
+            while there.status().get('adaptation_pairs') != start + block:
+                assert time.monotonic() < deadline, there.status()
+                time.sleep(0.02)
+                there.exchange()
+            candidate = there.take_candidate()
+            if candidate is not None:
+                there.applied(candidate, True)
+                accepted['there'].append(candidate.model.to_params())
+    finally:
+        there.stop()
+    assert not there.running
+    assert there.errors == 0
+    assert accepted['here'], here.status()
+    assert len(accepted['there']) == len(accepted['here'])
+    for a, b in zip(accepted['here'], accepted['there']):
+        for key in a:
+            np.testing.assert_allclose(b[key], a[key], rtol=1e-9, atol=1e-15, err_msg=key)
+    assert there.model.to_params() == MPIModel.from_params(accepted['there'][-1]).to_params()
+
+
+def test_the_thermal_state_in_chunks_is_the_compensators_recurrence():
+    # T_k = a T_(k-1) + (1 - a) x_(k-1)^2 from T_0 = x_0^2, one sample at a time (the
+    # thermal-drift compensator's step), against chunks split at random points.
+    rng = np.random.default_rng(5)
+    x = rng.uniform(0.0, 2.0, 1000)
+    a = math.exp(-1e-3 / 0.3)
+    expected = np.empty(x.size)
+    thermal, previous = x[0] ** 2, x[0]
+    for k, current in enumerate(x):
+        thermal = a * thermal + (1.0 - a) * previous ** 2
+        expected[k], previous = thermal, current
+    cuts = np.sort(rng.choice(np.arange(1, x.size), 6, replace=False))
+    state = np.full(2, math.nan)
+    parts = []
+    for chunk in np.split(x, cuts):
+        part, state = heating(chunk, coefficient=a, state=state)
+        parts.append(part)
+    np.testing.assert_allclose(np.concatenate(parts), expected, rtol=1e-13, atol=0.0)
+    np.testing.assert_array_equal(state, [expected[-1], x[-1]])
+
+
+@pytest.fixture(scope='module')
+def thermal_model():
+    # Identified on a record of the actuator drifting (3 um/A^2, tau 30 s): Gamma, tau_T
+    # and w_T.
+    t, x = identification_excitation(60.0, sample_rate=RATE, seed=SEEDS[1])
+    y = MagnetostrictiveActuator(ActuatorConfig(
+        noise_std_m=2e-8, thermal_gain_m_per_a2=3e-6, thermal_time_constant_s=30.0),
+        seed=SEEDS[1]).simulate(t, x)
+    model = fit_thermal_drift(t, x, y, order=(14, 7))
+    assert model.weight != 0.0
+    return model, float(np.min(y)), float(np.max(y))
+
+
+def test_the_recursive_fit_starts_at_the_thermal_models_point(thermal_model):
+    model, _, _ = thermal_model
+    fit = RecursiveFit(model.model, forgetting=1.0, thermal_time_constant=model.time_constant,
+                       thermal_weight=model.weight, sample_period=1 / RATE)
+    gamma = fit.model(fit.start).with_initial_states(model.model.hysteresis.initial_states)
+    rebuilt = ThermalDriftModel(gamma, model.time_constant, fit.thermal_weight(fit.start))
+    t, x = identification_excitation(20.0, sample_rate=RATE, seed=3)
+    expected = model.simulate(t, x)
+    np.testing.assert_allclose(rebuilt.simulate(t, x), expected, rtol=0,
+                               atol=1e-9 * np.ptp(expected))
+    with pytest.raises(ModelError, match='thermal time constant and the sample period'):
+        RecursiveFit(model.model, forgetting=1.0, thermal_time_constant=0.0)
+
+
+def test_the_thermal_weight_is_adapted_when_the_drift_grows(thermal_model):
+    # The plant's thermal gain doubles after the identification (6 um/A^2): the adapted
+    # thermal model, w_T re-fitted and T following the commands, tracks better than the
+    # static one in the last window, and its w_T grows; every accepted model is a valid
+    # thermal model whose Gamma satisfies (8) and (19).
+    model, lo, hi = thermal_model
+    span = hi - lo
+    t, desired = tracking_trajectory(180.0, sample_rate=RATE, low=lo + 0.15 * span,
+                                     high=hi - 0.15 * span, final_envelope=1.0)
+    results = {}
+    for adaptive in (False, True):
+        compensator = Compensator(model, output_min=0.0, output_max=2.0,
+                                  sample_period=1 / RATE)
+        actuator = MagnetostrictiveActuator(ActuatorConfig(
+            noise_std_m=2e-8, thermal_gain_m_per_a2=6e-6, thermal_time_constant_s=30.0),
+            seed=SEEDS[1] + 100)
+        adaptation = Adaptation(model, AdaptationSettings(sample_period=1 / RATE))
+        measured = np.empty(t.size)
+        accepted = []
+        for k in range(t.size):
+            current = compensator.command(float(desired[k]))
+            measured[k] = actuator.step(float(t[k]), current)
+            assert math.isfinite(current)
+            if adaptive:
+                adaptation.record_command(current)
+                adaptation.record_measurement(measured[k])
+                if k and k % int(RATE) == 0:
+                    adaptation.step()
+                    candidate = adaptation.take_candidate()
+                    if candidate is not None:
+                        compensator.install(candidate.model)
+                        adaptation.applied(candidate, True)
+                        accepted.append(candidate.model)
+        window = int(10 * RATE)
+        results[adaptive] = (100 * math.sqrt(np.mean(((measured - desired)[-window:] / span)
+                                                     ** 2)), accepted)
+    (static, _), (adapted, accepted) = results[False], results[True]
+    assert adapted < static, (adapted, static)
+    assert accepted
+    for candidate in accepted:
+        assert isinstance(candidate, ThermalDriftModel)
+        assert candidate.time_constant == model.time_constant
+        assert candidate.model.hysteresis.satisfies_constraints()           # (8)
+        assert candidate.model.superposition.satisfies_constraints()        # (19)
+        ThermalDriftModel.from_params(candidate.to_params())               # validates whole
+    assert abs(accepted[-1].weight) > abs(model.weight)
+
+
+def test_an_adaptation_process_that_ends_says_so_and_keeps_nothing():
+    # The child killed from outside: the node's side reports it once (on_error and the
+    # state), and drops what the command path records from then on.
+    model, _, _ = _model(SEEDS[0])
+    errors = []
+    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE),
+                                on_error=errors.append)
+    process.start()
+    try:
+        deadline = time.monotonic() + 120.0
+        while not process.status().get('adaptation_pairs') == 0:
+            assert time.monotonic() < deadline, process.status()
+            time.sleep(0.05)
+            process.exchange()
+        os.kill(process.pid, signal.SIGKILL)
+        while process.running:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        for _ in range(3):
+            for k in range(1000):
+                process.record_command(1.0)
+                process.record_measurement(1e-5)
+            process.exchange()
+    finally:
+        process.stop()
+    assert process.status()['adaptation_state'] == 'stopped: the adaptation process ended'
+    assert errors == ['stopped: the adaptation process ended']
+    assert process.take_candidate() is None
+    assert process.pending == (0, 0)

@@ -12,8 +12,10 @@ the fit has not seen.  The node applies a candidate through its ordinary paramet
 (the same validation as a push), so an adapted model is what ``ros2 param get`` and
 ``ros2 param dump`` show.
 
-The work runs in :class:`AdaptationWorker`'s thread; the command path only appends a
-float to a deque.
+The work runs in a child process (:class:`AdaptationProcess`: its own interpreter, so the
+command path never waits for the interpreter lock while a step runs) or in a thread of the
+node's process (:class:`AdaptationWorker`); either way the command path only appends a float
+to a list.
 
 Rules, in the order they are checked on each batch of paired samples:
 
@@ -33,24 +35,48 @@ Rules, in the order they are checked on each batch of paired samples:
   towards the QP's solution, which the linear constraints allow).
 """
 
+from array import array
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
+import multiprocessing.connection
+import os
+import pickle
+import socket
+import subprocess
+import sys
 import threading
+import time
 from typing import Any, Callable
 
 import numpy as np
 import numpy.typing as npt
 
 from ..errors import ModelError, MPIError
-from ..identification.recursive import RecursiveFit, WeightPoint
+from ..extensions import extended_model_from_params
+from ..extensions.thermal_drift import ThermalDriftModel
+from ..identification.recursive import heating, RecursiveFit, WeightPoint
 from ..operators.hysteresis import PIHysteresisOperator
 from ..operators.model import MPIModel
 from ..operators.play import play_end_state
 
-__all__ = ['Adaptation', 'AdaptationSettings', 'AdaptationWorker', 'Candidate']
+__all__ = ['Adaptation', 'AdaptationProcess', 'AdaptationSettings', 'AdaptationWorker',
+           'adaptable', 'Candidate', 'serve_socket']
 
 FloatArray = npt.NDArray[np.float64]
+
+#: The models the adaptation adapts: Gamma, or Gamma with a thermal drift (its weight
+#: ``w_T`` re-fitted, its thermal state following the commands, ``tau_T`` kept).
+AdaptedModel = MPIModel | ThermalDriftModel
+
+#: First 8 bytes of a message of pairs to the child (the others are pickled tuples).
+_PAIRS = b'pairs\x00\x00\x00'
+#: Most pairs per message, and most messages of pairs the child has not acknowledged:
+#: 4 x 32 KiB stay below a socket pair's buffer (208 KiB by default on Linux).
+_CHUNK = 2048
+_IN_FLIGHT = 4
+#: The state a node shows when its adaptation's child process has ended.
+_ENDED = 'stopped: the adaptation process ended'
 
 
 @dataclass(frozen=True)
@@ -146,8 +172,9 @@ class AdaptationSettings:
 
         """
         prefix = 'adaptation.'
+        switches = ('adaptation.enabled', 'adaptation.process')
         fields = {key[len(prefix):]: value for key, value in values.items()
-                  if key.startswith(prefix) and key != 'adaptation.enabled'}
+                  if key.startswith(prefix) and key not in switches}
         return cls(sample_period=sample_period, **fields)
 
     def samples(self, seconds: float) -> int:
@@ -162,8 +189,8 @@ class Candidate:
 
     Attributes
     ----------
-    model : MPIModel
-        The candidate Gamma (same thresholds as the running one).
+    model : MPIModel or ThermalDriftModel
+        The candidate (same thresholds, and time constant, as the running one).
     point : WeightPoint
         Its point in the recursive fit's design.
     running_error, candidate_error : float
@@ -174,7 +201,7 @@ class Candidate:
 
     """
 
-    model: MPIModel
+    model: AdaptedModel
     point: WeightPoint
     running_error: float
     candidate_error: float
@@ -186,9 +213,11 @@ class Candidate:
 
     def describe(self) -> str:
         """Return one log line: the held-out errors and the step."""
+        thermal = (f'; thermal weight {self.model.weight:.4g} 1/A'
+                   if isinstance(self.model, ThermalDriftModel) else '')
         return (f'held-out RMS {100 * self.running_error:.3g} % -> '
                 f'{100 * self.candidate_error:.3g} % of the displacement range '
-                f'(step {100 * self.step:.2g} %)')
+                f'(step {100 * self.step:.2g} %){thermal}')
 
 
 @dataclass
@@ -210,8 +239,9 @@ class Adaptation:
 
     Parameters
     ----------
-    model : MPIModel
-        The running forward model Gamma (n >= 1).
+    model : MPIModel or ThermalDriftModel
+        The running forward model: Gamma (n >= 1), or Gamma with a thermal drift, whose
+        weight ``w_T`` is adapted with Gamma and whose thermal state follows the commands.
     settings : AdaptationSettings
         See :class:`AdaptationSettings`.
 
@@ -222,7 +252,7 @@ class Adaptation:
 
     """
 
-    def __init__(self, model: MPIModel, settings: AdaptationSettings) -> None:
+    def __init__(self, model: AdaptedModel, settings: AdaptationSettings) -> None:
         self.settings = settings
         self._commands: deque[float] = deque()
         self._readings: deque[float] = deque()
@@ -246,7 +276,7 @@ class Adaptation:
         play_end_state(np.zeros(2), np.zeros(1))
 
     @property
-    def model(self) -> MPIModel:
+    def model(self) -> AdaptedModel:
         """Return the running model the adaptation starts its candidates from."""
         with self._lock:
             return self._model
@@ -259,6 +289,11 @@ class Adaptation:
     def record_measurement(self, displacement: float) -> None:
         """Record a displacement reading [m], in the order they arrive."""
         self._readings.append(displacement)
+
+    def record_pairs(self, currents: npt.ArrayLike, displacements: npt.ArrayLike) -> None:
+        """Record published commands [A] and readings [m] in bulk, each in order."""
+        self._commands.extend(np.asarray(currents, dtype=np.float64).tolist())
+        self._readings.extend(np.asarray(displacements, dtype=np.float64).tolist())
 
     def take_candidate(self) -> Candidate | None:
         """Return the candidate ready to apply, once (None when there is none)."""
@@ -291,7 +326,7 @@ class Adaptation:
                 self._counts.refused += 1
                 self._remember(f'candidate refused by validation: {reason}')
 
-    def reset(self, model: MPIModel) -> None:
+    def reset(self, model: AdaptedModel) -> None:
         """Start again from a model pushed from outside (the Gram matrices are dropped)."""
         with self._lock:
             self._reset(model)
@@ -363,19 +398,28 @@ class Adaptation:
         return candidate
 
     # -- internals ---------------------------------------------------------------------
-    def _reset(self, model: MPIModel) -> None:
+    def _reset(self, model: AdaptedModel) -> None:
         s = self.settings
+        gamma = _gamma(model)
+        drift = model if isinstance(model, ThermalDriftModel) else None
         self._fit = RecursiveFit(
-            model, forgetting=math.exp(-s.sample_period / s.forgetting_time),
-            offset_forgetting=math.exp(-s.sample_period / s.offset_time))
+            gamma, forgetting=math.exp(-s.sample_period / s.forgetting_time),
+            offset_forgetting=math.exp(-s.sample_period / s.offset_time),
+            thermal_time_constant=None if drift is None else drift.time_constant,
+            thermal_weight=0.0 if drift is None else drift.weight,
+            sample_period=s.sample_period)
         self._model = model
         self._point = self._fit.start
         d = self._fit.design
         self._input_span = 2.0 * d.x_scale
         sweep = d.input_offset + d.x_scale * np.concatenate(
             [np.linspace(-1.0, 1.0, 201), np.linspace(1.0, -1.0, 201)])
-        state = np.full(model.n + 1, float(sweep[0]) - model.input_offset)
-        self._output_span = float(np.ptp(model.run(sweep, state)[0]))
+        state = np.full(gamma.n + 1, float(sweep[0]) - gamma.input_offset)
+        self._output_span = float(np.ptp(gamma.run(sweep, state)[0]))
+        # The thermal state (T, x of the last sample) at the newest reading screened and
+        # at the first pair of the recent window (NaN: settles at the first sample).
+        self._heat_now = np.full(2, math.nan)
+        self._heat_window = np.full(2, math.nan)
         self._bx = np.empty(0)
         self._by = np.empty(0)
         self._bok = np.empty(0, dtype=bool)
@@ -392,7 +436,7 @@ class Adaptation:
         # Play outputs on the raw input [A] (every model of the design shares the
         # thresholds; a model with input offset x0 has the states minus x0): at the
         # newest reading screened, and at the first pair of the recent window.
-        self._thresholds = np.asarray(model.hysteresis.thresholds, dtype=np.float64)
+        self._thresholds = np.asarray(gamma.hysteresis.thresholds, dtype=np.float64)
         self._plays_now: FloatArray | None = None
         self._plays_window: FloatArray | None = None
 
@@ -411,13 +455,14 @@ class Adaptation:
         self._counts.pairs += k
         return x, y
 
-    def _screen(self, model: MPIModel, x: FloatArray, y: FloatArray) -> npt.NDArray[np.bool_]:
+    def _screen(self, model: AdaptedModel, x: FloatArray,
+                y: FloatArray) -> npt.NDArray[np.bool_]:
         # Garbage readings: non-finite, stuck, or a residual jump.  Any of them freezes.
         s = self.settings
         if self._plays_now is None:
             self._plays_now = np.full(self._thresholds.size, float(x[0]))
-        prediction, end = model.run(x, self._plays_now - model.input_offset)
-        self._plays_now = end + model.input_offset
+        prediction, self._plays_now, self._heat_now = self._run(
+            model, x, self._plays_now, self._heat_now)
         finite = np.isfinite(y)
         residual = np.where(finite, y - prediction, np.nan)
         previous = np.concatenate([[self._last_residual], residual[:-1]])
@@ -497,6 +542,10 @@ class Adaptation:
         if start and self._plays_window is not None:
             self._plays_window = play_end_state(self._bx[:start], self._thresholds,
                                                 self._plays_window)
+            if self._fit.heating_coefficient is not None:
+                _, self._heat_window = heating(self._bx[:start],
+                                               coefficient=self._fit.heating_coefficient,
+                                               state=self._heat_window)
         self._bx, self._by, self._bok = (self._bx[start:], self._by[start:],
                                          self._bok[start:])
         self._in_gram = max(0, self._in_gram - start)
@@ -536,7 +585,7 @@ class Adaptation:
     def _excitation_mask(self) -> bool:
         return self._commands_span() >= self.settings.min_excitation * self._input_span
 
-    def _candidate(self, model: MPIModel, point: WeightPoint,
+    def _candidate(self, model: AdaptedModel, point: WeightPoint,
                    solution: WeightPoint) -> Candidate | None:
         s = self.settings
         held = s.samples(s.holdout)
@@ -545,7 +594,7 @@ class Adaptation:
             return None
         test = slice(x.size - held, x.size)
         running = self._simulate(model, x)
-        proposed = self._fit.model(solution)
+        proposed = self._build(solution)
         # The output offset follows the newest training readings (a drifting zero): the
         # last held-out length before the held-out part.
         recent = slice(max(0, x.size - 2 * held), x.size - held)
@@ -555,7 +604,7 @@ class Adaptation:
         fraction = 1.0
         for _ in range(6):
             target = point.toward(solution, fraction)
-            candidate_model = self._fit.model(target)
+            candidate_model = self._build(target)
             simulated = self._simulate(candidate_model, x)
             step = float(np.max(np.abs(simulated - running))) / self._output_span
             if step <= s.max_step * (1.0 + 1e-9):
@@ -577,20 +626,41 @@ class Adaptation:
                 and candidate_error <= (1.0 - s.margin) * running_error):
             self._counts.not_better += 1
             return None
-        if not (candidate_model.hysteresis.satisfies_constraints()
-                and candidate_model.superposition.satisfies_constraints()):
+        gamma = _gamma(candidate_model)
+        if not (gamma.hysteresis.satisfies_constraints()
+                and gamma.superposition.satisfies_constraints()):
             self._counts.refused += 1
             self._remember('candidate violates (8)/(19): not proposed')
             return None
         return Candidate(_with_start(candidate_model, model), target, running_error,
                          candidate_error, step)
 
-    def _simulate(self, model: MPIModel, x: FloatArray) -> FloatArray:
+    def _simulate(self, model: AdaptedModel, x: FloatArray) -> FloatArray:
         # From the plays' state before the window's first pair (shared by the design's
-        # models, shifted by each one's input offset).
+        # models, shifted by each one's input offset) and the thermal state there.
         if self._plays_window is None:
             self._plays_window = np.full(self._thresholds.size, float(x[0]))
-        return model.run(x, self._plays_window - model.input_offset)[0]
+        return self._run(model, x, self._plays_window, self._heat_window)[0]
+
+    def _run(self, model: AdaptedModel, x: FloatArray, plays: FloatArray,
+             heat: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        # The model's displacement from the plays' outputs on the raw input [A] and the
+        # thermal state; returns both states after the last sample.
+        gamma = _gamma(model)
+        a = self._fit.heating_coefficient
+        if not isinstance(model, ThermalDriftModel) or a is None:
+            y, end = gamma.run(x, plays - gamma.input_offset)
+            return y, end + gamma.input_offset, heat
+        h, end = gamma.hysteresis_output(x, plays - gamma.input_offset)
+        thermal, heat = heating(x, coefficient=a, state=heat)
+        return gamma.output(h + model.weight * thermal), end + gamma.input_offset, heat
+
+    def _build(self, point: WeightPoint) -> AdaptedModel:
+        # The model of a point of the fit's design, of the running model's kind.
+        gamma = self._fit.model(point)
+        if isinstance(self._model, ThermalDriftModel):
+            return replace(self._model, model=gamma, weight=self._fit.thermal_weight(point))
+        return gamma
 
     def _set_state(self, state: str) -> None:
         with self._lock:
@@ -651,9 +721,320 @@ class AdaptationWorker:
                     self._on_error(f'{type(err).__name__}: {err}')
 
 
-def _with_start(candidate: MPIModel, running: MPIModel) -> MPIModel:
+class AdaptationProcess:
+    """
+    Run an :class:`Adaptation` in a child process; the node's side of it, in the node.
+
+    The node's interpreter runs nothing of a step: the command path appends each command
+    and each reading to a list, and :meth:`exchange` (the node's 10 Hz timer) sends what
+    arrived to the child in one message and takes back the child's candidate, status and
+    events.  The child (started with ``spawn``: a fork of a process with DDS threads is
+    unsafe) drains its end of the pipe in a thread of its own, so a long solve never
+    fills the pipe, and steps every ``period`` seconds.  Its methods mirror
+    :class:`Adaptation`'s node side, so the node treats both alike.
+
+    Parameters
+    ----------
+    model : MPIModel or ThermalDriftModel
+        The running forward model (see :class:`Adaptation`).
+    settings : AdaptationSettings
+        See :class:`AdaptationSettings`.
+    on_error : callable, optional
+        Called with the text of an exception a step raised in the child.
+
+    """
+
+    def __init__(self, model: AdaptedModel, settings: AdaptationSettings, *,
+                 on_error: Callable[[str], None] | None = None) -> None:
+        self.settings = settings
+        self._model = model
+        self._on_error = on_error
+        self.errors = 0
+        self._commands: list[float] = []
+        self._readings: list[float] = []
+        self._ready = False
+        self._in_flight = 0
+        self._candidate: Candidate | None = None
+        self._sequence: dict[int, int] = {}
+        self._status: dict[str, Any] = {'adaptation_state': 'starting the adaptation process'}
+        self._events: list[str] = []
+        self._params = model.to_params()
+        self._process: subprocess.Popen[bytes] | None = None
+        self._conn: multiprocessing.connection.Connection | None = None
+
+    @property
+    def model(self) -> AdaptedModel:
+        """Return the running model the adaptation starts its candidates from."""
+        return self._model
+
+    @property
+    def pid(self) -> int | None:
+        """Return the child's process id (None before :meth:`start`)."""
+        return None if self._process is None else self._process.pid
+
+    @property
+    def running(self) -> bool:
+        """Return whether the child process is alive."""
+        return self._process is not None and self._process.poll() is None
+
+    @property
+    def pending(self) -> tuple[int, int]:
+        """Return how many commands and readings are recorded here and not yet sent."""
+        return len(self._commands), len(self._readings)
+
+    def start(self) -> None:
+        """
+        Start the child: this interpreter, on this one's import path, serving a socket pair.
+
+        Not ``multiprocessing``'s spawn, which imports the parent's main module again in
+        the child: a script that builds the node without a ``__main__`` guard would start
+        it twice.
+        """
+        ours, theirs = socket.socketpair()
+        with ours, theirs:
+            code = ('import sys; from mpi_ros.compensation.adaptation import serve_socket;'
+                    ' serve_socket(int(sys.argv[1]))')
+            path = os.pathsep.join(p for p in sys.path if p)
+            self._process = subprocess.Popen(
+                [sys.executable, '-c', code, str(theirs.fileno())],
+                pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
+                env=dict(os.environ, PYTHONPATH=path))
+            self._conn = multiprocessing.connection.Connection(ours.detach())
+        self._conn.send((self._params, self.settings))
+
+    def stop(self, timeout: float = 1.0) -> None:
+        """Stop the child (asked first, terminated after ``timeout`` seconds)."""
+        process, conn = self._process, self._conn
+        if process is None or conn is None:
+            return
+        try:
+            conn.send(('stop',))
+        except (OSError, ValueError):
+            pass
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            process.terminate()
+            try:
+                process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait(timeout)
+        conn.close()
+
+    def record_command(self, current: float) -> None:
+        """Record a published command [A] (cheap: the command path calls it)."""
+        self._commands.append(current)
+
+    def record_measurement(self, displacement: float) -> None:
+        """Record a displacement reading [m], in the order they arrive."""
+        self._readings.append(displacement)
+
+    def exchange(self) -> None:
+        """Send the pairs that arrived to the child; take back what it sent (non-blocking)."""
+        conn = self._conn
+        if conn is None:
+            return
+        try:
+            while conn.poll():
+                self._receive(conn.recv())
+        except (EOFError, OSError):
+            # The child ended: say so once; what the node records is dropped from now on.
+            self._commands.clear()
+            self._readings.clear()
+            if self._status.get('adaptation_state') != _ENDED:
+                self._status['adaptation_state'] = _ENDED
+                self.errors += 1
+                if self._on_error is not None:
+                    self._on_error(_ENDED)
+            return
+        # The pipe never fills, so a send never blocks the node: at most _IN_FLIGHT
+        # messages of at most _CHUNK pairs each are unacknowledged; the rest waits here.
+        commands, readings = self._commands, self._readings
+        while self._ready and self._in_flight < _IN_FLIGHT and (commands or readings):
+            a, b = commands[:_CHUNK], readings[:_CHUNK]
+            del commands[:_CHUNK]
+            del readings[:_CHUNK]
+            conn.send_bytes(_PAIRS + array('q', [len(a)]).tobytes()
+                            + array('d', a).tobytes() + array('d', b).tobytes())
+            self._in_flight += 1
+        # A child that does not keep up (or not yet listening): the newest pairs are kept,
+        # as many dropped from both lists, so the k-th reading still answers the k-th
+        # command.
+        limit = 20 * self.settings.samples(self.settings.holdout)
+        drop = max(0, min(len(commands), len(readings)) - limit)
+        del commands[:drop]
+        del readings[:drop]
+
+    def take_candidate(self) -> Candidate | None:
+        """Return the candidate ready to apply, once (None when there is none)."""
+        candidate, self._candidate = self._candidate, None
+        return candidate
+
+    def applied(self, candidate: Candidate, accepted: bool, reason: str = '') -> None:
+        """Tell the child whether the node's validation took the candidate."""
+        number = self._sequence.pop(id(candidate), None)
+        if accepted:
+            self._model = candidate.model
+        if number is not None and self._conn is not None:
+            self._conn.send(('applied', number, accepted, reason))
+
+    def reset(self, model: AdaptedModel) -> None:
+        """Start again from a model pushed from outside."""
+        self._model = model
+        self._candidate = None
+        self._sequence.clear()
+        self._params = model.to_params()
+        if self._conn is not None:
+            self._conn.send(('reset', self._params))
+
+    def status(self) -> dict[str, Any]:
+        """Return the values /diagnostics shows (``adaptation_*``), as the child last sent."""
+        return dict(self._status)
+
+    def events(self) -> list[str]:
+        """Return and clear the events to log."""
+        events, self._events = self._events, []
+        return events
+
+    def _receive(self, message: Any) -> None:
+        kind = message[0]
+        if kind == 'taken':
+            self._in_flight -= 1
+        elif kind == 'ready':
+            self._ready = True
+        elif kind == 'candidate':
+            _, number, candidate = message
+            self._sequence = {id(candidate): number}
+            self._candidate = candidate
+        elif kind == 'status':
+            self._status, events = message[1], message[2]
+            self._events.extend(events)
+        elif kind == 'error':
+            self.errors += 1
+            if self._on_error is not None:
+                self._on_error(message[1])
+
+
+def serve_socket(descriptor: int) -> None:
+    """
+    Serve an :class:`AdaptationProcess` on an inherited socket (the child's entry point).
+
+    Parameters
+    ----------
+    descriptor : int
+        The child's end of the socket pair; the first message is the model's parameters
+        and the settings.
+
+    """
+    conn = multiprocessing.connection.Connection(descriptor)
+    try:
+        params, settings = conn.recv()
+    except (EOFError, OSError):
+        return
+    _serve(conn, params, settings)
+
+
+def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
+           settings: AdaptationSettings) -> None:
+    # The child's loop: a thread moves the pairs from the pipe into the adaptation (so a
+    # long solve never fills the pipe); this thread steps every period and answers.
+    adaptation = Adaptation(_adapted(params), settings)
+    candidates: dict[int, Candidate] = {}
+    stop = threading.Event()
+    send = threading.Lock()
+
+    def reply(message: Any) -> None:
+        with send:
+            conn.send(message)
+
+    def listen() -> None:
+        try:
+            while True:
+                data = conn.recv_bytes()
+                if data[:8] == _PAIRS:
+                    count = array('q', data[8:16])[0]
+                    values = np.frombuffer(data, dtype=np.float64, offset=16)
+                    adaptation.record_pairs(values[:count], values[count:])
+                    reply(('taken',))
+                    continue
+                message = pickle.loads(data)
+                if message[0] == 'stop':
+                    break
+                if message[0] == 'applied':
+                    candidate = candidates.pop(message[1], None)
+                    if candidate is not None:
+                        adaptation.applied(candidate, message[2], message[3])
+                elif message[0] == 'reset':
+                    candidates.clear()
+                    adaptation.reset(_adapted(message[1]))
+        except (EOFError, OSError):
+            pass
+        stop.set()
+
+    listener = threading.Thread(target=listen, name='pipe', daemon=True)
+    listener.start()
+    reply(('ready',))
+    number = 0
+    deadline = time.monotonic() + settings.period
+    while not stop.wait(max(0.0, deadline - time.monotonic())):
+        deadline += settings.period
+        try:
+            adaptation.step()
+        except Exception as err:  # noqa: B902 - reported to the node, never raised there
+            reply(('error', f'{type(err).__name__}: {err}'))
+        candidate = adaptation.take_candidate()
+        try:
+            if candidate is not None:
+                number += 1
+                candidates[number] = candidate
+                reply(('candidate', number, candidate))
+            reply(('status', adaptation.status(), adaptation.events()))
+        except (BrokenPipeError, OSError):
+            break
+    conn.close()
+
+
+def adaptable(model: object) -> bool:
+    """
+    Return whether the adaptation adapts ``model``.
+
+    Parameters
+    ----------
+    model : object
+        A model of any kind.
+
+    Returns
+    -------
+    bool
+        True for a forward Gamma with n >= 1, alone or with a thermal drift.
+
+    """
+    gamma = model.model if isinstance(model, ThermalDriftModel) else model
+    return isinstance(gamma, MPIModel) and not gamma.is_inverse and gamma.n >= 1
+
+
+def _adapted(params: dict[str, Any]) -> AdaptedModel:
+    model = extended_model_from_params(params)
+    if not isinstance(model, (MPIModel, ThermalDriftModel)):
+        msg = f'the adaptation adapts Gamma or Gamma with a thermal drift; found {model!r}'
+        raise ModelError(msg)
+    return model
+
+
+def _gamma(model: AdaptedModel) -> MPIModel:
+    return model.model if isinstance(model, ThermalDriftModel) else model
+
+
+def _with_start(candidate: AdaptedModel, running: AdaptedModel) -> AdaptedModel:
     # The candidate keeps the running model's start state (its plays' initial states,
     # moved with the input offset): only what the adaptation fitted changes.
+    if isinstance(candidate, ThermalDriftModel):
+        return replace(candidate, model=_gamma_with_start(candidate.model, _gamma(running)))
+    return _gamma_with_start(candidate, _gamma(running))
+
+
+def _gamma_with_start(candidate: MPIModel, running: MPIModel) -> MPIModel:
     h = candidate.hysteresis
     states = running.hysteresis.initial_states + (running.input_offset
                                                   - candidate.input_offset)

@@ -12,9 +12,17 @@ same thresholds: the compensator's model swap (wiping-out property) takes it bum
 Exponential forgetting rather than a sliding window: the Gram matrix stays one matrix (no
 buffer of past rows to subtract), its memory has one time constant to state, and the old
 data fade instead of dropping out at once.
+
+A thermal drift (``h = H[x - x0] + w_T T``, ``tau_T dT/dt = x^2 - T``; the effect of
+:mod:`mpi_ros.extensions.thermal_drift`) is one more column of the generalised error, the
+thermal state ``T`` computed from the commands by the compensator's own recurrence
+(:func:`heating`): its weight ``w_T`` is re-fitted with the others, any sign, and ``T``
+follows the commands.  ``tau_T`` stays the model's (a time constant is not a linear
+parameter of the QP).
 """
 
 from dataclasses import dataclass
+import math
 
 import numba
 import numpy as np
@@ -27,7 +35,7 @@ from ..operators.inverse import invert_superposition
 from ..operators.model import MPIModel
 from ..operators.play import play_clamp
 
-__all__ = ['RecursiveFit', 'WeightPoint']
+__all__ = ['heating', 'RecursiveFit', 'WeightPoint']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -48,8 +56,9 @@ class WeightPoint:
 
     Attributes
     ----------
-    weights : ndarray of float, shape (n+1+m,)
-        ``[w_H; w'_S]`` in the design's scaled units, satisfying (8), (19), (36).
+    weights : ndarray of float, shape (n+1+m,) or (n+2+m,)
+        ``[w_H; w'_S]`` in the design's scaled units, satisfying (8), (19), (36); with a
+        thermal column, its weight last (any sign).
     constant : float
         Constant term of the generalised error (an input offset, scaled units).
     output_shift : float
@@ -89,16 +98,26 @@ class RecursiveFit:
     offset_forgetting : float, optional
         A shorter memory for the regressors' means, which set the constant term (the
         operating point drifts faster than the shape changes); ``forgetting`` by default.
+    thermal_time_constant : float, optional
+        ``tau_T`` [s] of a thermal drift the model has (None: none): adds the thermal
+        state's column.
+    thermal_weight : float
+        The model's ``w_T`` [1/A] (the starting point's thermal weight).
+    sample_period : float
+        Interval between samples [s], for the thermal state's recurrence.
 
     Raises
     ------
     ModelError
-        For an inverse model, n = 0, or a forgetting factor outside (0, 1].
+        For an inverse model, n = 0, a forgetting factor outside (0, 1], or a thermal
+        time constant or sample period that is not finite and > 0.
 
     """
 
     def __init__(self, model: MPIModel, *, forgetting: float,
-                 offset_forgetting: float | None = None) -> None:
+                 offset_forgetting: float | None = None,
+                 thermal_time_constant: float | None = None, thermal_weight: float = 0.0,
+                 sample_period: float = 1e-3) -> None:
         if model.is_inverse or model.n < 1:
             msg = ('the recursive fit needs a forward model Gamma with n >= 1 plays;'
                    f' found {"an inverse" if model.is_inverse else "n = 0"}')
@@ -106,6 +125,12 @@ class RecursiveFit:
         offset_forgetting = forgetting if offset_forgetting is None else offset_forgetting
         if not (0.0 < forgetting <= 1.0 and 0.0 < offset_forgetting <= 1.0):
             msg = f'forgetting must lie in (0, 1]; found {forgetting!r}'
+            raise ModelError(msg)
+        if thermal_time_constant is not None and not (
+                math.isfinite(thermal_time_constant) and thermal_time_constant > 0.0
+                and math.isfinite(sample_period) and sample_period > 0.0):
+            msg = ('the thermal time constant and the sample period must be finite and > 0;'
+                   f' found {thermal_time_constant!r} and {sample_period!r}')
             raise ModelError(msg)
         h = model.hysteresis
         n = model.n
@@ -123,8 +148,15 @@ class RecursiveFit:
         w_s = np.asarray(s_inv.weights, dtype=np.float64) * (y_scale / x_scale)
         # (36) is a normalisation: H and S' scaled alike give the same Gamma.
         norm = float(np.dot(1.0 - self.design.hysteresis_thresholds, w_h))
-        self.start = WeightPoint(np.concatenate([w_h, w_s]) / norm)
+        #: Lag coefficient ``a = exp(-h / tau_T)`` of the thermal state (None: no drift).
+        self.heating_coefficient = (None if thermal_time_constant is None
+                                    else math.exp(-sample_period / thermal_time_constant))
+        # The thermal column is T / x_scale^2 (as the batch fit's), so w_T x_scale scaled.
+        extra = ([] if thermal_time_constant is None else [thermal_weight * x_scale])
+        self.start = WeightPoint(np.concatenate([w_h, w_s, extra]) / norm)
         nv = self.start.weights.size
+        self._extras = len(extra)
+        self._heat = np.full(2, math.nan)     # T and x of the last sample (scaled)
         self._gram = np.zeros((nv, nv))
         self._sums = np.zeros(nv)
         self._count = np.zeros(1)
@@ -164,8 +196,11 @@ class RecursiveFit:
         nv = self._gram.shape[0]
         gram, sums, count = np.zeros((nv, nv)), np.zeros(nv), np.zeros(1)
         plays = np.full(d.hysteresis_thresholds.size, -1.0)
+        # Gamma's own output, without drift: the thermal column is 0 here, so the memory
+        # keeps Gamma's shape and leaves w_T to the recent data.
         _accumulate(d.scaled_input(x), d.scaled_output(y), np.ones(x.size, dtype=np.bool_),
-                    d.hysteresis_thresholds, d.inverse_superposition_thresholds, plays, 1.0,
+                    np.zeros((x.size, self._extras)), d.hysteresis_thresholds,
+                    d.inverse_superposition_thresholds, plays, 1.0,
                     gram, sums, count, 1.0, np.zeros(nv), np.zeros(1))
         mean = sums / count[0]
         self._memory = gram / count[0] - np.outer(mean, mean)
@@ -201,7 +236,13 @@ class RecursiveFit:
         if not self._started and u.size:
             self._plays[:] = u[0]           # at rest at the first input: wiped out later
             self._started = True
-        _accumulate(u, v, mask, d.hysteresis_thresholds, d.inverse_superposition_thresholds,
+        extra = np.zeros((x.size, self._extras))
+        if self.heating_coefficient is not None and x.size:
+            extra[:, 0], self._heat = heating(x / d.x_scale,
+                                              coefficient=self.heating_coefficient,
+                                              state=self._heat)
+        _accumulate(u, v, mask, extra, d.hysteresis_thresholds,
+                    d.inverse_superposition_thresholds,
                     self._plays, self.forgetting, self._gram, self._sums, self._count,
                     self.offset_forgetting, self._fast_sums, self._fast_count)
 
@@ -250,13 +291,15 @@ class RecursiveFit:
         d = self.design
         n1 = d.hysteresis_thresholds.size
         nv = cov.shape[0]
+        k = self._extras
+        m = nv - n1 - k
         if hysteresis:
             reduce = np.eye(nv)
             equality = 1.0 - d.hysteresis_thresholds
             start = prior.weights
         else:
-            # [H[u]; -S'[v]] = T^T [plays; -S'[v]] with T = [w_H 0; 0 I]; (36) fixes the
-            # one H weight at 1.
+            # [H[u]; -S'[v]; T] = R^T [plays; -S'[v]; T] with R = [w_H 0; 0 I]; (36) fixes
+            # the one H weight at 1.
             reduce = np.zeros((nv, nv - n1 + 1))
             reduce[:n1, 0] = prior.weights[:n1]
             reduce[n1:, 1:] = np.eye(nv - n1)
@@ -271,12 +314,14 @@ class RecursiveFit:
         cov /= max(float(np.mean(np.diag(cov))), 1e-300)
         rho = strength
         cov[np.diag_indices(cov.shape[0])] += rho
-        w_h, w_s, _, _ = fit_generalized_error(
-            cov, equality, n_hysteresis=equality.size,
-            n_superposition=nv - n1, superposition_center=d.center,
-            linear=-2.0 * rho * start, warm_start=start)
-        weights = (np.concatenate([w_h, w_s]) if hysteresis
-                   else np.concatenate([prior.weights[:n1] * w_h[0], w_s]))
+        # OSQP minimises 1/2 v^T P v + q^T v: with P = C + rho I, q = -rho v_prior is the
+        # pull v^T C v + rho |v - v_prior|^2 (up to a factor 2 and a constant).
+        w_h, w_s, w_x, _ = fit_generalized_error(
+            cov, equality, n_hysteresis=equality.size, n_superposition=m,
+            superposition_center=d.center, extra_lower=np.full(k, -np.inf),
+            linear=-rho * start, warm_start=start)
+        weights = (np.concatenate([w_h, w_s, w_x]) if hysteresis
+                   else np.concatenate([prior.weights[:n1] * w_h[0], w_s, w_x]))
         recent = self._fast_sums / max(float(self._fast_count[0]), 1.0)
         return WeightPoint(weights, -float(recent @ weights))
 
@@ -297,21 +342,89 @@ class RecursiveFit:
         """
         d = self.design
         n1 = d.hysteresis_thresholds.size
-        gamma = d.model(point.weights[:n1], point.weights[n1:], point.constant)
+        m = point.weights.size - n1 - self._extras
+        gamma = d.model(point.weights[:n1], point.weights[n1:n1 + m], point.constant)
         return gamma.with_operating_point(output_offset=d.output_offset + point.output_shift)
+
+    def thermal_weight(self, point: WeightPoint) -> float:
+        """
+        Return ``w_T`` [1/A] of a point, for the Gamma :meth:`model` gives (0 without drift).
+
+        Parameters
+        ----------
+        point : WeightPoint
+            A point of this design.
+
+        Returns
+        -------
+        float
+            The weight of the thermal state ``T`` [A^2] in H's output [A].
+
+        """
+        if not self._extras:
+            return 0.0
+        return float(point.weights[-1]) / self.design.x_scale
+
+
+def heating(current: npt.ArrayLike, *, coefficient: float,
+            state: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """
+    Return the thermal state ``T`` of a thermal drift over a chunk of currents, and the state.
+
+    The compensator's recurrence (:class:`~mpi_ros.extensions.thermal_drift.ThermalDriftInverse`):
+    ``T_k = a T_(k-1) + (1 - a) x_(k-1)^2``; at the first sample of all (a NaN state) ``T``
+    starts in steady state, ``x_0^2``.
+
+    Parameters
+    ----------
+    current : array_like of float, shape (K,)
+        Current ``x`` (any unit; ``T`` comes out in its square).
+    coefficient : float
+        ``a = exp(-h / tau_T)`` for the sample interval ``h``.
+    state : array_like of float, shape (2,)
+        ``T`` and ``x`` of the sample before the chunk (NaN: none).
+
+    Returns
+    -------
+    thermal_state : ndarray of float, shape (K,)
+        ``T`` at each sample.
+    state_end : ndarray of float, shape (2,)
+        ``T`` and ``x`` of the last sample: pass it to continue in chunks.
+
+    """
+    x = np.ascontiguousarray(current, dtype=np.float64).reshape(-1)
+    start = np.array(state, dtype=np.float64).reshape(2)
+    if not x.size:
+        return np.empty(0), start
+    if not np.isfinite(start[0]):
+        start = np.array([x[0] * x[0], x[0]])
+    t = np.empty(x.size)
+    _heat(x, float(coefficient), float(start[0]), float(start[1]), t)
+    return t, np.array([t[-1], x[-1]])
 
 
 @numba.njit(cache=True, nogil=True)
-def _accumulate(u: FloatArray, v: FloatArray, use: npt.NDArray[np.bool_], r_h: FloatArray,
-                r_s: FloatArray, z: FloatArray, forgetting: float, gram: FloatArray,
-                sums: FloatArray, count: FloatArray, fast_forgetting: float,
+def _heat(x: FloatArray, a: float, t0: float, x0: float,
+          out: FloatArray) -> None:  # pragma: no cover - compiled
+    previous_t, previous_x = t0, x0
+    for k in range(x.shape[0]):
+        previous_t = a * previous_t + (1.0 - a) * previous_x * previous_x
+        out[k] = previous_t
+        previous_x = x[k]
+
+
+@numba.njit(cache=True, nogil=True)
+def _accumulate(u: FloatArray, v: FloatArray, use: npt.NDArray[np.bool_], extra: FloatArray,
+                r_h: FloatArray, r_s: FloatArray, z: FloatArray, forgetting: float,
+                gram: FloatArray, sums: FloatArray, count: FloatArray, fast_forgetting: float,
                 fast_sums: FloatArray, fast_count: FloatArray) -> None:  # pragma: no cover
-    # G <- lambda G + phi phi^T with phi = [plays (4), -dead zones (17)] per used sample;
-    # the column sums twice: with lambda (the Gram matrix's) and with the operating
-    # point's shorter memory.
+    # G <- lambda G + phi phi^T with phi = [plays (4), -dead zones (17), extras] per used
+    # sample; the column sums twice: with lambda (the Gram matrix's) and with the
+    # operating point's shorter memory.
     nh = r_h.shape[0]
     ns = r_s.shape[0]
-    nv = nh + ns
+    ne = extra.shape[1]
+    nv = nh + ns + ne
     phi = np.empty(nv)
     dz = np.empty(ns)
     for k in range(u.shape[0]):
@@ -325,6 +438,8 @@ def _accumulate(u: FloatArray, v: FloatArray, use: npt.NDArray[np.bool_], r_h: F
         dead_zone_step(v[k], r_s, dz)
         for j in range(ns):
             phi[nh + j] = -dz[j]
+        for j in range(ne):
+            phi[nh + ns + j] = extra[k, j]
         for a in range(nv):
             pa = phi[a]
             sums[a] = forgetting * sums[a] + pa

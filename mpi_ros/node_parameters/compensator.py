@@ -239,6 +239,11 @@ ADAPTATION_PARAMETERS = (
         'Samples by which the displacement readings lag the commands (0: lock step, the '
         'k-th reading answers the k-th command)', value_range=(0, 100000), read_only=True),
     ParameterSpec(
+        'adaptation.process', 'bool', True,
+        'true: the adaptation fits in a child process (the command path never waits for '
+        'it); false: in a thread of the node, sharing the interpreter lock',
+        read_only=True),
+    ParameterSpec(
         'adaptation.hysteresis', 'bool', False,
         "false: adapt S' (gain, shape) and the operating point; true: the weights of H too",
         read_only=True),

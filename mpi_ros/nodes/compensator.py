@@ -101,7 +101,7 @@ nobody asked for (with ``autostart: false`` it starts, and configure fails inste
 import struct
 import sys
 import time
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -114,7 +114,9 @@ from .qos import loop_qos
 from .spinning import run_node_main
 from ..array_layout import FLOAT64_SIZE, malformed_float64
 from ..compensation import Compensator
-from ..compensation.adaptation import Adaptation, AdaptationSettings, AdaptationWorker
+from ..compensation.adaptation import (
+    adaptable, Adaptation, AdaptationProcess, AdaptationSettings, AdaptationWorker,
+)
 from ..compensation.message_time import MessageClock
 from ..compensation.multi_axis import InputCounts
 from ..compensation.status import single_axis_status, single_axis_values
@@ -123,7 +125,6 @@ from ..compensation.updates import (
 )
 from ..node_parameters import specs_by_name
 from ..node_parameters.compensator import compensator_parameters, wants_multi_axis
-from ..operators.model import MPIModel
 from ..units import INPUT_QUANTITY_KEY
 
 __all__ = ['CompensatorNode', 'main', 'make_node']
@@ -180,8 +181,8 @@ class CompensatorNode(CompensatorNodeBase):
         self._extended = False
         self._model_kind = 'none'
         self._model_version = 0
-        self._adaptation: Optional[Adaptation] = None
-        self._worker: Optional[AdaptationWorker] = None
+        self._adaptation: Optional[Union[Adaptation, AdaptationProcess]] = None
+        self._worker: Optional[Union[AdaptationWorker, AdaptationProcess]] = None
         self._readings: Any = None
         self._record: Optional[Any] = None    # Adaptation.record_command while adapting
         self._own_update = False
@@ -215,7 +216,7 @@ class CompensatorNode(CompensatorNodeBase):
         return self._compensator
 
     @property
-    def adaptation(self) -> Optional[Adaptation]:
+    def adaptation(self) -> Optional[Union[Adaptation, AdaptationProcess]]:
         """Online adaptation of the model (``adaptation.enabled`` and a model), else None."""
         return self._adaptation
 
@@ -367,22 +368,29 @@ class CompensatorNode(CompensatorNodeBase):
         super()._close_loop()
 
     def _on_displacement(self, data: bytes) -> None:
-        if len(data) < FLOAT64_SIZE or data[0] != 0 or data[1] > 1:
-            self._inputs.refuse('malformed', malformed_float64(data))
-            return
+        # Every reading queued is taken in this one callback (as the command path does),
+        # as CDR bytes, decoded by one struct call and appended to a list.
         adaptation = self._adaptation
-        if adaptation is not None:
-            adaptation.record_measurement(
-                (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0])
+        take = self._readings.handle.take_message
+        for _ in range(_DRAIN_LIMIT):
+            if len(data) < FLOAT64_SIZE or data[0] != 0 or data[1] > 1:
+                self._inputs.refuse('malformed', malformed_float64(data))
+            elif adaptation is not None:
+                adaptation.record_measurement(
+                    (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0])
+            taken = take(Float64, True)
+            if taken is None:
+                return
+            data = taken[0]
 
     def _start_adaptation(self, model: Any) -> None:
         # A model that arrives from outside (configure, a push) starts the adaptation
         # afresh; the adaptation's own updates continue it.
-        if not isinstance(model, MPIModel) or model.n < 1:
+        if not adaptable(model):
             self._stop_adaptation()
             self.get_logger().warning(
-                f'adaptation.enabled: adaptation adapts a plain Gamma with n >= 1 only; off'
-                f' for this model ({self._model_kind})')
+                f'adaptation.enabled: adaptation adapts Gamma with n >= 1, alone or with a'
+                f' thermal drift; off for this model ({self._model_kind})')
             return
         if self._adaptation is not None:
             self._adaptation.reset(model)
@@ -391,21 +399,29 @@ class CompensatorNode(CompensatorNodeBase):
         values = parameter_values(self, [k for k in self._specs if k.startswith('adaptation.')])
         settings = AdaptationSettings.from_values(
             values, self.get_parameter('sample_period').value)
-        self._adaptation = Adaptation(model, settings)
+
+        def on_error(text: str) -> None:
+            self.get_logger().error(f'adaptation step failed: {text}')
+
+        if self.get_parameter('adaptation.process').value:
+            # Its own process: the command path never waits for a step's interpreter lock.
+            process = AdaptationProcess(model, settings, on_error=on_error)
+            self._adaptation = self._worker = process
+        else:
+            # A thread shares the interpreter lock with the command path: let it hold the
+            # lock for at most 0.5 ms at a time (Python's default is 5 ms).
+            sys.setswitchinterval(min(sys.getswitchinterval(), _SWITCH_INTERVAL))
+            self._adaptation = Adaptation(model, settings)
+            self._worker = AdaptationWorker(self._adaptation, on_error=on_error)
         self._record = self._adaptation.record_command
-        # The worker thread shares the interpreter lock with the command path: let it hold
-        # the lock for at most 0.5 ms at a time (Python's default is 5 ms), so a step's
-        # Python code delays a command by no more than that.
-        sys.setswitchinterval(min(sys.getswitchinterval(), _SWITCH_INTERVAL))
-        self._worker = AdaptationWorker(
-            self._adaptation,
-            on_error=lambda text: self.get_logger().error(f'adaptation step failed: {text}'))
         self._worker.start()
         self.get_logger().info(
             f'adaptation on: readings on {self.resolve_topic_name("displacement")}, paired'
             f' in lock step (delay {settings.delay} samples), memory'
             f' {settings.forgetting_time:g} s, candidates every {settings.period:g} s,'
-            f' held out {settings.holdout:g} s, margin {100 * settings.margin:g} %')
+            f' held out {settings.holdout:g} s, margin {100 * settings.margin:g} %; fitting in'
+            + (f' process {self._worker.pid}' if isinstance(self._worker, AdaptationProcess)
+               else ' a thread'))
 
     def _stop_adaptation(self) -> None:
         worker, self._worker = self._worker, None
@@ -418,6 +434,8 @@ class CompensatorNode(CompensatorNodeBase):
         adaptation = self._adaptation
         if adaptation is None:
             return
+        if isinstance(adaptation, AdaptationProcess):
+            adaptation.exchange()
         candidate = adaptation.take_candidate()
         if candidate is not None:
             values = candidate.params()

@@ -6,12 +6,17 @@ The node computes the commands (``CompensatorNode.command``, which records them 
 message path does); the test plays the drifting actuator and hands each reading to the
 node's adaptation, steps it once per simulated second (the worker thread is not started,
 so the steps are the test's) and spins the node, whose timer applies a candidate through
-its own ``set_parameters``: the validation every push goes through.
+its own ``set_parameters``: the validation every push goes through.  The node's default,
+the adaptation in a child process, is run the same way, each second sent once the child has
+taken the one before.
 """
+
+import time
 
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
-from mpi_ros.compensation.adaptation import AdaptationWorker
+from mpi_ros.compensation.adaptation import AdaptationProcess, AdaptationWorker
+from mpi_ros.extensions.thermal_drift import ThermalDriftModel
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.spinning import events_executor
 from mpi_ros.operators.model import MPIModel
@@ -24,9 +29,11 @@ from rclpy.parameter import Parameter
 RATE = 500.0
 
 
-@pytest.fixture
-def node_and_plant(ros_context, monkeypatch):
-    monkeypatch.setattr(AdaptationWorker, 'start', lambda self: None)
+@pytest.fixture(params=[False])
+def node_and_plant(ros_context, monkeypatch, request):
+    process = request.param
+    if not process:
+        monkeypatch.setattr(AdaptationWorker, 'start', lambda self: None)
     t, x = identification_excitation(30.0, sample_rate=RATE, seed=11)
     config = {'noise_std_m': 2e-8, 'sensor_zero_current_a': 0.2}
     y = MagnetostrictiveActuator(ActuatorConfig(**config), seed=11).simulate(t, x)
@@ -34,7 +41,8 @@ def node_and_plant(ros_context, monkeypatch):
     overrides = [Parameter(k, value=v) for k, v in model.to_params().items()] + [
         Parameter('output.min', value=0.0), Parameter('output.max', value=2.0),
         Parameter('sample_period', value=1 / RATE),
-        Parameter('adaptation.enabled', value=True)]
+        Parameter('adaptation.enabled', value=True),
+        Parameter('adaptation.process', value=process)]
     node = CompensatorNode(context=ros_context, parameter_overrides=overrides)
     executor = events_executor(ros_context)
     executor.add_node(node)
@@ -98,3 +106,80 @@ def test_a_push_from_outside_restarts_the_adaptation(node_and_plant):
     assert node.adaptation is adaptation       # the same object, reset to the new model
     assert adaptation.model.to_params() == MPIModel.from_params(params).to_params()
     assert node.model_version == 2
+
+
+@pytest.mark.parametrize('node_and_plant', [True], indirect=True)
+def test_the_adaptation_process_updates_the_nodes_model_and_stops_with_it(node_and_plant):
+    node, executor, plant, (lo, hi) = node_and_plant
+    adaptation = node.adaptation
+    assert isinstance(adaptation, AdaptationProcess)
+    span = hi - lo
+    t, desired = tracking_trajectory(40.0, sample_rate=RATE, low=lo + 0.15 * span,
+                                     high=hi - 0.15 * span, final_envelope=1.0)
+    block = int(RATE)
+    for start in range(0, t.size - block + 1, block):
+        for k in range(start, start + block):
+            current = node.command(float(desired[k]))
+            assert np.isfinite(current)
+            adaptation.record_measurement(plant.step(float(t[k]), current))
+        deadline = time.monotonic() + 120.0
+        while adaptation.status().get('adaptation_pairs') != start + block:
+            assert time.monotonic() < deadline, adaptation.status()
+            executor.spin_once(timeout_sec=0.05)
+    for _ in range(5):                          # the last candidate, if any, is applied
+        executor.spin_once(timeout_sec=0.05)
+    status = adaptation.status()
+    assert status['adaptation_updates_accepted'] >= 1, status
+    assert node.model_version == 1 + status['adaptation_updates_accepted']
+    running = node.compensator.model
+    assert adaptation.model.to_params() == running.to_params()
+    dumped = {key: node.get_parameter(key).value for key in running.to_params()}
+    assert MPIModel.from_params(dumped).to_params() == running.to_params()
+    node.destroy_node()
+    assert not adaptation.running
+
+
+def test_a_thermal_drift_model_is_adapted_with_its_weight(ros_context, monkeypatch):
+    # The node adapts Gamma with a thermal drift too: a model whose w_T is a sixth of the
+    # plant's drift (tau_T right) on a plant drifting 3 um/A^2; the node applies whole
+    # thermal models through its own set_parameters, w_T grows, tau_T stays.
+    monkeypatch.setattr(AdaptationWorker, 'start', lambda self: None)
+    t, x = identification_excitation(30.0, sample_rate=RATE, seed=12)
+    config = {'noise_std_m': 2e-8}
+    y = MagnetostrictiveActuator(ActuatorConfig(**config), seed=12).simulate(t, x)
+    model = ThermalDriftModel(identify(x, y, n=10, l=5).model, 30.0, 0.02)
+    overrides = [Parameter(k, value=v) for k, v in model.to_params().items()] + [
+        Parameter('output.min', value=0.0), Parameter('output.max', value=2.0),
+        Parameter('sample_period', value=1 / RATE),
+        Parameter('adaptation.enabled', value=True),
+        Parameter('adaptation.process', value=False)]
+    node = CompensatorNode(context=ros_context, parameter_overrides=overrides)
+    executor = events_executor(ros_context)
+    executor.add_node(node)
+    plant = MagnetostrictiveActuator(ActuatorConfig(
+        thermal_gain_m_per_a2=3e-6, thermal_time_constant_s=30.0, **config), seed=112)
+    try:
+        adaptation = node.adaptation
+        assert adaptation is not None and isinstance(adaptation.model, ThermalDriftModel)
+        lo, hi = float(np.min(y)), float(np.max(y))
+        span = hi - lo
+        t, desired = tracking_trajectory(60.0, sample_rate=RATE, low=lo + 0.15 * span,
+                                         high=hi - 0.15 * span, final_envelope=1.0)
+        for k in range(t.size):
+            current = node.command(float(desired[k]))
+            adaptation.record_measurement(plant.step(float(t[k]), current))
+            if k and k % int(RATE) == 0:
+                adaptation.step()
+                for _ in range(3):
+                    executor.spin_once(timeout_sec=0.05)
+        status = adaptation.status()
+        assert status['adaptation_updates_accepted'] >= 1, status
+        running = node.compensator.model
+        assert isinstance(running, ThermalDriftModel)
+        assert running.time_constant == 30.0
+        assert node.get_parameter('model.thermal_drift.weight').value == running.weight
+        assert running.weight > model.weight
+    finally:
+        executor.remove_node(node)
+        executor.shutdown()
+        node.destroy_node()
