@@ -87,6 +87,22 @@ def test_diagnose_names_the_hidden_effect(cause, seed):
     json.dumps(report.to_json())
 
 
+def test_an_effect_its_fit_switched_off_is_the_baseline_itself():
+    # Each effect nests the baseline: a candidate whose fit switched its effect off (a lag
+    # or a dead time of 0) is the baseline model, so its validation gain and its z are 0
+    # exactly (the effect fit's own Gamma, another fit of the same record, gained down to
+    # -0.36 on the wide sweep's Preisach plants).
+    train, val = _experiment('none', 1)
+    report = diagnose(train, validation=val)
+    off = [c for c in report.candidates
+           if c['parameters'].get('model.rate_dependence.time_constant') == 0.0
+           or c['parameters'].get('model.dead_time') == 0.0]
+    assert off, [c['parameters'] for c in report.candidates]
+    for c in off:
+        assert c['gain'] == 0.0 and c['z'] == 0.0, c
+        assert c['rms_error'] == report.baseline['rms_error']
+
+
 @pytest.mark.parametrize('cause', ['none', 'creep', 'rate_dependence', 'thermal_drift',
                                    'dead_time'])
 def test_diagnose_with_the_sensor_zeroed_in_operation(cause):

@@ -120,10 +120,6 @@ def test_a_lag_far_beyond_the_search_range_is_not_identified():
     assert 'upper bound' in model.not_identified[RATE_TIME_CONSTANT]
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    'known defect after the 2026-11-26 merges: the nested dead-time fit now returns the'
-    ' effect off (0 s) for a 3 s dead time instead of the search bound flagged not'
-    ' identified; the branch alone passed'))
 def test_a_dead_time_far_beyond_the_search_range_is_not_identified():
     t, x, y = _record(dead_time_s=3.0)                  # the longest trial is 1 s
     model = fit_dead_time(t, x, y, order=ORDER)

@@ -181,10 +181,6 @@ def test_cross_rate_tum_model_validates_on_the_other_rates():
         assert _rms(sim[keep], yv[keep]) < 0.5 * _rms(np.polyval(line, xv[keep]), yv[keep])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    'known defect after the 2026-11-26 merges (issues 24 and 26): with the effect fits chosen'
-    ' on blocked folds and the shared dynamics finding, the 20 + 40 Hz -> 100 Hz diagnosis says'
-    ' none instead of rate_dependence; each branch passed alone'))
 def test_tum_loops_widen_with_rate_and_the_diagnosis_names_rate_dependence(tmp_path):
     # Issue 18: the rig's 20 and 40 Hz records (joined, each with its own start state) train
     # the plain model and the extensions; the 100 Hz record, a rate not used to fit them,

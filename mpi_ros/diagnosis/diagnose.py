@@ -91,7 +91,7 @@ from ..identification.start_states import estimate_start_state
 from ..metrics import range_error, rms_range_error
 from ..model_fit import identify
 from ..operators.filters import first_order_lag
-from ..operators.model import OPERATING_POINT_KEYS
+from ..operators.model import MPIModel, OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
 __all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor', 'z_wording']
@@ -449,7 +449,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         if bursts is not None else None)
     scorer = _Scorer(on_validation, (tt, xt, yt), base.burn_in, yv, val, r0, baseline,
                      bandwidth, reestimate, say)
-    candidates = _fit_candidates(scorer, causes, (n, l))
+    scorer.baseline_model = base.model
+    candidates = _fit_candidates(scorer, causes, (n, l), base.model)
     excess = math.sqrt(float(np.mean(r0 ** 2))) > noise_factor * sigma
     level = alpha / len(catalogue)               # Bonferroni over the catalogue
     for c in candidates:
@@ -605,6 +606,7 @@ class _Scorer:
         self.say = say
         self.sims: dict[str, FloatArray] = {}
         self.residuals: dict[str, FloatArray] = {}
+        self.baseline_model: Any = None
 
     def score(self, cause: str, model: Any, parameter_count: int) -> Candidate:
         """Simulate a fitted model on the validation record and measure its gain."""
@@ -634,17 +636,30 @@ class _Scorer:
                          lags, train, shift, parameter_count, params, unknown)
 
 
-def _fit_candidates(scorer: _Scorer, causes: tuple[str, ...],
-                    order: tuple[int, int]) -> list[Candidate]:
+def _fit_candidates(scorer: _Scorer, causes: tuple[str, ...], order: tuple[int, int],
+                    baseline: Any) -> list[Candidate]:
     # Each effect fitted on the training record at the baseline's order, then scored.
     out = []
     tt, xt, yt = scorer.training
     for cause in causes:
         scorer.say(f'fitting candidate {cause}')
-        model = EFFECTS[cause].fit(tt, xt, yt, order=order)
+        model = _nested(EFFECTS[cause].fit(tt, xt, yt, order=order), baseline, tt, xt)
         out.append(scorer.score(cause, model,
                                 EFFECTS[cause].parameter_count(model.to_params())))
     return out
+
+
+def _nested(model: Any, baseline: Any, time: FloatArray, current: FloatArray) -> Any:
+    # A fit that switched its effect(s) off (its simulation on the training record is its
+    # Gamma's) is the baseline itself: each effect nests the baseline, so its gain is 0,
+    # not the difference between the effect fit's Gamma and identify's (on the wide sweep
+    # an effect fitted off gained -0.36, and a pair of two effects fitted off -2.29, on a
+    # Preisach core's validation record).
+    gamma = getattr(model, 'model', None)
+    if (isinstance(baseline, MPIModel) and isinstance(gamma, MPIModel)
+            and np.array_equal(model.response(time, current), gamma.simulate(current))):
+        return model.with_gamma(baseline)
+    return model
 
 
 def _try_pair(scorer: _Scorer, pair: tuple[Candidate, Candidate], candidates: list[Candidate],
@@ -658,8 +673,9 @@ def _try_pair(scorer: _Scorer, pair: tuple[Candidate, Candidate], candidates: li
     cause = composite_cause(names)
     scorer.say(f'fitting candidate {cause} (both signatures present)')
     tt, xt, yt = scorer.training
-    model = fit_composite(tt, xt, yt, names, order=order,
-                          fits={c.cause: c.model for c in pair})
+    model = _nested(fit_composite(tt, xt, yt, names, order=order,
+                                  fits={c.cause: c.model for c in pair}),
+                    scorer.baseline_model, tt, xt)
     both = scorer.score(cause, model, sum(c.parameter_count for c in pair))
     both.signature = 'present'
     both.significant = bool(excess and both.gain >= min_gain and both.z >= z_critical)

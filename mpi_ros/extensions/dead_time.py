@@ -21,13 +21,9 @@ import numpy.typing as npt
 
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
-from .fitting import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
-    choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
-    fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
-    scalar_parameter
+from .fitting import AxisUnits, burst_evidence, burst_verdict, check_series, \
+    fit_input_stage, Order, scalar_parameter
 from .plant_steps import delay_state, delay_stream
-from ..identification import select_order
-from ..identification.folds import blocked_folds
 from ..operators.filters import delay
 from ..operators.model import MPIModel
 
@@ -93,16 +89,12 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
     Identify Gamma and the dead time, chosen on held-out blocks.
 
     Trial lags: 0 (Gamma alone) and log-spaced from one sample interval to the smaller of 200
-    intervals and 5 % of the record.  Each is judged out of sample: on three contiguous
-    blocks of the record (:func:`~mpi_ros.identification.folds.blocked_folds`), each
-    predicted by the fit on the other two, over the samples determined for every trial
-    (after the raw current's burn-in and the longest trial lag), with
-    :func:`mpi_ros.model_fit.identify`'s design (operating point, sign, constant term).
-    The held-out errors choose the bracket (two grid steps), the whole record's fit error
-    refines the lag inside it.  The chosen lag is then fitted on the whole record and kept
-    only when it fits the record
-    better than no delay (``L = 0`` is Gamma).  A best lag at the longest trial is reported
-    as not identified (``not_identified``); one sample is a resolvable delay, not a bound.
+    intervals and 5 % of the record, chosen on held-out blocks and kept only when the
+    delayed fit is better than Gamma alone on the record
+    (:func:`~mpi_ros.extensions.fitting.fit_input_stage`; the samples scored start after
+    the raw current's burn-in and the longest trial lag).  A best lag at the longest trial
+    is reported as not identified (``not_identified``); one sample is a resolvable delay,
+    not a bound (no delay competes below it).
 
     Parameters
     ----------
@@ -121,46 +113,10 @@ def fit_dead_time(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
         The identified model.
 
     """
-    t, x, y = check_series(time, current, displacement)
-    dt, longest = lag_search_limits(t)
-    n_l, chosen = resolve_order(x, y, order)
-    # Every trial lag is scored on the same determined samples: after the raw current's
-    # burn-in and the longest trial lag.
-    start = determined_start(t, x, y, n_l, settle=longest)
-    scored = np.arange(t.size) >= start
-    folds = blocked_folds(t.size, start=start)
-
-    def fold_fit(delayed: FloatArray, held: npt.NDArray[np.bool_]) -> FloatArray:
-        return fit_gamma(delayed, y, n_l, epsilon, start=start, held=held)[0].simulate(delayed)
-    baseline = fold_simulations(lambda held: fold_fit(x, held), folds)
-
-    def held_out(delayed: FloatArray) -> float:
-        return held_out_error(lambda held: fold_fit(delayed, held), y, folds, scored,
-                              nested=baseline)
-
-    def in_sample(v: float) -> float:
-        return fit_gamma(delay(t, x, v), y, n_l, epsilon, start=start)[1]
-    choice = choose_out_of_sample(lambda v: held_out(delay(t, x, v)),
-                                  np.geomspace(dt, longest, 8),
-                                  off_error=fixed_held_out_error(baseline, y, folds, scored),
-                                  refine=8, bounds=(False, True),
-                                  refine_on=in_sample)
-    base, base_error = fit_gamma(x, y, n_l, epsilon, start=start)
-    if choice.value is None:
-        return DeadTimeModel(base, 0.0)
-    lag = choice.value
-    model, error = fit_gamma(delay(t, x, lag), y, n_l, epsilon, start=start)
-    if base_error <= error:
-        return DeadTimeModel(base, 0.0)
-    unidentified = {DEAD_TIME: bound_note(choice)} if choice.bound else {}
-    if chosen:
-        # The order again, for the current as the output sees it.
-        delayed = delay(t, x, lag)
-        final, _ = select_order(delayed, y)
-        if final != n_l:
-            model, _ = fit_gamma(delayed, y, final, epsilon,
-                                 start=determined_start(t, x, y, final, settle=longest))
-    return DeadTimeModel(model, lag, unidentified)
+    fit = fit_input_stage(time, current, displacement, delay, order=order, epsilon=epsilon,
+                          lowest=1.0, settle=1.0)
+    unidentified = {DEAD_TIME: fit.not_identified} if fit.not_identified else {}
+    return DeadTimeModel(fit.model, fit.value, unidentified)
 
 
 def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,

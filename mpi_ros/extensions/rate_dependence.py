@@ -23,14 +23,10 @@ import numpy.typing as npt
 
 from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT, PlantChunk, \
     PlantEffect, PlantParameter
-from .fitting import AxisUnits, bound_note, burst_evidence, burst_verdict, check_series, \
-    choose_out_of_sample, determined_start, fit_gamma, fixed_held_out_error, \
-    fold_simulations, held_out_error, lag_search_limits, Order, resolve_order, \
-    scalar_parameter
+from .fitting import AxisUnits, burst_evidence, burst_verdict, check_series, \
+    fit_input_stage, Order, scalar_parameter
 from .plant_steps import lag_state, lag_stream
 from ..errors import ModelError
-from ..identification import select_order
-from ..identification.folds import blocked_folds
 from ..operators.filters import first_order_lag, lag_coefficients
 from ..operators.model import MPIModel
 
@@ -226,18 +222,12 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
     Identify Gamma and the input-lag time constant, chosen on held-out blocks.
 
     The trial range is half a sample interval to the smaller of 200 intervals and 5 % of
-    the record, log-spaced, and no lag at all competes with every trial.  Each trial is
-    judged out of sample: on three contiguous blocks of the record
-    (:func:`~mpi_ros.identification.folds.blocked_folds`), each predicted by the fit on the
-    other two, over the samples determined for every trial (after the raw current's burn-in
-    and three of the longest trial lags), with :func:`mpi_ros.model_fit.identify`'s
-    design (operating point, sign, constant term).  The held-out errors choose the lag's
-    bracket (two grid steps); inside it the whole record's fit error refines it (the held-out
-    error is noisier: on a 4 ms lag it refined to 3.4-3.7 ms, in sample 4.9 ms, and the creep
-    fitted behind the lag lost 14 % of its gain).  The chosen lag is then fitted on the
-    whole record; it is kept only when it fits the record better than no lag (so the model
-    is never worse than Gamma alone on its own data: ``tau_e = 0`` is Gamma).  A best lag at
-    either end of the range is reported as not identified (``not_identified``).
+    the record, log-spaced, and no lag at all competes with every trial; the lag is chosen
+    on held-out blocks and kept only when the lagged fit is better than Gamma alone on the
+    record (``tau_e = 0`` is Gamma; :func:`~mpi_ros.extensions.fitting.fit_input_stage`;
+    the samples scored start after the raw current's burn-in and three of the longest trial
+    lags).  A best lag at the longest trial is reported as not identified
+    (``not_identified``); half a sample is no bound (no lag competes below it).
 
     Parameters
     ----------
@@ -256,45 +246,10 @@ def fit_rate_dependence(time: npt.ArrayLike, current: npt.ArrayLike,
         The identified model.
 
     """
-    t, x, y = check_series(time, current, displacement)
-    dt, longest = lag_search_limits(t)
-    n_l, chosen = resolve_order(x, y, order)
-    # Every trial (and the lag-free fit) is scored on the same determined samples: after
-    # the raw current's burn-in and three of the longest trial time constants.
-    start = determined_start(t, x, y, n_l, settle=3.0 * longest)
-    scored = np.arange(t.size) >= start
-    folds = blocked_folds(t.size, start=start)
-
-    def fold_fit(lagged: FloatArray, held: npt.NDArray[np.bool_]) -> FloatArray:
-        return fit_gamma(lagged, y, n_l, epsilon, start=start, held=held)[0].simulate(lagged)
-    baseline = fold_simulations(lambda held: fold_fit(x, held), folds)
-
-    def held_out(lagged: FloatArray) -> float:
-        return held_out_error(lambda held: fold_fit(lagged, held), y, folds, scored,
-                              nested=baseline)
-
-    def in_sample(v: float) -> float:
-        return fit_gamma(first_order_lag(t, x, v), y, n_l, epsilon, start=start)[1]
-    choice = choose_out_of_sample(lambda v: held_out(first_order_lag(t, x, v)),
-                                  np.geomspace(0.5 * dt, longest, 8),
-                                  off_error=fixed_held_out_error(baseline, y, folds, scored),
-                                  refine=8, refine_on=in_sample)
-    base, base_error = fit_gamma(x, y, n_l, epsilon, start=start)
-    if choice.value is None:
-        return RateDependentModel(base, 0.0)
-    tau = choice.value
-    model, error = fit_gamma(first_order_lag(t, x, tau), y, n_l, epsilon, start=start)
-    if base_error <= error:
-        return RateDependentModel(base, 0.0)
-    unidentified = {RATE_TIME_CONSTANT: bound_note(choice)} if choice.bound else {}
-    if chosen:
-        # The order again, for the current the material sees.
-        lagged = first_order_lag(t, x, tau)
-        final, _ = select_order(lagged, y)
-        if final != n_l:
-            model, _ = fit_gamma(lagged, y, final, epsilon,
-                                 start=determined_start(t, x, y, final, settle=3.0 * longest))
-    return RateDependentModel(model, tau, unidentified)
+    fit = fit_input_stage(time, current, displacement, first_order_lag, order=order,
+                          epsilon=epsilon, lowest=0.5, settle=3.0)
+    unidentified = {RATE_TIME_CONSTANT: fit.not_identified} if fit.not_identified else {}
+    return RateDependentModel(fit.model, fit.value, unidentified)
 
 
 def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
