@@ -242,9 +242,10 @@ def markdown(facts: Mapping[str, Any], images: Sequence[str] = ()) -> str:
         lines += _evidence_section(facts, units)
     lines += _data_section(facts, units)
     if images:
+        fitted = bool(facts.get('baseline'))
         lines += ['## Plots', '']
         for name in images:
-            lines += [f'![{name}]({name})', '', f'*{_caption(name)}*', '']
+            lines += [f'![{name}]({name})', '', f'*{_caption(name, fitted)}*', '']
     return '\n'.join(lines).rstrip('\n') + '\n'
 
 
@@ -299,7 +300,9 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
     ax.set_title('validation loops: where the baseline (blue) leaves the measured loop\n'
                  '(black), the extended model (red) should follow it' if len(sims) > 1 else
                  'validation loops: the baseline MPI (blue) should lie on the measured\n'
-                 'loop (black); no extension was chosen', fontsize=10)
+                 'loop (black); no extension was chosen' if sims else
+                 'the measured loops (black): outside the invertible class,\nno model was'
+                 ' fitted', fontsize=10)
     ax.legend(fontsize=8)
     written.append(_save(fig, out / 'loops.png', plt))
 
@@ -365,10 +368,11 @@ def _signature(cause: str, t: Any, x: Any, y: Any, base: Any, sim: Any, k0: int,
     return _save(fig, path, plt)
 
 
-def _caption(name: str) -> str:
+def _caption(name: str, fitted: bool = True) -> str:
     # The two plots of every report, and each effect's signature plot as its module says.
     captions = {
-        'loops.png': 'Measured and simulated output against the input, validation data.',
+        'loops.png': ('Measured and simulated output against the input, validation data.'
+                      if fitted else 'Measured output against the input; no model fitted.'),
         'residual.png': 'Measured minus simulated output over time, validation data.'}
     if name in captions:
         return captions[name]
