@@ -298,31 +298,12 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     # One analysis of the record, as `mpi-ros identify` makes it: the time base (when the
     # record has one), its segments, the ringing after steps left out, the start state.
     say(f'identifying the baseline MPI model on {tt.size} samples (order {order})')
-    prepared: dict[str, Any] = {'time': tt if timed else None, 'dynamics': 'off'}
-    try:
-        if order == 'auto':
-            base = identify(xt, yt, order='auto', **prepared)
-        else:
-            base = identify(xt, yt, n=int(order[0]), l=int(order[1]), **prepared)
-    except IdentificationError as err:
-        # A split's training part that holds only part of the record's loops is refused for
-        # what that part shows; the cause is the split: say so, with the fraction outside.
-        outside = (_outside_training(xt, xv[start:], None) if validation is None else '')
-        if not outside or return_point_drift(xt, yt).drifts:
-            raise                       # no split to blame, or a drift: the record's cause
-        msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
-               f' the likely cause is the split: {outside}; pass a record of several cycles,'
-               ' another --split, or a separate --validate record')
-        raise IdentificationError(msg) from err
+    base = _identify_baseline((tt, xt, yt), (tv, xv), start, order, timed,
+                              split_record=validation is None)
     # The dynamics finding `mpi-ros identify` states for DATA (the training record, or the
     # whole record of a split), and the step response's onset that bounds a dead time.
     td, xd, yd = (tt, xt, yt) if validation is not None else (tv, xv, yv)
-    finding = DynamicsFinding()
-    onset = StepOnset()
-    if timed:
-        say('dynamics: the analysis identify makes of the record (dead time, lag, steps)')
-        _, finding = record_dynamics(xd, yd, td)
-        onset = step_onset(td, xd, yd, sign=sign)
+    finding, onset = _record_dynamics(td, xd, yd, sign, timed, say)
     data.dynamics_finding = finding
     if finding.kind != 'unavailable':
         say(finding.describe())
@@ -399,19 +380,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                         bool(excess))
     if unphysical:
         decision.steps.append(unphysical)
-    chosen = _decide(candidates, excess, decision.steps, min_gain, z_critical)
-    pair = _pair(candidates) if excess else None
-    if pair is not None:
-        chosen = _try_pair(scorer, pair, candidates, chosen, (n, l), decision.steps,
-                           min_gain=min_gain, z_critical=z_critical, excess=excess)
-    _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
-    beyond = _separate_evidence(validation is not None, scorer.residuals, z_critical,
-                                bandwidth)
-    agreed = _agree_with_finding(decision, chosen, candidates, finding, beyond)
-    if agreed is not chosen:
-        chosen = agreed
-        _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
-        _agree_with_finding(decision, chosen, candidates, finding, beyond)
+    chosen = _choose(decision, candidates, scorer, finding, (n, l), excess=excess,
+                     separate=validation is not None)
     series.baseline, series.candidates = sim0, scorer.sims
     if chosen is None:
         cause, model, extended, gain = 'none', base.model, baseline.to_dict(), 0.0
@@ -447,6 +417,64 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,
                            series=series)
+
+
+def _identify_baseline(training: tuple[FloatArray, FloatArray, FloatArray],
+                       validation: tuple[FloatArray, FloatArray], start: int,
+                       order: str | tuple[int, int], timed: bool, *,
+                       split_record: bool) -> Any:
+    # Step 2: Gamma on the training record, as `mpi-ros identify` fits it (the time base
+    # when the record has one, its segments, the ringing after steps left out, the start
+    # state; the effects are the candidates, so no dynamics).
+    tt, xt, yt = training
+    tv, xv = validation
+    prepared: dict[str, Any] = {'time': tt if timed else None, 'dynamics': 'off'}
+    try:
+        if order == 'auto':
+            return identify(xt, yt, order='auto', **prepared)
+        return identify(xt, yt, n=int(order[0]), l=int(order[1]), **prepared)
+    except IdentificationError as err:
+        # A split's training part that holds only part of the record's loops is refused for
+        # what that part shows; the cause is the split: say so, with the fraction outside.
+        outside = _outside_training(xt, xv[start:], None) if split_record else ''
+        if not outside or return_point_drift(xt, yt).drifts:
+            raise                       # no split to blame, or a drift: the record's cause
+        msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
+               f' the likely cause is the split: {outside}; pass a record of several cycles,'
+               ' another --split, or a separate --validate record')
+        raise IdentificationError(msg) from err
+
+
+def _record_dynamics(t: FloatArray, x: FloatArray, y: FloatArray, sign: int, timed: bool,
+                     say: Callable[[str], None]) -> tuple[DynamicsFinding, StepOnset]:
+    # The dynamics finding `identify` states for the record and its steps' onset (none
+    # without a time base).
+    if not timed:
+        return DynamicsFinding(), StepOnset()
+    say('dynamics: the analysis identify makes of the record (dead time, lag, steps)')
+    _, finding = record_dynamics(x, y, t)
+    return finding, step_onset(t, x, y, sign=sign)
+
+
+def _choose(decision: Decision, candidates: 'list[Candidate]', scorer: '_Scorer',
+            finding: DynamicsFinding, order: tuple[int, int], *, excess: bool,
+            separate: bool) -> 'Candidate | None':
+    # Step 5: the rule (significance and signature), a pair of effects, the ties, and the
+    # agreement with identify's dynamics finding; the steps are written into DECISION.
+    min_gain, z_critical, bandwidth = decision.min_gain, decision.z_critical, decision.bandwidth
+    chosen = _decide(candidates, excess, decision.steps, min_gain, z_critical)
+    pair = _pair(candidates) if excess else None
+    if pair is not None:
+        chosen = _try_pair(scorer, pair, candidates, chosen, order, decision.steps,
+                           min_gain=min_gain, z_critical=z_critical, excess=excess)
+    _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
+    beyond = _separate_evidence(separate, scorer.residuals, z_critical, bandwidth)
+    agreed = _agree_with_finding(decision, chosen, candidates, finding, beyond)
+    if agreed is not chosen:
+        chosen = agreed
+        _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
+        _agree_with_finding(decision, chosen, candidates, finding, beyond)
+    return chosen
 
 
 @dataclass
