@@ -5,23 +5,28 @@ Effects are plug-ins: a toy effect registered here, in one place, works end to e
 The toy effect is a drive gain: the material sees ``k x`` instead of the commanded ``x``,
 ``s = Gamma[k x]`` (degenerate with Gamma itself, which is fine for a toy: the point is
 that nothing outside this file is edited).  Registering it makes the parameter form, the
-fit, the exact per-step inverse in the one compensator and the diagnosis candidate work,
-and, through its plant step (an input-side gain, ``actuator.drive_gain``), the simulated
-actuator and the plant simulator node, over DDS.
+fit, the exact per-step inverse in the one compensator, the compensator nodes' parameters,
+the diagnosis candidate with its row in the report's table, its signature plot with its
+caption and what separates it from creep in a tie work, and, through its plant step (an
+input-side gain, ``actuator.drive_gain``), the simulated actuator and the plant simulator
+node, over DDS.
 """
 
 from dataclasses import dataclass
+import re
 import time
 from typing import Any
 
 from mpi_ros import MPIModel
 from mpi_ros.compensation import Compensator
 from mpi_ros.diagnosis import diagnose
+from mpi_ros.diagnosis.report import markdown, report_facts, write_report
 from mpi_ros.errors import ModelError
 from mpi_ros.extensions import (Effect, EffectParameter, EFFECTS, extended_model_from_params,
                                 ExtendedModelBase, register_effect, unregister_effect)
-from mpi_ros.extensions.effect import PlantEffect, PlantParameter
+from mpi_ros.extensions.effect import PlantEffect, PlantParameter, separating_measurement
 from mpi_ros.extensions.fitting import fit_gamma, search_fit
+from mpi_ros.node_parameters.compensator import axis_parameters, compensator_parameters
 from mpi_ros.nodes.plant_simulator import PlantSimulatorNode
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
@@ -89,9 +94,18 @@ def fit_drive_gain(time, current, displacement, *, order):
     return model
 
 
+def plot_drive_gain(ax, time, current, measured, baseline, extended, start):
+    ax.plot(current[start:], measured[start:] - extended[start:], '.', ms=1, label='toy')
+    ax.set_title('drive gain: residual against the input')
+
+
+SEPARATION = 'a change of the drive amplifier separates a drive gain from creep'
+
 TOY = Effect(name='drive_gain', formula='Gamma[k x]',
              parameters=(EffectParameter(GAIN, 'double', 0.0, 'Toy drive gain k'),),
              model_class=DriveGainModel, fit=fit_drive_gain, parameter_count=lambda p: 1,
+             plot=plot_drive_gain, caption='Drive gain: the residual against the input.',
+             separations={'creep': SEPARATION},
              plant=PlantEffect(
                  stage='input', label='drive gain',
                  parameters=(PlantParameter('drive_gain', 0.0, 'Toy drive gain k, 0 = off',
@@ -109,6 +123,7 @@ def toy():
         unregister_effect(TOY.name)
     assert 'drive_gain' not in EFFECTS
     assert 'drive_gain' not in ActuatorConfig().to_mapping()
+    assert GAIN not in {spec.name for spec in compensator_parameters()}
 
 
 def test_toy_effect_parameter_form_and_exact_inverse(toy):
@@ -130,7 +145,15 @@ def test_toy_effect_parameter_form_and_exact_inverse(toy):
     assert comp.kind == 'none' and not comp.has_effect
 
 
-def test_toy_effect_is_fitted_and_a_diagnosis_candidate(toy):
+def test_toy_effect_in_the_compensator_nodes_parameters(toy):
+    """Both compensator nodes declare the toy's key from the registry (ROS-free specs)."""
+    spec = next(s for s in compensator_parameters() if s.name == GAIN)
+    assert spec.description == 'Toy drive gain k' and spec.default is None
+    names = {s.name for s in axis_parameters(2)}
+    assert {f'axis0.{GAIN}', f'axis1.{GAIN}'} <= names
+
+
+def test_toy_effect_is_fitted_and_a_diagnosis_candidate(toy, tmp_path):
     t, x = identification_excitation(30.0, sample_rate=200.0, seed=2, holds=False,
                                      bursts=False)
     truth = DriveGainModel(random_model(np.random.default_rng(1), n=4, l=2,
@@ -144,6 +167,19 @@ def test_toy_effect_is_fitted_and_a_diagnosis_candidate(toy):
     assert names == ['creep', 'drive_gain']
     toy_row = report.candidates[1]
     assert toy_row['signature'] == 'unavailable' and toy_row['parameter_count'] == 1
+    # The report: a row in the table of models, its signature plot with its own caption.
+    files = write_report(report, tmp_path)
+    assert 'signature_drive_gain.png' in [f.name for f in files]
+    summary = (tmp_path / 'summary.md').read_text(encoding='utf-8')
+    assert re.search(r'^\| \d \| drive_gain( \(chosen\))? \| \S+ % \|', summary, re.MULTILINE)
+    assert f'![signature_drive_gain.png](signature_drive_gain.png)\n\n*{TOY.caption}*' in summary
+    # A tie with creep says what separates them, as the toy's module states it.
+    assert separating_measurement(['creep', 'drive_gain']) == SEPARATION
+    facts = report_facts(report)
+    tied = {**facts, 'cause': 'creep',
+            'decision': {**facts['decision'], 'ambiguous': True, 'tied_with': ['drive_gain'],
+                         'tie_reasons': {'drive_gain': 'within the noise'}}}
+    assert f'5-40 Hz: {SEPARATION}.' in markdown(tied)
 
 
 def test_toy_effect_in_the_simulated_actuator(toy):

@@ -1,26 +1,36 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """
-``mpi-ros diagnose``: summary.md and the stderr summary say what the JSON says.
+``mpi-ros diagnose``: summary.md, the stderr summary and the plots say what the JSON says.
 
 Each record goes through the command line as a user runs it; summary.md is parsed back and
-its holds count, scored part, verdict, gains, z wording and units are checked against
-report.json.  No line of summary.md may look like JSON or carry more than 4 significant
-digits.
+every sentence that states a fact is checked against report.json: the verdict and its
+label (clear, weak, ambiguous), the holds count and the holds the signature test used, the
+bursts, the scored part, every model's errors, gain, z and the z test's wording (table,
+summary line, decision steps, evidence), who decided (the signature or the gain alone), the
+fitted parameters (table, evidence, plot titles and legends, read back from each PNG's
+text), the captions (each effect's own, from the registry) and the units.  No line of
+summary.md may look like JSON or carry more than 4 significant digits, and every error or
+gain printed on stderr is a percentage.  The records: synthetic plants of every effect
+(mpi_ros.plant) and the measured records of ``../shared/data/measured`` when present.
 """
 
 import json
 import math
+from pathlib import Path
 import re
 
 from mpi_ros.app.cli import main
 from mpi_ros.diagnosis.report import data_units, markdown, summary_lines, z_wording
+from mpi_ros.extensions import EFFECTS
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
 from mpi_ros.recordings import write_csv_columns
 import numpy as np
+from PIL import Image
 import pytest
 
 NOISE = 2e-8                       # [m] sensor noise, 0.05 % of the stroke
+MEASURED = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'measured'
 # Rounding to 3 significant digits moves a number by at most half a unit of the third digit.
 ROUNDING = 5e-3
 
@@ -32,13 +42,14 @@ def _record(path, config, *, seconds=20.0, seed=1, **excitation):
     write_csv_columns(path, {'time': t, 'current': x, 'displacement': y})
 
 
-def _diagnose(tmp_path, capsys, data, *extra):
-    argv = ['diagnose', str(data), '--order', '8', '4', '--json', str(tmp_path / 'r.json'),
+def _diagnose(tmp_path, capsys, data, *extra, order=('8', '4')):
+    argv = ['diagnose', str(data), '--order', *order, '--json', str(tmp_path / 'r.json'),
             '--report', str(tmp_path / 'report'), *extra]
     assert main(argv) == 0, capsys.readouterr().err
     err = capsys.readouterr().err
     facts = json.loads((tmp_path / 'r.json').read_text(encoding='utf-8'))
     summary = (tmp_path / 'report' / 'summary.md').read_text(encoding='utf-8')
+    _check_plots(facts, summary, tmp_path / 'report')
     return facts, summary, err
 
 
@@ -135,6 +146,173 @@ def _check_agreement(facts, summary, err):
         assert line in err.splitlines()
         assert f'- {line[0].upper()}{line[1:]}' in lines
     _check_prose(summary)
+    _check_sentences(facts, summary, err)
+
+
+#: Sentences checked against the JSON, by kind (counted over the whole module's records).
+CHECKED = {}
+
+
+def _count(kind, n=1):
+    CHECKED[kind] = CHECKED.get(kind, 0) + n
+
+
+def _check_sentences(facts, summary, err):
+    """Check the sentences beyond the table: label, summary gains, evidence, baseline."""
+    decision, residual = facts['decision'], facts['residual']
+    zc = decision['z_critical']
+    chosen = next((c for c in facts['candidates'] if c['cause'] == facts['cause']), None)
+    by_cause = {c['cause']: c for c in facts['candidates']}
+    # The label: ambiguous, weak or clear as the decision says.
+    label = re.search(r'\*\*Verdict: .+?\*\* \((.+)\)', summary).group(1)
+    assert label.startswith('present, ambiguous') == (
+        decision['ambiguous'] and decision.get('strength') != 'present, weak'), label
+    assert (label == 'present, weak') == (decision.get('strength') == 'present, weak'), label
+    _count('verdict label')
+    # The summary line of gains: every candidate's gain, z and wording.
+    line = next(x for x in summary.splitlines() if x.startswith('- Gains on the validation'))
+    said = re.findall(r'(\S+) ([-+]\S+) % \(z (\S+), ([a-z ]+)\)', line.split(': ', 1)[1])
+    assert sorted(c for c, *_ in said) == sorted(by_cause)
+    for cause, gain, z, wording in said:
+        c = by_cause[cause]
+        assert _close(gain, 100 * c['gain']) and _close(z, c['z'])
+        assert wording == z_wording(c['z'], zc)
+        _count('gain and significance (summary line)')
+    # The baseline's row and the straight line.
+    base = facts['baseline']
+    row = re.search(r'\| - \| baseline MPI, order (\d+), (\d+) \| (\S+) % \| (\S+) % \|', summary)
+    assert [int(row.group(1)), int(row.group(2))] == base['order']
+    assert _close(row.group(3), 100 * base['rms_error'])
+    assert _close(row.group(4), 100 * base['nonlinearity_error'])
+    line = re.search(r'Straight line fitted on the training data: (\S+) % RMS', summary)
+    assert _close(line.group(1), 100 * base['linear_rms_error'])
+    _count('baseline errors', 2)
+    # Each candidate's fitted scalar parameters, as the table states them.
+    units = {p.key: p.unit for e in EFFECTS.values() for p in e.parameters}
+    for c in facts['candidates']:
+        row = next(x for x in summary.splitlines()
+                   if re.match(rf'\| \d+ \| {re.escape(c["cause"])}( \(chosen\))? \|', x))
+        for key, value in c['parameters'].items():
+            if isinstance(value, list):
+                continue
+            name = key.rsplit('.', 1)[-1].replace('_', ' ')
+            said = re.search(rf'(?:\| |; ){re.escape(name)} (\S+)( ms| s)?(?:;| \|)', row)
+            assert said is not None, (key, row)
+            scale = 1e3 if said.group(2) == ' ms' else 1.0
+            assert units.get(key) != 's' or said.group(2), (key, row)
+            assert _close(said.group(1), scale * value), (key, value, row)
+            _count('fitted parameter (table)')
+        for key in c.get('not_identified', {}):
+            assert f'{key} not identified' in row
+            _count('not identified (table)')
+    # The evidence sentence (JSON) and the evidence section (summary.md).
+    evidence = facts['evidence']
+    miss = re.search(r'misses (\S+) % of the output range', evidence)
+    assert _close(miss.group(1), 100 * base['rms_error'])
+    _count('evidence: baseline error')
+    cut = re.search(r'extension cuts it by (-?\d+) % \(z = (\S+);', evidence)
+    if chosen is None:
+        assert cut is None and 'no extension reduces it significantly' in evidence
+    else:
+        assert cut is not None, evidence
+        assert int(cut.group(1)) == round(100 * chosen['gain'])
+        assert math.isclose(float(cut.group(2)), chosen['z'], abs_tol=0.051)
+    _count('evidence: chosen gain and z')
+    holds = residual['hold_signature']
+    used = re.search(r'the hold signature test used (\d+) hold', evidence)
+    assert used is None or (holds is not None and int(used.group(1)) == holds['holds'])
+    assert ('no hold of' in evidence) <= (holds is None)
+    during = re.search(r'- During (\d+) hold\(s\) the residual', summary)
+    assert (during is None) == (holds is None)
+    if holds is not None:
+        assert int(during.group(1)) == holds['holds']
+    _count('holds (evidence)', 2)
+    bursts = residual['burst_signature']
+    shown = re.search(r'- Bursts at (\d+) frequencies, .* follows the (\w+) law \(delay L ='
+                      r' (\S+) ms', summary)
+    assert (shown is None) == (bursts is None)
+    if bursts is not None:
+        assert int(shown.group(1)) == len(bursts['frequencies'])
+        assert shown.group(2) == bursts['law']
+        assert _close(shown.group(3), 1e3 * bursts['delay'])
+    tested = re.search(r'the burst signature test used bursts at (\d+) frequencies', evidence)
+    assert tested is None or int(tested.group(1)) == len(bursts['frequencies'])
+    _count('bursts (evidence)', 2)
+    # Who decided: the chosen candidate's signature, worded the same everywhere.
+    if chosen is not None:
+        for says in re.findall(r'its physical signature is (\w+)', evidence):
+            assert says == chosen['signature'], evidence
+        gain_alone = 'decided on the gain alone' in evidence
+        assert gain_alone <= (chosen['signature'] == 'unavailable')
+        _count('who decided')
+    # The noise floor of the evidence section.
+    floor = re.search(r'noise floor \S+ \S+ \((\S+) % of the output range\)', summary)
+    assert _close(floor.group(1), 100 * residual['noise_floor_relative'])
+    _count('noise floor')
+    # stderr: every error, gain and noise floor a percentage; the offset a length with its unit.
+    for line in err.splitlines():
+        for number in re.finditer(r'(?:error|gain|noise floor|line) ([-+]?\d[\d.]*(?:e[-+]?\d+)?)'
+                                  r'(?=[ ,;)])( %)?', line):
+            assert number.group(2), line
+        for number in re.finditer(r'offset re-estimated: (\S+)( m)?', line):
+            assert number.group(2), line
+    _count('stderr units')
+
+
+def _png_text(path):
+    with Image.open(path) as image:
+        return dict(image.text)
+
+
+def _check_plots(facts, summary, folder):
+    """Check each plot's words (title, labels, legend) and its caption against the JSON."""
+    images = re.findall(r'^!\[(\S+)\]\(\S+\)\n\n\*(.+)\*$', summary, flags=re.MULTILINE)
+    assert images, summary[-500:]
+    parameters = {c['cause']: c['parameters'] for c in facts['candidates']}
+    for name, caption in images:
+        text = _png_text(folder / name)
+        title, words = text['Title'], text['Description']
+        if name in ('loops.png', 'residual.png'):
+            assert ('no extension was chosen' in title) == (facts['cause'] == 'none'), title
+            assert ('no model was fitted' in title) == (not facts['baseline']), title
+            assert ('simulated' in caption) == bool(facts['baseline']), caption
+            _count('plot title: chosen or not')
+            continue
+        cause = name.removeprefix('signature_').removesuffix('.png')
+        assert caption == EFFECTS[cause].caption
+        _count('caption')
+        fitted = parameters[cause]
+        if cause == 'dead_time':
+            said = re.search(r'fitted L = (\S+) ms; the residual is smallest at\sd = (\S+) ms'
+                             r' \((.+)\)', title)
+            assert _close(said.group(1), 1e3 * fitted['model.dead_time']), title
+            assert f'legend: minimum at d = {said.group(2)} ms' in words
+            assert f'legend: fitted dead time L = {said.group(1)} ms' in words
+            _count('plot title: fitted value', 2)
+        elif cause == 'resonance':
+            said = re.search(r'f = (\S+) Hz, decay (\S+) ms', title)
+            if 'model.resonance.frequency' in fitted and fitted['model.resonance.frequency'] > 0:
+                assert said is not None, title
+                assert math.isclose(float(said.group(1)), fitted['model.resonance.frequency'],
+                                    rel_tol=5e-4)
+                assert _close(said.group(2), 1e3 * fitted['model.resonance.decay'])
+            else:
+                assert said is None and 'no mode fitted' in title, title
+            _count('plot title: fitted value')
+        elif cause == 'thermal_drift':
+            said = re.search(r'tau_T = (\S+) s, fitted', words)
+            tau = fitted.get('model.thermal_drift.time_constant')
+            assert (said is None) == (not tau), words
+            if said is not None:
+                assert _close(said.group(1), tau)
+            _count('plot label: fitted value')
+        elif cause == 'rate_dependence':
+            said = re.search(r'lag tau = (\S+) ms', title)
+            tau = fitted.get('model.rate_dependence.time_constant')
+            assert (said is None) == (tau is None), title
+            if said is not None:
+                assert _close(said.group(1), 1e3 * tau)
+            _count('plot title: fitted value')
 
 
 def _check_prose(summary):
@@ -326,3 +504,61 @@ def test_a_pair_states_each_effect_and_a_weak_strength(tmp_path, capsys):
     assert (f'{names[0]} +12.0 % (z 2.50, significantly better), {names[1]} +9.00 % (z -1.80,'
             ' significantly worse)') in text
     _check_prose(text)
+
+
+@pytest.mark.parametrize('config', [
+    {'eddy_time_constant_s': 0.005},
+    {'thermal_gain_m_per_a2': 1.2e-6},
+    {'resonance_frequency_hz': 120.0},
+], ids=['rate_dependence', 'thermal_drift', 'resonance'])
+def test_synthetic_plants_of_every_effect(tmp_path, capsys, config):
+    """A plant of each other effect (seeds fixed before looking), through the command line."""
+    _record(tmp_path / 'data.csv', config, seed=3)
+    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    _check_agreement(facts, summary, err)
+
+
+@pytest.mark.parametrize('name, options', [
+    ('tum_piezo/rs_100hz_lp_20140608.csv', ()),
+    ('tum_piezo/rs_40hz_nolp_20140608.csv', ()),
+    ('pnzt-aixacct-tue/csv/SLOW_table01_TEST_0_1Hz.csv',
+     ('--time-column', 'Time_s', '--input-column', 'Vplus_V', '--output-column', 'D1_nm')),
+])
+def test_measured_records(tmp_path, capsys, name, options):
+    """Real records of ../shared/data/measured (skipped when absent), with their own units."""
+    path = MEASURED / name
+    if not path.exists():
+        pytest.skip(f'{name} is not in ../shared/data/measured')
+    argv = ['diagnose', str(path), *options, '--order', '8', '4', '--json',
+            str(tmp_path / 'r.json'), '--report', str(tmp_path / 'report')]
+    code = main(argv)
+    err = capsys.readouterr().err
+    if code != 0:                          # a refusal: one line naming the cause, no report
+        assert code == 1 and re.search(r'^error: ', err, re.MULTILINE), err
+        assert not (tmp_path / 'r.json').exists()
+        pytest.skip(f'diagnose refuses {name}: {err.strip().splitlines()[-1]}')
+    facts = json.loads((tmp_path / 'r.json').read_text(encoding='utf-8'))
+    summary = (tmp_path / 'report' / 'summary.md').read_text(encoding='utf-8')
+    _check_plots(facts, summary, tmp_path / 'report')
+    if facts['cause'] == 'outside_invertible_class':
+        # No model: the verdict, why, and the units; no table, no gains.
+        assert summary.splitlines()[2] == ('**Verdict: outside_invertible_class** (outside the'
+                                           ' invertible class: no model fitted)')
+        why = summary.split('## Why no model was fitted\n\n', 1)[1].split('\n', 1)[0]
+        assert why == facts['evidence'] and '| rank |' not in summary
+        assert 'Holds: not counted (no model fitted)' in summary
+        units = re.search(r'Units: input (\S+), output (\S+), time s', summary)
+        assert (units.group(1), units.group(2)) == (facts['data']['units']['input'],
+                                                    facts['data']['units']['output'])
+        _check_prose(summary)
+        _count('refusal: verdict, why, holds, units', 4)
+        return
+    _check_agreement(facts, summary, err)
+
+
+@pytest.fixture(scope='module', autouse=True)
+def _sentences_checked():
+    """Print how many sentences of each kind were checked (shown with -s or -rA)."""
+    yield
+    print('\nsentences checked against the JSON:', ', '.join(
+        f'{kind} {n}' for kind, n in sorted(CHECKED.items())), f'(total {sum(CHECKED.values())})')

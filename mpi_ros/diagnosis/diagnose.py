@@ -50,20 +50,23 @@ Procedure (documented in ``docs/diagnosis.md``):
      (``z >= z_critical``, one-sided).  The variance of the mean loss difference is a
      Newey-West (Bartlett) HAC estimate whose bandwidth follows the autocorrelation of the
      loss difference (Andrews' AR(1) plug-in), so a slow effect gets a long window;
-   - *signature* (:mod:`mpi_ros.diagnosis.signatures`, computed from the baseline
-     residual and the input alone): creep needs a ``log t`` component during holds;
-     thermal drift a smooth drift during holds *without* one; rate dependence and dead
-     time a frequency-dependent burst response that follows the lag law
-     (``atan(w tau)``, falling amplitude) resp. the delay law (phase linear in ``w``)
-     better than the other.  Each test runs at ``alpha / 4`` (Bonferroni over the four
-     causes).  A record without holds (bursts) leaves the slow (fast) signatures
-     *unavailable*; they then do not veto, and the report says so.
+   - *signature*: each registered effect's own test (``Effect.signature`` of
+     :data:`mpi_ros.extensions.EFFECTS`, on the hold and burst tests of
+     :mod:`mpi_ros.diagnosis.signatures`, computed from the baseline residual and the
+     input alone; each effect module states what it looks for).  Each test runs at
+     ``alpha`` over the number of registered effects (Bonferroni).  A record without
+     holds (bursts) leaves the signatures shown by holds (bursts) *unavailable*
+     (``Effect.signature_test``); they then do not veto, and the report says so.
+
+   What separates tied causes is what their effects state (``Effect.separations``,
+   ``Effect.signature_test``: :func:`mpi_ros.extensions.effect.separating_measurement`).
 
    The cause is the candidate with the largest gain among those that are significant and
    whose signature is present (or unavailable); ``none`` when there is none, or when the
    baseline residual does not exceed the noise floor by ``noise_factor``.
 """
 
+from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
 import math
 from typing import Any, Callable
@@ -72,6 +75,9 @@ from warnings import catch_warnings, simplefilter
 import numpy as np
 import numpy.typing as npt
 
+from .facts import Baseline, Decision, HoldCount, jsonable, OperatingPoint, Ranked, \
+    RecordFacts, Refusal, Residual, ReturnPoints, Reversals, ScoredPart, Series, \
+    StepOnsetCheck
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .signatures import burst_signature, hold_segments, hold_signature
@@ -80,12 +86,11 @@ from ..errors import DataError, IdentificationError, ModelError, MPIWarning
 from ..extensions import EFFECTS, fit_composite
 from ..extensions.composite import check_combination, composite_cause
 from ..extensions.dead_time import DEAD_TIME
-from ..extensions.effect import unidentified_parameters
+from ..extensions.effect import separating_measurement, unidentified_parameters
 from ..extensions.fitting import rate_cross_correlation
 from ..identification import burn_in, output_sign
 from ..identification.dynamics import return_point_drift, step_onset, StepOnset
-from ..identification.finding import DynamicsFinding, record_dynamics, \
-    SEPARATE_LAG_AND_DEAD_TIME
+from ..identification.finding import DynamicsFinding, record_dynamics
 from ..identification.record import prepare_record, refuse_if_unmodellable
 from ..identification.start_states import estimate_start_state
 from ..metrics import range_error, rms_range_error
@@ -115,13 +120,11 @@ class DiagnosisReport:
     Attributes
     ----------
     cause : str
-        ``creep``, ``rate_dependence``, ``thermal_drift``, ``dead_time``, ``none`` or
-        ``outside_invertible_class``.
-    baseline : dict
-        ``order``, ``rms_error``, ``nonlinearity_error`` of Gamma on the validation data
-        (fractions of its output range), ``linear_rms_error`` (the training data's straight
-        line), ``validation_output_offset`` [m] (the re-estimated sensor zero of a separate
-        validation record; 0 for a split), ``training_rms_error``, ``operating_point``.
+        A registered effect's name (:data:`mpi_ros.extensions.EFFECTS`), two joined by
+        ``' + '`` for a pair, ``none`` or ``outside_invertible_class``.
+    baseline : Baseline or None
+        Gamma on the validation data (:class:`~mpi_ros.diagnosis.facts.Baseline`); None
+        when no model was fitted.
     extended : dict
         The same for the chosen model (the baseline for ``none``), plus ``parameters``.
     gain : float
@@ -133,47 +136,49 @@ class DiagnosisReport:
         ``signature`` (``present``, ``absent`` or ``unavailable``), ``parameters``.
     evidence : str
         One or two sentences a control engineer can check.
-    residual : dict
-        Structure of the baseline residual (noise floor, holds, rate, power, lag).
-    decision : dict
+    residual : Residual or Reversals
+        Structure of the baseline residual (noise floor, holds, rate, power, lag, the
+        signature tests; :class:`~mpi_ros.diagnosis.facts.Residual`), or the reversals
+        of a record outside the invertible class.
+    decision : Decision or Refusal
         The rule's thresholds and the steps taken; ``tied_with`` and ``tie_reasons`` (per
-        tied cause, why: the validation data's z, or the record's dynamics finding).
-    data : dict
-        Sources, sample counts, split (``leading_hold``: the samples of a hold at the
-        record's start given to training), ``output_sign``, burn-ins,
-        ``output_offset_reestimated``, ``dynamics_finding`` (the finding ``identify``
-        states for the record, :class:`~mpi_ros.identification.finding.DynamicsFinding`),
-        ``validation_outside_training_range`` (fraction of the scored samples).
+        tied cause, why: the validation data's z, or the record's dynamics finding)
+        (:class:`~mpi_ros.diagnosis.facts.Decision`).
+    data : RecordFacts
+        Sources, sample counts, split, sign, burn-ins, the dynamics finding ``identify``
+        states for the record, the validation input outside the training range
+        (:class:`~mpi_ros.diagnosis.facts.RecordFacts`).
     warnings : list of str
         What looks wrong without stopping the diagnosis, one sentence each: time constants
         the record's time base makes implausible (:mod:`mpi_ros.diagnosis.time_base`).
     model : object
         The extended model (or the baseline MPIModel); not serialised.
-    series : dict
+    series : Series
         Arrays for plots (not serialised).
 
     """
 
     cause: str
-    baseline: dict[str, Any]
+    baseline: Baseline | None
     extended: dict[str, Any]
     gain: float
     candidates: list[dict[str, Any]]
     evidence: str
-    residual: dict[str, Any] = field(default_factory=dict)
-    decision: dict[str, Any] = field(default_factory=dict)
-    data: dict[str, Any] = field(default_factory=dict)
+    residual: Residual | Reversals
+    decision: Decision | Refusal
+    data: RecordFacts
+    series: Series = field(repr=False)
     warnings: list[str] = field(default_factory=list)
     model: Any = None
-    series: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def to_json(self) -> dict[str, Any]:
         """Return the JSON-ready dictionary (no arrays, no model objects)."""
-        form: dict[str, Any] = _jsonable({
+        form: dict[str, Any] = jsonable({
             'cause': self.cause, 'gain': self.gain, 'evidence': self.evidence,
-            'baseline': self.baseline, 'extended': self.extended,
-            'candidates': self.candidates, 'residual': self.residual,
-            'decision': self.decision, 'data': self.data, 'warnings': self.warnings})
+            'baseline': self.baseline if self.baseline is not None else {},
+            'extended': self.extended, 'candidates': self.candidates,
+            'residual': self.residual, 'decision': self.decision, 'data': self.data,
+            'warnings': self.warnings})
         return form
 
     def parameters(self) -> dict[str, Any]:
@@ -293,7 +298,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         if validation is not None or validation_block is not None:
             return None
         block = _inner_block(_arrays(recording, 'recording')[1], tv.size - start,
-                             int(data.get('leading_hold', 0)))
+                             data.leading_hold or 0)
         if block is None:
             return None
         identify_whole()                # the record's own cause, not the split's
@@ -309,9 +314,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     # The sensor may fall as the actuator extends: the class check (a rising map) and the
     # model (model.output_sign) use the sign detected on the training data.
     sign, _ = output_sign(xt, yt)
-    data['output_sign'] = sign
-    series: dict[str, Any] = {'time': tv, 'current': xv, 'displacement': yv,
-                              'start': start}
+    data.output_sign = sign
+    series = Series(tv, xv, yv, start)
     _refuse_constant_output(yt, yv, validation is not None)
     timed = bool(getattr(recording, 'timed', True))
     check = _class_check(xt, sign * yt, xv[start:], sign * yv[start:], validation is not None)
@@ -321,64 +325,38 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         # Each record on its own; a split's whole record.
         analysed = [(tt, xt, yt), (tv, xv, yv)] if validation is not None else [(tv, xv, yv)]
         check = _with_analysis(check, analysed, timed)
-        data['class_check'] = check.reason
+        data.class_check = check.reason
     if not check.inside:
         say(f'outside the invertible class: {check.reason}')
         return DiagnosisReport(
-            cause=OUTSIDE_INVERTIBLE_CLASS, baseline={}, extended={}, gain=0.0,
+            cause=OUTSIDE_INVERTIBLE_CLASS, baseline=None, extended={}, gain=0.0,
             candidates=[], evidence=check.reason[0].upper() + check.reason[1:] + '.',
-            residual={'reversal_ratio': check.reversal_ratio, 'branches': check.branches},
-            decision={'rule': 'invertible-class check failed; no model fitted'}, data=data,
+            residual=Reversals(check.reversal_ratio, check.branches),
+            decision=Refusal('invertible-class check failed; no model fitted'), data=data,
             series=series)
-    if data.get('class_check'):
+    if data.class_check:
         say(f'invertible class: {check.reason}')
     # One analysis of the record, as `mpi-ros identify` makes it: the time base (when the
     # record has one), its segments, the ringing after steps left out, the start state.
     say(f'identifying the baseline MPI model on {tt.size} samples (order {order})')
-    # A block's training part is two experiments joined at a gap: segments need the time
-    # base (a record without one has its sample index).
-    prepared: dict[str, Any] = {'time': tt if timed or validation_block is not None else None,
-                                'dynamics': 'off'}
-    try:
-        if order == 'auto':
-            base = identify(xt, yt, order='auto', **prepared)
-        else:
-            base = identify(xt, yt, n=int(order[0]), l=int(order[1]), **prepared)
-    except IdentificationError as err:
-        # A split's training part that holds only part of the record's loops is refused for
-        # what that part shows; the cause is the split: say so, with the fraction outside.
-        outside = (_outside_training(xt, xv[start:], {}) if validation is None else '')
-        if validation_block is not None and not return_point_drift(xt, yt).drifts:
-            msg = (f'the training part (the record without the validation block, samples'
-                   f' {start}..{tv.size - 1}) is refused: {err}')
-            raise IdentificationError(msg) from err
-        if not outside or return_point_drift(xt, yt).drifts:
-            raise                       # no split to blame, or a drift: the record's cause
-        retried = inner_block(f'its training part is refused: {err}')
-        if retried is not None:
-            return retried
-        msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
-               f' the likely cause is the split: {outside}; pass a record of several cycles,'
-               ' another --split, or a separate --validate record')
-        raise IdentificationError(msg) from err
+    base = _identify_baseline((tt, xt, yt), (tv, xv), start, order, timed,
+                              split_record=validation is None,
+                              block=validation_block is not None, retry=inner_block)
+    if isinstance(base, DiagnosisReport):
+        return base                     # validated on an inner block instead of the tail
     # The dynamics finding `mpi-ros identify` states for DATA (the training record, or the
     # whole record of a split), and the step response's onset that bounds a dead time.
     td, xd, yd = (tt, xt, yt) if validation is not None else _arrays(recording, 'recording')
-    finding = DynamicsFinding()
-    onset = StepOnset()
-    if timed:
-        say('dynamics: the analysis identify makes of the record (dead time, lag, steps)')
-        _, finding = record_dynamics(xd, yd, td)
-        onset = step_onset(td, xd, yd, sign=sign)
-    data['dynamics_finding'] = finding.to_json()
+    finding, onset = _record_dynamics(td, xd, yd, sign, timed, say)
+    data.dynamics_finding = finding
     if finding.kind != 'unavailable':
         say(finding.describe())
     n, l = base.order  # noqa: E741
-    data['training_burn_in'] = base.burn_in
+    data.training_burn_in = base.burn_in
     estimate_start = False
     if validation is not None:
         start, estimate_start = _scored_part(tv, xv, yv, sign, data)
-        series['start'] = start
+        series.start = start
     val = slice(start, None)
 
     def on_validation(model: Any) -> FloatArray:
@@ -393,7 +371,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     # Only the validation record's output offset (its sensor zero) is re-estimated, for the
     # baseline, the straight line and every candidate alike; nothing else is refitted.
     reestimate = validation is not None
-    data['output_offset_reestimated'] = reestimate
+    data.output_offset_reestimated = reestimate
     line = _linear_fit(xt[base.burn_in:], yt[base.burn_in:])
     linear = np.asarray(np.polyval(line, xv), dtype=np.float64)
     linear_shift = _zero_shift(linear[val], yv[val], reestimate)
@@ -402,30 +380,27 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     sim0 = sim0 + shift0
     r0 = yv[val] - sim0[val]
     sigma = noise_floor(yv[val])
-    baseline: dict[str, Any]
-    baseline = {'order': [n, l], **_errors(sim0[val], yv[val]),
-                'training_rms_error': base.rms_error,
-                'validation_output_offset': shift0,
-                'linear_rms_error': _errors(linear[val] + linear_shift, yv[val])['rms_error'],
-                'operating_point': {'input_offset': base.model.input_offset,
-                                    'output_offset': base.model.output_offset,
-                                    'output_sign': base.model.output_sign}}
+    errors = _errors(sim0[val], yv[val])
+    baseline = Baseline(
+        (n, l), errors['rms_error'], errors['nonlinearity_error'], base.rms_error, shift0,
+        _errors(linear[val] + linear_shift, yv[val])['rms_error'],
+        OperatingPoint(base.model.input_offset, base.model.output_offset,
+                       base.model.output_sign))
     say(f'baseline order n={n}, l={l}: validation RMS error'
-        f' {100 * baseline["rms_error"]:.3g} % of the output range (straight line'
-        f' {100 * baseline["linear_rms_error"]:.3g} %), (37)'
-        f' {100 * baseline["nonlinearity_error"]:.3g} %'
+        f' {100 * baseline.rms_error:.3g} % of the output range (straight line'
+        f' {100 * baseline.linear_rms_error:.3g} %), (37)'
+        f' {100 * baseline.nonlinearity_error:.3g} %'
         + (f'; validation output offset re-estimated: {shift0:+.4g} m' if reestimate else ''))
     outside = _outside_training(xt, xv[val], data)
     drift = return_point_drift(xd, yd)
     if drift.drifts and validation is None:
         identify_whole()                # a drift identify refuses the record for
-    data['return_point_drift'] = {'visits': drift.visits, 'change': drift.change,
-                                  'monotone': drift.monotone, 'end': drift.end,
-                                  'drifts': drift.drifts}
-    if not baseline['rms_error'] < baseline['linear_rms_error']:
+    data.return_point_drift = ReturnPoints(drift.visits, drift.change, drift.monotone,
+                                           drift.end, drift.drifts)
+    if not baseline.rms_error < baseline.linear_rms_error:
         retried = (inner_block(f'the baseline is no better than a straight line on it'
-                               f' ({100 * baseline["rms_error"]:.3g} % vs'
-                               f' {100 * baseline["linear_rms_error"]:.3g} %); {outside}')
+                               f' ({100 * baseline.rms_error:.3g} % vs'
+                               f' {100 * baseline.linear_rms_error:.3g} %); {outside}')
                    if outside and not drift.drifts else None)
         if retried is not None:
             return retried
@@ -435,18 +410,13 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                  ' columns/topics, units and sign, and that the validation record sweeps the'
                  ' range of the training record')
         msg = (f'the baseline MPI model (n={n}, l={l}) is no better than a straight line on'
-               f' the validation data: RMS error {100 * baseline["rms_error"]:.3g} % of the'
-               f' output range vs {100 * baseline["linear_rms_error"]:.3g} % for the line'
+               f' the validation data: RMS error {100 * baseline.rms_error:.3g} % of the'
+               f' output range vs {100 * baseline.linear_rms_error:.3g} % for the line'
                f' fitted on the training data{cause}')
         raise IdentificationError(msg)
     residual = _residual_structure(tv, xv, yv, sim0, start, sigma)
-    holds = hold_signature(tv[val], xv[val], r0)
-    bursts = burst_signature(tv[val], xv[val], yv[val], sim0[val])
-    residual['hold_signature'] = asdict(holds) if holds is not None else None
-    residual['burst_signature'] = (
-        {**asdict(bursts), 'law': bursts.law,
-         'log_ratio': [[v.real, v.imag] for v in bursts.log_ratio]}
-        if bursts is not None else None)
+    residual.hold_signature = hold_signature(tv[val], xv[val], r0)
+    residual.burst_signature = burst_signature(tv[val], xv[val], yv[val], sim0[val])
     scorer = _Scorer(on_validation, (tt, xt, yt), base.burn_in, yv, val, r0, baseline,
                      bandwidth, reestimate, say)
     scorer.baseline_model = base.model
@@ -457,32 +427,17 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         c.signature = EFFECTS[c.cause].signature(residual, level)
         c.significant = bool(excess and c.gain >= min_gain and c.z >= z_critical)
     unphysical = _unphysical_dead_time(candidates, onset, td)
-    residual['step_onset'] = ({'bound': onset.bound, 'steps': onset.steps,
-                               'dead_time_check': unphysical}
-                              if math.isfinite(onset.bound) else None)
-    decision: dict[str, Any]
-    decision = {'min_gain': min_gain, 'z_critical': z_critical, 'alpha': alpha,
-                'signature_level': level, 'bandwidth': bandwidth,
-                'noise_factor': noise_factor, 'noise_floor': sigma,
-                'baseline_above_noise': bool(excess), 'steps': []}
+    residual.step_onset = (StepOnsetCheck(onset.bound, onset.steps, unphysical)
+                           if math.isfinite(onset.bound) else None)
+    decision = Decision(min_gain, z_critical, alpha, level, bandwidth, noise_factor, sigma,
+                        bool(excess))
     if unphysical:
-        decision['steps'].append(unphysical)
-    chosen = _decide(candidates, excess, decision['steps'], min_gain, z_critical)
-    pair = _pair(candidates) if excess else None
-    if pair is not None:
-        chosen = _try_pair(scorer, pair, candidates, chosen, (n, l), decision['steps'],
-                           min_gain=min_gain, z_critical=z_critical, excess=excess)
-    _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
-    beyond = _separate_evidence(validation is not None, scorer.residuals, z_critical,
-                                bandwidth)
-    agreed = _agree_with_finding(decision, chosen, candidates, finding, beyond)
-    if agreed is not chosen:
-        chosen = agreed
-        _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
-        _agree_with_finding(decision, chosen, candidates, finding, beyond)
-    series.update({'baseline': sim0, 'candidates': scorer.sims})
+        decision.steps.append(unphysical)
+    chosen = _choose(decision, candidates, scorer, finding, (n, l), excess=excess,
+                     separate=validation is not None)
+    series.baseline, series.candidates = sim0, scorer.sims
     if chosen is None:
-        cause, model, extended, gain = 'none', base.model, dict(baseline), 0.0
+        cause, model, extended, gain = 'none', base.model, baseline.to_dict(), 0.0
     else:
         cause, model, gain = chosen.cause, chosen.model, float(chosen.gain)
         extended = {'cause': cause, 'rms_error': chosen.rms_error,
@@ -496,11 +451,11 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(yv[val])))
     if extended['not_identified']:
         evidence += ' ' + _unidentified_sentence(extended['not_identified'])
-    if decision['ambiguous']:
-        tied = '; '.join(f'{k} is tied ({v})' for k, v in decision['tie_reasons'].items())
+    if decision.ambiguous:
+        tied = '; '.join(f'{k} is tied ({v})' for k, v in decision.tie_reasons.items())
         evidence += (f' Ambiguous: {tied} ({cause} ranks first by its validation gain;'
                      f' {_who_decided(chosen)}).'
-                     f' To separate them: {decision["separate_by"]}.')
+                     f' To separate them: {decision.separate_by}.')
     records = ([('record', t)] if validation is None
                else [('training record', t), ('validation record', tv)])
     warning = time_base_warning(implausible_time_constants(public, residual), records)
@@ -515,6 +470,75 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,
                            series=series)
+
+
+def _identify_baseline(training: tuple[FloatArray, FloatArray, FloatArray],
+                       validation: tuple[FloatArray, FloatArray], start: int,
+                       order: str | tuple[int, int], timed: bool, *,
+                       split_record: bool, block: bool,
+                       retry: Callable[[str], Any]) -> Any:
+    # Step 2: Gamma on the training record, as `mpi-ros identify` fits it (the time base
+    # when the record has one, its segments, the ringing after steps left out, the start
+    # state; the effects are the candidates, so no dynamics).  A split's tail refused for
+    # the split's sake is validated on an inner block instead (RETRY gives that report).
+    tt, xt, yt = training
+    tv, xv = validation
+    # A block's training part is two experiments joined at a gap: segments need the time
+    # base (a record without one has its sample index).
+    prepared: dict[str, Any] = {'time': tt if timed or block else None, 'dynamics': 'off'}
+    try:
+        if order == 'auto':
+            return identify(xt, yt, order='auto', **prepared)
+        return identify(xt, yt, n=int(order[0]), l=int(order[1]), **prepared)
+    except IdentificationError as err:
+        # A split's training part that holds only part of the record's loops is refused for
+        # what that part shows; the cause is the split: say so, with the fraction outside.
+        outside = _outside_training(xt, xv[start:], None) if split_record else ''
+        if block and not return_point_drift(xt, yt).drifts:
+            msg = (f'the training part (the record without the validation block, samples'
+                   f' {start}..{tv.size - 1}) is refused: {err}')
+            raise IdentificationError(msg) from err
+        if not outside or return_point_drift(xt, yt).drifts:
+            raise                       # no split to blame, or a drift: the record's cause
+        retried = retry(f'its training part is refused: {err}')
+        if retried is not None:
+            return retried
+        msg = (f'the training part (the first {tt.size} of {tv.size} samples) is refused: {err};'
+               f' the likely cause is the split: {outside}; pass a record of several cycles,'
+               ' another --split, or a separate --validate record')
+        raise IdentificationError(msg) from err
+
+
+def _record_dynamics(t: FloatArray, x: FloatArray, y: FloatArray, sign: int, timed: bool,
+                     say: Callable[[str], None]) -> tuple[DynamicsFinding, StepOnset]:
+    # The dynamics finding `identify` states for the record and its steps' onset (none
+    # without a time base).
+    if not timed:
+        return DynamicsFinding(), StepOnset()
+    say('dynamics: the analysis identify makes of the record (dead time, lag, steps)')
+    _, finding = record_dynamics(x, y, t)
+    return finding, step_onset(t, x, y, sign=sign)
+
+
+def _choose(decision: Decision, candidates: 'list[Candidate]', scorer: '_Scorer',
+            finding: DynamicsFinding, order: tuple[int, int], *, excess: bool,
+            separate: bool) -> 'Candidate | None':
+    # Step 5: the rule (significance and signature), a pair of effects, the ties, and the
+    # agreement with identify's dynamics finding; the steps are written into DECISION.
+    min_gain, z_critical, bandwidth = decision.min_gain, decision.z_critical, decision.bandwidth
+    chosen = _decide(candidates, excess, decision.steps, min_gain, z_critical)
+    pair = _pair(candidates) if excess else None
+    if pair is not None:
+        chosen = _try_pair(scorer, pair, candidates, chosen, order, decision.steps,
+                           min_gain=min_gain, z_critical=z_critical, excess=excess)
+    _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
+    beyond = _separate_evidence(separate, scorer.residuals, z_critical, bandwidth)
+    agreed = _agree_with_finding(decision, chosen, candidates, finding, beyond)
+    if agreed is not chosen:
+        chosen = agreed
+        _state_ties(decision, chosen, candidates, scorer.residuals, z_critical, bandwidth)
+        _agree_with_finding(decision, chosen, candidates, finding, beyond)
+    return chosen
 
 
 @dataclass
@@ -592,7 +616,7 @@ class _Scorer:
     def __init__(self, on_validation: Callable[[Any], FloatArray],
                  training: tuple[FloatArray, FloatArray, FloatArray], burn_in: int,
                  validation_output: FloatArray, scored: slice, r0: FloatArray,
-                 baseline: dict[str, Any], bandwidth: int | None, reestimate: bool,
+                 baseline: Baseline, bandwidth: int | None, reestimate: bool,
                  say: Callable[[str], None]) -> None:
         self.on_validation = on_validation
         self.training = training
@@ -618,7 +642,7 @@ class _Scorer:
         rc = self.measured - sim[val]
         self.residuals[cause] = rc
         errs = _errors(sim[val], self.measured)
-        base = self.baseline['rms_error']
+        base = self.baseline.rms_error
         # A baseline without error leaves nothing to gain (and no ratio to form).
         gain = 1.0 - errs['rms_error'] / base if base > 0.0 else 0.0
         z, lags = _dm_statistic(self.r0, rc, self.bandwidth)
@@ -704,22 +728,22 @@ def _try_pair(scorer: _Scorer, pair: tuple[Candidate, Candidate], candidates: li
     return chosen
 
 
-def _state_ties(decision: dict[str, Any], chosen: Candidate | None,
+def _state_ties(decision: Decision, chosen: Candidate | None,
                 candidates: list[Candidate], residuals: dict[str, FloatArray],
                 z_critical: float, bandwidth: int | None) -> None:
     # The candidates within the noise of the chosen one, the ranking, how to separate them.
-    ties = _ties(chosen, candidates, residuals, z_critical, bandwidth, decision['steps'])
-    decision['ranking'] = _ranking(chosen, candidates, residuals, bandwidth)
-    decision['ambiguous'] = bool(ties)
-    decision['tied_with'] = [c.cause for c in ties]
+    ties = _ties(chosen, candidates, residuals, z_critical, bandwidth, decision.steps)
+    decision.ranking = _ranking(chosen, candidates, residuals, bandwidth)
+    decision.ambiguous = bool(ties)
+    decision.tied_with = [c.cause for c in ties]
     # Why each is tied, in words written from the same z as the ranking's.
-    z_of = {row['cause']: row['z_against_chosen'] for row in decision['ranking']}
-    decision['tie_reasons'] = {
+    z_of = {row.cause: row.z_against_chosen for row in decision.ranking}
+    decision.tie_reasons = {
         c.cause: (f'within the noise of {chosen.cause} on the validation data (z'
                   f' {z_of[c.cause]:.3g} < {z_critical:.4g})' if chosen is not None else '')
         for c in ties}
-    decision['separate_by'] = (_separation([chosen.cause, *decision['tied_with']])
-                               if chosen is not None and ties else '')
+    decision.separate_by = (_separation([chosen.cause, *decision.tied_with])
+                            if chosen is not None and ties else '')
 
 
 def _who_decided(chosen: Candidate | None) -> str:
@@ -739,32 +763,32 @@ def _unidentified_sentence(unknown: dict[str, str]) -> str:
             + '; '.join(f'{key} {why}' for key, why in unknown.items()) + '.')
 
 
-def _strength(decision: dict[str, Any], chosen: Candidate | None, baseline: dict[str, Any],
+def _strength(decision: Decision, chosen: Candidate | None, baseline: Baseline,
               sigma: float, span: float) -> str:
     # A named effect whose gain stays below the bar a user can rely on is present but weak:
     # significant and physically supported, yet small against what else the plain model
     # misses (or the noise).  Returns the sentence the evidence gets.
-    decision['strength_bar'] = STRONG_GAIN
-    decision['strength'] = ('none' if chosen is None else
-                            'clear' if chosen.gain >= STRONG_GAIN else 'present, weak')
-    if chosen is None or decision['strength'] != 'present, weak':
+    decision.strength_bar = STRONG_GAIN
+    decision.strength = ('none' if chosen is None else
+                         'clear' if chosen.gain >= STRONG_GAIN else 'present, weak')
+    if chosen is None or decision.strength != 'present, weak':
         return ''
     reason = (
         f'{chosen.cause} is present, weak: its extension cuts the validation error by only'
         f' {100 * chosen.gain:.0f} % (below {100 * STRONG_GAIN:.0f} %), although the cut is'
         f' significant and the physical signature is {chosen.signature}; the plain model'
-        f' misses {100 * baseline["rms_error"]:.2f} % of the range, the noise floor is'
+        f' misses {100 * baseline.rms_error:.2f} % of the range, the noise floor is'
         f' {100 * sigma / span:.2f} %: most of the error is not this effect (a longer record,'
         ' or an excitation that shows it more, e.g. longer holds for slow effects, measures'
         ' it better)')
-    decision['weak_reason'] = reason
+    decision.weak_reason = reason
     return ' ' + reason[0].upper() + reason[1:] + '.'
 
 
 def _records(recording: Any, validation: Any, split: float,
              block: tuple[int, int] | None = None) -> tuple[
         FloatArray, tuple[FloatArray, FloatArray, FloatArray],
-        tuple[FloatArray, FloatArray, FloatArray], int, dict[str, Any]]:
+        tuple[FloatArray, FloatArray, FloatArray], int, RecordFacts]:
     # The training and the validation record (a separate one, or the record's tail after
     # the split), the first validation sample scored, and what the report says of them.
     t, x, y = _arrays(recording, 'recording')
@@ -782,12 +806,12 @@ def _records(recording: Any, validation: Any, split: float,
         n_train = lead + int(round(split * (t.size - lead)))
         tt, xt, yt = t[:n_train], x[:n_train], y[:n_train]
         tv, xv, yv, start = t, x, y, n_train
-        data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
-                'split': split, 'training_samples': n_train, 'leading_hold': lead,
-                'validation': f'samples {n_train}..{t.size - 1} of the same record',
-                'validation_scored': {'from_sample': n_train, 'samples': int(t.size - n_train),
-                                      'left_out': 'the training part',
-                                      'start_state': 'continues the training part'}}
+        data = RecordFacts(
+            getattr(recording, 'source', ''), int(t.size),
+            f'samples {n_train}..{t.size - 1} of the same record', split=split,
+            training_samples=n_train, leading_hold=lead,
+            validation_scored=ScoredPart(n_train, int(t.size - n_train), 'the training part',
+                                         'continues the training part'))
         if block is not None:
             # A block inside the record: trained on the rest, joined at a time gap (a
             # segment of its own); the models run from sample 0 to the block's end.
@@ -798,21 +822,20 @@ def _records(recording: Any, validation: Any, split: float,
                 raise DataError(msg)
             tt, xt, yt = (np.concatenate([v[:a], v[b:]]) for v in (t, x, y))
             tv, xv, yv, start = t[:b], x[:b], y[:b], a
-            data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
-                    'training_samples': int(tt.size), 'leading_hold': lead,
-                    'validation_block': [a, b],
-                    'validation': f'samples {a}..{b - 1} of the same record',
-                    'validation_scored': {
-                        'from_sample': a, 'samples': b - a,
-                        'left_out': 'the rest of the record, the training part',
-                        'start_state': 'continues the training part before it'}}
+            data = RecordFacts(
+                getattr(recording, 'source', ''), int(t.size),
+                f'samples {a}..{b - 1} of the same record',
+                training_samples=int(tt.size), leading_hold=lead, validation_block=[a, b],
+                validation_scored=ScoredPart(a, b - a,
+                                             'the rest of the record, the training part',
+                                             'continues the training part before it'))
     else:
         tt, xt, yt = t, x, y
         tv, xv, yv = _arrays(validation, 'validation')
         start = 0
-        data = {'source': getattr(recording, 'source', ''), 'samples': int(t.size),
-                'validation': getattr(validation, 'source', '') or 'separate recording',
-                'validation_samples': int(tv.size)}
+        data = RecordFacts(getattr(recording, 'source', ''), int(t.size),
+                           getattr(validation, 'source', '') or 'separate recording',
+                           validation_samples=int(tv.size))
     if tt.size < 200 or tv.size - start < 100:
         msg = (f'too few samples to diagnose: {tt.size} for training and {tv.size - start}'
                ' for validation; record at least a few loops (>= 300 samples)')
@@ -837,14 +860,16 @@ def _inner_block(x: FloatArray, length: int, lead: int) -> tuple[int, int] | Non
     return None
 
 
-def _outside_training(xt: FloatArray, scored: FloatArray, data: dict[str, Any]) -> str:
+def _outside_training(xt: FloatArray, scored: FloatArray, data: RecordFacts | None) -> str:
     # The scored validation input beyond the training input's range (more than 1 % of the
-    # training range outside): the models extrapolate there.  Stated in data and worded.
+    # training range outside): the models extrapolate there.  Stated in data (when given)
+    # and worded.
     lo, hi = float(xt.min()), float(xt.max())
     margin = 0.01 * (hi - lo)
     beyond = (scored < lo - margin) | (scored > hi + margin)
     fraction = float(np.mean(beyond)) if scored.size else 0.0
-    data['validation_outside_training_range'] = fraction
+    if data is not None:
+        data.validation_outside_training_range = fraction
     if not beyond.any():
         return ''
     return (f'the validation input leaves the training range: {float(scored.min()):.4g} to'
@@ -855,9 +880,9 @@ def _outside_training(xt: FloatArray, scored: FloatArray, data: dict[str, Any]) 
 
 
 def _scored_part(tv: FloatArray, xv: FloatArray, yv: FloatArray, sign: int,
-                 data: dict[str, Any]) -> tuple[int, bool]:
+                 data: RecordFacts) -> tuple[int, bool]:
     # The first sample of a separate validation record that is scored, and whether each
-    # model's start state is estimated on it (stated in data['validation_scored']).
+    # model's start state is estimated on it (stated in data.validation_scored).
     estimate_start = False
     # A separate experiment starts from its own state.  Scored once its input has
     # covered its range (the plays' and the effects' slow states then follow from the
@@ -878,11 +903,11 @@ def _scored_part(tv: FloatArray, xv: FloatArray, yv: FloatArray, sign: int,
                f' {tv.size - start} samples (from sample {start}: {left_out}); record a'
                ' longer validation (e.g. mpi-ros diagnose --excitation)')
         raise DataError(msg)
-    data['validation_burn_in'] = start
-    data['validation_scored'] = {
-        'from_sample': start, 'samples': int(tv.size - start), 'left_out': left_out,
-        'start_state': ('estimated for each model (its weights kept)' if estimate_start
-                        else 'set by the data before the scored part')}
+    data.validation_burn_in = start
+    data.validation_scored = ScoredPart(
+        start, int(tv.size - start), left_out,
+        'estimated for each model (its weights kept)' if estimate_start
+        else 'set by the data before the scored part')
     return start, estimate_start
 
 
@@ -1085,8 +1110,25 @@ def _ties(best: Candidate | None, candidates: list[Candidate],
     return tied
 
 
-#: The two input stages one excitation rate cannot tell apart, and the finding each is.
-_INPUT_STAGES = {'rate_dependence': 'lag', 'dead_time': 'dead_time'}
+class _FindingKinds(Mapping[str, str]):
+    """Effect name -> the dynamics finding it is, read from the registry when used."""
+
+    def __getitem__(self, name: str) -> str:
+        kind = EFFECTS[name].dynamics_finding if name in EFFECTS else ''
+        if not kind:
+            raise KeyError(name)
+        return kind
+
+    def __iter__(self) -> Iterator[str]:
+        return iter([name for name, e in EFFECTS.items() if e.dynamics_finding])
+
+    def __len__(self) -> int:
+        return sum(1 for e in EFFECTS.values() if e.dynamics_finding)
+
+
+#: The input stages one excitation rate cannot tell apart (a lag, a dead time), and the
+#: kind of dynamics finding each is (:attr:`mpi_ros.extensions.Effect.dynamics_finding`).
+_INPUT_STAGES: Mapping[str, str] = _FindingKinds()
 
 
 def _unphysical_dead_time(candidates: list[Candidate], onset: StepOnset,
@@ -1123,7 +1165,7 @@ def _separate_evidence(separate: bool, residuals: dict[str, FloatArray], z_criti
     return beyond
 
 
-def _agree_with_finding(decision: dict[str, Any], chosen: Candidate | None,
+def _agree_with_finding(decision: Decision, chosen: Candidate | None,
                         candidates: list[Candidate], finding: DynamicsFinding,
                         beyond: Callable[[Candidate, Candidate | None], str]
                         ) -> Candidate | None:
@@ -1134,11 +1176,11 @@ def _agree_with_finding(decision: dict[str, Any], chosen: Candidate | None,
     # absent) or a separate validation record does (`beyond`); when the finding is none,
     # the validation gain of a split alone does not name an input stage.  Returns the
     # chosen candidate (another one only for a finding of none).
-    decision['dynamics_finding'] = finding.kind
+    decision.dynamics_finding = finding.kind
     if (chosen is None or chosen.cause not in _INPUT_STAGES
             or finding.kind in ('unavailable', _INPUT_STAGES[chosen.cause])):
         return chosen
-    steps = decision['steps']
+    steps = decision.steps
     other = next((c for c in candidates if c.cause in _INPUT_STAGES
                   and c.cause != chosen.cause), None)
     if other is not None and chosen.signature == 'present' and other.signature == 'absent':
@@ -1159,84 +1201,69 @@ def _agree_with_finding(decision: dict[str, Any], chosen: Candidate | None,
                      f' burst signature supports {chosen.cause}: it is not named;'
                      f' {after.cause if after is not None else "none"}')
         return after
-    if other is not None and other.cause not in decision['tied_with']:
-        decision['tied_with'].append(other.cause)
+    if other is not None and other.cause not in decision.tied_with:
+        decision.tied_with.append(other.cause)
         why = ('a tie of lag and dead time' if finding.kind == 'tie'
                else f'{finding.kind.replace("_", " ")}, not {_INPUT_STAGES[chosen.cause]}'
                .replace('dead_time', 'dead time'))
-        decision['tie_reasons'][other.cause] = (
+        decision.tie_reasons[other.cause] = (
             f"the analysis of the record (identify's held-out blocks) finds {why}, and no"
             ' burst signature of the validation data separates them')
         steps.append(f'{other.cause} is tied with {chosen.cause}: the analysis of the record'
                      f' (identify\'s held-out blocks) finds {finding.kind.replace("_", " ")}'
                      f' ({finding.reason}): ambiguous')
-    decision['ambiguous'] = bool(decision['tied_with'])
-    decision['separate_by'] = _separation([chosen.cause, *decision['tied_with']])
+    decision.ambiguous = bool(decision.tied_with)
+    decision.separate_by = _separation([chosen.cause, *decision.tied_with])
     return chosen
 
 
 def _ranking(best: Candidate | None, candidates: list[Candidate],
              residuals: dict[str, FloatArray],
-             bandwidth: int | None) -> list[dict[str, Any]]:
+             bandwidth: int | None) -> list[Ranked]:
     # Every candidate by its validation gain, with its z against the chosen one.
     out = []
     for c in sorted(candidates, key=lambda c: -c.gain):
         z = (math.nan if best is None or c is best else
              _dm_statistic(residuals[c.cause], residuals[best.cause], bandwidth)[0])
-        out.append({'cause': c.cause, 'gain': c.gain, 'z_against_chosen': z,
-                    'significant': c.significant, 'signature': c.signature})
+        out.append(Ranked(c.cause, c.gain, z, c.significant, c.signature))
     return out
 
 
-#: What separates two causes that tie (the record cannot tell them apart).
-_SEPARATIONS = {
-    frozenset({'rate_dependence', 'dead_time'}): SEPARATE_LAG_AND_DEAD_TIME,
-    frozenset({'creep', 'thermal_drift'}):
-        'holds after steps up and down: creep follows log t in the direction of the step,'
-        ' thermal drift follows the input power whatever the step',
-}
-
-
 def _separation(causes: list[str]) -> str:
-    pairs = [_SEPARATIONS[frozenset(pair)] for pair in
-             ((a, b) for i, a in enumerate(causes) for b in causes[i + 1:])
-             if frozenset(pair) in _SEPARATIONS]
-    general = 'holds (creep, thermal drift) and bursts at several rates (lag, dead time)'
-    what = '; '.join(pairs) or general
-    return (f'{what}; mpi-ros diagnose --excitation validation_input.csv writes such an input'
-            ' (holds from both sides, bursts at 5-40 Hz): play it on the rig and pass the record'
-            ' as --validate')
+    # What separates tied causes (the registered effects say it), and how to record it.
+    return (f'{separating_measurement(causes)}; mpi-ros diagnose --excitation'
+            ' validation_input.csv writes such an input (holds from both sides, bursts at'
+            ' 5-40 Hz): play it on the rig and pass the record as --validate')
 
 
 def _residual_structure(t: FloatArray, x: FloatArray, y: FloatArray, sim: FloatArray,
-                        start: int, sigma: float) -> dict[str, Any]:
+                        start: int, sigma: float) -> Residual:
+    # The residual's statistics; the signature tests and the step onset are added later.
     val = slice(start, None)
     r = (y - sim)[val]
     tv, xv = t[val], x[val]
     scale = float(np.ptp(y[val]))
-    out: dict[str, Any] = {'rms': float(np.sqrt(np.mean(r ** 2))), 'noise_floor': sigma,
-                           'noise_floor_relative': sigma / scale if scale else 0.0}
     holds = hold_segments(tv, xv, 0.5)
     moves = [float(r[j] - r[k]) for k, j in holds]
     steps = [float(np.sign(xv[k] - xv[max(k - int(0.2 * (j - k)) - 1, 0)])) for k, j in holds]
-    out['holds'] = {'count': len(holds), 'minimum_duration': 0.5,
-                    'signature_minimum_duration': 1.0,
-                    'mean_abs_residual_change': float(np.mean(np.abs(moves))) if moves else 0.0,
-                    'change_along_last_step': float(np.mean(np.array(moves) * np.array(
-                        steps))) if moves else 0.0}
+    count = HoldCount(len(holds), 0.5, 1.0,
+                      float(np.mean(np.abs(moves))) if moves else 0.0,
+                      float(np.mean(np.array(moves) * np.array(steps))) if moves else 0.0)
     rate = np.gradient(xv, tv)
-    out['rate_correlation'] = _corr(r, rate)
     order = np.argsort(np.abs(rate))
     quint = np.array_split(order, 5)
-    out['rms_by_rate_quintile'] = [float(np.sqrt(np.mean(r[q] ** 2))) for q in quint]
     duration = float(t[-1] - t[0])
     power = first_order_lag(t, x * x, duration / 3.0)[val]
-    out['power_correlation'] = _corr(r, power - power.mean())
     # The lag window (0.2 s, or 5 % of the record) shrinks to half the scored samples when
     # those are fewer (a validation record scored only after a long burn-in).
     lags, xc = rate_cross_correlation(tv, y[val], sim[val], min(0.2, 0.05 * duration))
-    out['lag_of_best_correlation'] = float(lags[int(np.argmax(xc))])
-    return out
+    return Residual(
+        rms=float(np.sqrt(np.mean(r ** 2))), noise_floor=sigma,
+        noise_floor_relative=sigma / scale if scale else 0.0, holds=count,
+        rate_correlation=_corr(r, rate),
+        rms_by_rate_quintile=[float(np.sqrt(np.mean(r[q] ** 2))) for q in quint],
+        power_correlation=_corr(r, power - power.mean()),
+        lag_of_best_correlation=float(lags[int(np.argmax(xc))]))
 
 
 def _corr(a: FloatArray, b: FloatArray) -> float:
@@ -1245,15 +1272,14 @@ def _corr(a: FloatArray, b: FloatArray) -> float:
     return float(np.corrcoef(a, b)[0, 1])
 
 
-def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, Any]],
-              residual: dict[str, Any], sigma: float, y: FloatArray,
-              data: dict[str, Any]) -> str:
+def _evidence(cause: str, baseline: Baseline, candidates: list[dict[str, Any]],
+              residual: Residual, sigma: float, y: FloatArray, data: RecordFacts) -> str:
     span = float(np.ptp(y))
-    shift = baseline.get('validation_output_offset', 0.0)
+    shift = baseline.validation_output_offset
     zero = (f'; the validation record has its own sensor zero: only its output offset was'
             f' re-estimated, for every model alike (baseline {shift:+.3g} m)'
-            if data.get('output_offset_reestimated') else '')
-    base = (f'The MPI simulation misses {100 * baseline["rms_error"]:.2f} % of the output range'
+            if data.output_offset_reestimated else '')
+    base = (f'The MPI simulation misses {100 * baseline.rms_error:.2f} % of the output range'
             f' (RMS) on validation data (noise floor {100 * sigma / span:.2f} %{zero})')
     ranked = sorted(candidates, key=lambda c: -c['gain'])
     listing = ', '.join(f'{c["cause"]} {100 * c["gain"]:+.0f} %' for c in ranked)
@@ -1265,13 +1291,13 @@ def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, A
     detail = '; '.join(d for d in details if d is not None)
     if not detail:
         # From the same residual facts the report's Holds and Bursts lines are written from.
-        holds = residual.get('hold_signature')
-        bursts = residual.get('burst_signature')
-        minimum = residual.get('holds', {}).get('signature_minimum_duration', 1.0)
-        used = (f'the hold signature test used {holds["holds"]} hold(s) of {minimum:g} s or'
+        holds = residual.hold_signature
+        bursts = residual.burst_signature
+        minimum = residual.holds.signature_minimum_duration
+        used = (f'the hold signature test used {holds.holds} hold(s) of {minimum:g} s or'
                 ' more' if holds is not None else f'the record has no hold of {minimum:g} s or'
                 ' more')
-        rates = (f'the burst signature test used bursts at {len(bursts["frequencies"])}'
+        rates = (f'the burst signature test used bursts at {len(bursts.frequencies)}'
                  ' frequencies' if bursts is not None else 'no bursts the signature tests can'
                  ' use')
         detail = f'{used}, {rates}: its physical signature is {c.get("signature", "-")}'
@@ -1281,20 +1307,3 @@ def _evidence(cause: str, baseline: dict[str, Any], candidates: list[dict[str, A
             f'{p} {100 * c["part_gains"][p]:.0f} %' for p in parts))
     return (f'{base}; the {cause} extension cuts it by {100 * c["gain"]:.0f} % (z ='
             f' {c["z"]:.1f}; all: {listing}{each}), and {detail}.')
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return [_jsonable(v) for v in value.tolist()]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else None
-    return value

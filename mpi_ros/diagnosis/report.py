@@ -2,18 +2,20 @@
 """
 Report for people: a markdown summary and PNG plots of a :class:`DiagnosisReport`.
 
-**One dictionary feeds everything.**  The JSON (``report.to_json()``), the summary lines the
-command line prints and ``summary.md`` are all written from the same dictionary; the prose
-only rounds its numbers (3 significant digits) and never computes a number of its own.
-The units are the data's (``data['units']``: input ``A`` or ``V``, output ``m``, ``µm``,
-``nm``, ...; see :func:`data_units`), A and m (SI, REP 103) when nothing says otherwise.
+**One set of facts feeds everything.**  The JSON (``report.to_json()``), the summary lines
+the command line prints and ``summary.md`` are all written from the report's typed parts
+(:mod:`mpi_ros.diagnosis.facts`, read through their JSON keys); the prose only rounds their
+numbers (3 significant digits) and never computes a number of its own.  Errors are
+percentages of the output's range, gains percentages of the baseline's error, lengths and
+times carry their units.  The units are the data's (``data['units']``: input ``A`` or
+``V``, output ``m``, ``µm``, ``nm``, ...; see :func:`data_units`), A and m (SI, REP 103)
+when nothing says otherwise.
 
 Plots (matplotlib, Agg backend), each titled with what to look at: measured vs simulated
 loops (``loops.png``), the residuals over time (``residual.png``) and one signature plot
-per candidate (``signature_<cause>.png``, drawn by the effect's ``plot``): creep - the
-residual during input holds; rate dependence - the RMS residual against the input speed;
-thermal drift - the residual against the input power through the fitted thermal lag; dead
-time - the dead-time model's residual against the delay, smallest at the fitted delay.
+per candidate (``signature_<cause>.png``, drawn by the effect's ``plot``, captioned by its
+``caption``: :class:`mpi_ros.extensions.Effect`).  Each PNG carries its title, axis labels
+and legend as its ``Title`` and ``Description`` text, so a check reads them back.
 """
 
 import inspect
@@ -28,6 +30,7 @@ from scipy.stats import norm
 
 from .diagnose import DiagnosisReport, z_wording
 from ..extensions import EFFECTS
+from ..extensions.effect import effect_caption, separating_measurement
 from ..extensions.fitting import AxisUnits
 from ..params import write_params_yaml
 from ..recordings.files import atomic_write
@@ -239,9 +242,10 @@ def markdown(facts: Mapping[str, Any], images: Sequence[str] = ()) -> str:
         lines += _evidence_section(facts, units)
     lines += _data_section(facts, units)
     if images:
+        fitted = bool(facts.get('baseline'))
         lines += ['## Plots', '']
         for name in images:
-            lines += [f'![{name}]({name})', '', f'*{_caption(name)}*', '']
+            lines += [f'![{name}]({name})', '', f'*{_caption(name, fitted)}*', '']
     return '\n'.join(lines).rstrip('\n') + '\n'
 
 
@@ -279,29 +283,30 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
     out.mkdir(parents=True, exist_ok=True)
     s = report.series
     written = []
-    t, x, y, k0 = s['time'], s['current'], s['displacement'], s['start']
+    t, x, y, k0 = s.time, s.current, s.displacement, s.start
     axes = _axis_units(_units(facts), y[k0:])
     val = slice(k0, None)
-    sims = {'baseline MPI': s.get('baseline')}
-    if report.cause in s.get('candidates', {}):
-        sims[f'extended ({report.cause})'] = s['candidates'][report.cause]
+    sims = {} if s.baseline is None else {'baseline MPI': s.baseline}
+    if report.cause in s.candidates:
+        sims[f'extended ({report.cause})'] = s.candidates[report.cause]
     out_label = f'output [{axes.displacement}]'
 
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     ax.plot(x[val], axes.scale * y[val], lw=0.8, color='k', label='measured')
     for (name, sim), color in zip(sims.items(), ('tab:blue', 'tab:red')):
-        if sim is not None:
-            ax.plot(x[val], axes.scale * sim[val], lw=0.8, color=color, label=name)
+        ax.plot(x[val], axes.scale * sim[val], lw=0.8, color=color, label=name)
     ax.set_xlabel(f'input [{axes.current}]')
     ax.set_ylabel(out_label)
     ax.set_title('validation loops: where the baseline (blue) leaves the measured loop\n'
                  '(black), the extended model (red) should follow it' if len(sims) > 1 else
                  'validation loops: the baseline MPI (blue) should lie on the measured\n'
-                 'loop (black); no extension was chosen', fontsize=10)
+                 'loop (black); no extension was chosen' if sims else
+                 'the measured loops (black): outside the invertible class,\nno model was'
+                 ' fitted', fontsize=10)
     ax.legend(fontsize=8)
     written.append(_save(fig, out / 'loops.png', plt))
 
-    if sims['baseline MPI'] is not None:
+    if s.baseline is not None:
         fig, ax = plt.subplots(figsize=(8, 3.8))
         for (name, sim), color in zip(sims.items(), ('tab:blue', 'tab:red')):
             ax.plot(t[val], axes.scale * (y - sim)[val], lw=0.6, color=color, label=name)
@@ -315,8 +320,8 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
         ax.legend(fontsize=8)
         written.append(_save(fig, out / 'residual.png', plt))
         parameters = {c['cause']: c.get('parameters', {}) for c in facts.get('candidates', [])}
-        for cause, sim in s.get('candidates', {}).items():
-            plot = _signature(cause, t, x, y, sims['baseline MPI'], sim, k0,
+        for cause, sim in s.candidates.items():
+            plot = _signature(cause, t, x, y, s.baseline, sim, k0,
                               out / f'signature_{cause}.png', plt, axes,
                               parameters.get(cause, {}))
             if plot is not None:
@@ -329,10 +334,18 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
 
 
 def _save(fig: Any, path: Path, plt: Any) -> Path:
+    # The PNG carries what its text says (title, axis labels, legend) as its Title and
+    # Description, so the report's check can read a plot's words back beside the JSON.
+    ax = fig.axes[0]
+    legend = ax.get_legend()
+    labels = [t.get_text() for t in legend.get_texts()] if legend is not None else []
+    metadata = {'Title': ax.get_title(),
+                'Description': '\n'.join([f'x: {ax.get_xlabel()}', f'y: {ax.get_ylabel()}',
+                                          *(f'legend: {label}' for label in labels)])}
     fig.tight_layout()
     try:
         with atomic_write(path, binary=True) as handle:
-            fig.savefig(handle, format='png', dpi=110)
+            fig.savefig(handle, format='png', dpi=110, metadata=metadata)
     finally:
         plt.close(fig)
     return path
@@ -355,24 +368,15 @@ def _signature(cause: str, t: Any, x: Any, y: Any, base: Any, sim: Any, k0: int,
     return _save(fig, path, plt)
 
 
-def _caption(name: str) -> str:
+def _caption(name: str, fitted: bool = True) -> str:
+    # The two plots of every report, and each effect's signature plot as its module says.
     captions = {
-        'loops.png': 'Measured and simulated output against the input, validation data.',
-        'residual.png': 'Measured minus simulated output over time, validation data.',
-        'signature_creep.png': 'Creep: residual over time with the input; look at the holds.',
-        'signature_rate_dependence.png': 'Rate dependence: RMS residual against the input'
-                                         ' speed.',
-        'signature_thermal_drift.png': 'Thermal drift: residual against the lagged input'
-                                       ' power.',
-        'signature_dead_time.png': "Dead time: the dead-time model's residual against the"
-                                   ' delay; the minimum should sit on the fitted value.',
-        'signature_resonance.png': 'Resonance: measured, baseline and mode output after the'
-                                   ' largest input step of the validation data (the title'
-                                   ' says when the input has no step).'}
+        'loops.png': ('Measured and simulated output against the input, validation data.'
+                      if fitted else 'Measured output against the input; no model fitted.'),
+        'residual.png': 'Measured minus simulated output over time, validation data.'}
     if name in captions:
         return captions[name]
-    cause = name.removeprefix('signature_').removesuffix('.png').replace('_', ' ')
-    return f'The {cause} candidate against the measured output, validation data.'
+    return effect_caption(name.removeprefix('signature_').removesuffix('.png'))
 
 
 def _units(facts: Mapping[str, Any]) -> dict[str, str]:
@@ -558,27 +562,8 @@ def _tie_section(facts: Mapping[str, Any]) -> list[str]:
     lines += ['', 'To separate them, run `mpi-ros diagnose --excitation validation_input.csv`,'
               ' play that input on the rig, record the answer and diagnose again with'
               ' `--validate` the new record.  The excitation holds the input after steps up'
-              f' and down and drives bursts at 5-40 Hz: {_separation(tied)}.', '']
+              f' and down and drives bursts at 5-40 Hz: {separating_measurement(tied)}.', '']
     return lines
-
-
-def _separation(tied: Sequence[str]) -> str:
-    # What the diagnostic excitation adds for these causes.
-    slow = [c for c in ('creep', 'thermal_drift') if c in tied]
-    fast = [c for c in ('rate_dependence', 'dead_time') if c in tied]
-    how = []
-    if len(slow) == 2:
-        how.append('a hold separates creep (the residual follows log t in the direction of'
-                   ' the step) from thermal drift (it follows the input power)')
-    if slow and fast:
-        how.append(f'a hold separates {" and ".join(slow)} (the residual keeps moving while'
-                   f' the input holds) from {" and ".join(fast)} (silent during a hold)')
-    if len(fast) == 2:
-        how.append('a step separates a dead time (the output stays still for its length)'
-                   ' from a lag (the output moves at once); two rates separate a lag (its'
-                   ' phase saturates and its amplitude falls with the frequency) from a dead'
-                   ' time (its phase grows in proportion to the frequency)')
-    return '; '.join(how) or 'its holds and bursts test every signature'
 
 
 def _evidence_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[str]:

@@ -2,6 +2,9 @@
 """
 Physically motivated extensions of the MPI model, one module per cause.
 
+The built-in effects (the registry :data:`EFFECTS` is the list; ``Effect.formula`` and
+``Effect.keys`` say the same for any registered effect):
+
 =====================  =============================================  ===========================
 cause                  model                                          extra parameter keys
 =====================  =============================================  ===========================
@@ -52,8 +55,9 @@ __all__ = ['CreepModel', 'RateDependentModel', 'ThermalDriftModel', 'DeadTimeMod
            'EffectParameter', 'EFFECTS', 'ExtendedModelBase', 'register_effect',
            'unregister_effect']
 
-ExtendedModel = (CreepModel | RateDependentModel | ThermalDriftModel | DeadTimeModel
-                 | ResonanceModel | CompositeModel)
+#: The type of an extended model: any registered effect's model class (and a composite of
+#: several) meets the :class:`EffectModel` protocol, so no list of classes is kept here.
+ExtendedModel = EffectModel
 
 # The registry of effects: one line per effect module.
 register_effect(creep.EFFECT)

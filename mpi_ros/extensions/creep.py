@@ -503,4 +503,5 @@ EFFECT = Effect(
     model_class=CreepModel, fit=fit_creep,
     parameter_count=lambda p: len(p[CREEP_WEIGHTS]),
     signature=_signature, evidence=hold_evidence, plot=_plot,
-    plant=PLANT)
+    plant=PLANT, signature_test='hold',
+    caption='Creep: residual over time with the input; look at the holds.')

@@ -24,6 +24,7 @@ from .effect import Effect, EffectParameter, ExtendedModelBase, FAST_TIME_LIMIT,
 from .fitting import AxisUnits, burst_evidence, burst_verdict, check_series, \
     fit_input_stage, Order, scalar_parameter
 from .plant_steps import delay_state, delay_stream
+from ..identification.finding import SEPARATE_LAG_AND_DEAD_TIME
 from ..operators.filters import delay
 from ..operators.model import MPIModel
 
@@ -182,4 +183,7 @@ EFFECT = Effect(
     model_class=DeadTimeModel, fit=fit_dead_time, parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'delay'),
     evidence=lambda residual: burst_evidence(residual, 'delay'), plot=_plot, stage='input',
-    plant=PLANT)
+    plant=PLANT, signature_test='burst', dynamics_finding='dead_time',
+    separations={'rate_dependence': SEPARATE_LAG_AND_DEAD_TIME},
+    caption="Dead time: the dead-time model's residual against the delay; the minimum should"
+            ' sit on the fitted value.')

@@ -2,9 +2,8 @@
 """
 The interface of a physical effect, and the registry that finds every effect.
 
-One module per effect (``creep.py``, ``rate_dependence.py``, ``thermal_drift.py``,
-``dead_time.py``, ``resonance.py``) owns everything about it and describes it by one
-:class:`Effect`:
+One module per effect (the built-in ones are registered in :mod:`mpi_ros.extensions`)
+owns everything about it and describes it by one :class:`Effect`:
 
 - its parameter keys, their units and the values that switch it off
   (:class:`EffectParameter`; the compensator node declares them from here);
@@ -13,8 +12,9 @@ One module per effect (``creep.py``, ``rate_dependence.py``, ``thermal_drift.py`
   ``inverse_step()``, the exact per-step inverse :class:`~mpi_ros.compensation.Compensator`
   plugs in;
 - its fit (``fit(time, current, displacement, order=(n, l))``) and free-parameter count;
-- its diagnosis signature (a verdict from the residual signatures), the evidence sentence
-  and the report plot;
+- its diagnosis signature (a verdict from the residual signatures), the evidence sentence,
+  the report plot and its caption, and what separates it from another effect that a record
+  ties with it;
 - its step in the simulated plant (:class:`PlantEffect`, optional): the ``actuator.*``
   parameters with defaults, units and ranges (:class:`PlantParameter`), how its state starts
   and a vectorised pass over a chunk of samples, at its place in the plant's signal chain
@@ -30,7 +30,7 @@ the registry, never a list of names.  Adding an effect is one new module and one
 line (docs/design.md).
 """
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, cast, ClassVar, NamedTuple, Protocol
 
@@ -44,7 +44,8 @@ __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFF
            'register_effect', 'unregister_effect', 'effect_keys', 'effect_off_values',
            'effects_present', 'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT', 'PlantChunk', 'PlantEffect',
            'PlantParameter', 'PLANT_STAGES', 'EFFECT_STAGES', 'plant_effects', 'plant_switch',
-           'unidentified_parameters']
+           'unidentified_parameters', 'SIGNATURE_TESTS', 'separating_measurement',
+           'effect_caption']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -55,6 +56,9 @@ PLANT_STAGES = ('input', 'output')
 
 #: The places of an effect's model in the signal chain, in order (:attr:`Effect.stage`).
 EFFECT_STAGES = ('input', 'material', 'output')
+
+#: What part of the diagnostic excitation shows an effect (:attr:`Effect.signature_test`).
+SIGNATURE_TESTS = ('', 'hold', 'burst')
 
 #: Longest dead time or rate lag [s] plausible for a smart-material actuator: amplifier,
 #: sensor and eddy-current delays are microseconds to milliseconds.  A fitted value above it
@@ -349,6 +353,22 @@ class Effect:
         any output stages.
     plant : PlantEffect or None
         Its step in the simulated plant; None when the plant cannot show the effect.
+    caption : str
+        The caption of its signature plot in the diagnosis report, one sentence ('': a
+        general one naming the effect).
+    signature_test : {'', 'hold', 'burst'}
+        Which part of the diagnostic excitation shows its signature: ``'hold'`` (the
+        residual keeps moving while the input holds), ``'burst'`` (bursts at several
+        rates; silent during a hold), '' (neither).  The diagnosis says from it what
+        separates tied causes.
+    separations : Mapping of str to str
+        Another effect's name -> the measurement that separates the two when a record ties
+        them (given on one of the two; read both ways by
+        :func:`separating_measurement`).
+    dynamics_finding : str
+        The kind of the dynamics finding of :func:`mpi_ros.identify` that this effect is
+        (``'lag'``, ``'dead_time'``; '' for none): the diagnosis' verdict on such an
+        effect never contradicts that finding.
 
     """
 
@@ -365,12 +385,21 @@ class Effect:
     plot: Callable[..., None] | None = None
     stage: str = 'material'
     plant: PlantEffect | None = None
+    caption: str = ''
+    signature_test: str = ''
+    separations: Mapping[str, str] = field(default_factory=dict)
+    dynamics_finding: str = ''
 
     def __post_init__(self) -> None:
-        """Check the stage."""
+        """Check the stage and the signature test."""
         if self.stage not in EFFECT_STAGES:
             msg = (f'effect {self.name!r}: stage must be one of {", ".join(EFFECT_STAGES)},'
                    f' not {self.stage!r}')
+            raise ModelError(msg)
+        if self.signature_test not in SIGNATURE_TESTS:
+            msg = (f'effect {self.name!r}: signature_test must be one of'
+                   f' {", ".join(repr(t) for t in SIGNATURE_TESTS)}, not'
+                   f' {self.signature_test!r}')
             raise ModelError(msg)
 
     @property
@@ -505,6 +534,74 @@ def plant_switch(name: str) -> str:
     return effect.plant.switch.name
 
 
+def separating_measurement(causes: Sequence[str]) -> str:
+    """
+    Say what measurement separates causes that a record ties, from the registered effects.
+
+    Each pair of causes with a text (:attr:`Effect.separations`, given on either effect)
+    contributes it; causes whose signature shows in holds beside causes whose signature
+    shows in bursts (:attr:`Effect.signature_test`) get a hold; else the general answer
+    names every registered effect by the part of the excitation that shows it.
+
+    Parameters
+    ----------
+    causes : sequence of str
+        The tied causes (effect names; unknown names are ignored).
+
+    Returns
+    -------
+    str
+        One clause, or several joined by ``'; '``.
+
+    Examples
+    --------
+    >>> separating_measurement(['creep', 'dead_time'])[:40]
+    'a hold separates creep (the residual kee'
+
+    """
+    known = [c for c in causes if c in EFFECTS]
+    said = []
+    for k, a in enumerate(known):
+        for b in known[k + 1:]:
+            text = EFFECTS[a].separations.get(b) or EFFECTS[b].separations.get(a)
+            if text:
+                said.append(text)
+    held = [c for c in known if EFFECTS[c].signature_test == 'hold']
+    burst = [c for c in known if EFFECTS[c].signature_test == 'burst']
+    if held and burst:
+        said.append(f'a hold separates {" and ".join(_words(held))} (the residual keeps moving'
+                    f' while the input holds) from {" and ".join(_words(burst))} (silent during'
+                    ' a hold)')
+    if said:
+        return '; '.join(said)
+    every = {test: [name for name, e in EFFECTS.items() if e.signature_test == test]
+             for test in ('hold', 'burst')}
+    return (f'holds ({", ".join(_words(every["hold"]))}) and bursts at several rates'
+            f' ({", ".join(_words(every["burst"]))})')
+
+
+def effect_caption(name: str) -> str:
+    """
+    Return the report's caption of an effect's signature plot (:attr:`Effect.caption`).
+
+    Parameters
+    ----------
+    name : str
+        The effect's name (or a pair's, joined by ``' + '``).
+
+    Returns
+    -------
+    str
+        Its caption; a general one for an effect without one, or an unknown name.
+
+    """
+    effect = EFFECTS.get(name)
+    if effect is not None and effect.caption:
+        return effect.caption
+    return (f'The {name.replace("_", " ")} candidate against the measured output, validation'
+            ' data.')
+
+
 def unidentified_parameters(model: Any) -> dict[str, str]:
     """
     Return the parameters of a fitted model that its fit could not identify.
@@ -531,6 +628,10 @@ def unidentified_parameters(model: Any) -> dict[str, str]:
         out.update(unidentified_parameters(part))
     out.update(dict(getattr(model, 'not_identified', None) or {}))
     return out
+
+
+def _words(names: Sequence[str]) -> list[str]:
+    return [name.replace('_', ' ') for name in names]
 
 
 def _is_off(value: Any) -> bool:

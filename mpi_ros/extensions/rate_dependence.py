@@ -310,4 +310,5 @@ EFFECT = Effect(
     parameter_count=lambda p: 1,
     signature=lambda residual, level: burst_verdict(residual, level, 'lag'),
     evidence=lambda residual: burst_evidence(residual, 'lag'), plot=_plot, stage='input',
-    plant=PLANT)
+    plant=PLANT, signature_test='burst', dynamics_finding='lag',
+    caption='Rate dependence: RMS residual against the input speed.')

@@ -704,4 +704,6 @@ EFFECT = Effect(
                         ' (read as record_start.resonance.initial_deflection)', 'm')),
     model_class=ResonanceModel, fit=fit_resonance,
     parameter_count=lambda p: 2 + int(float(p.get(RESONANCE_DEFLECTION) or 0.0) != 0.0),
-    plot=_plot, stage='output', plant=PLANT)
+    plot=_plot, stage='output', plant=PLANT,
+    caption='Resonance: measured, baseline and mode output after the largest input step of'
+            ' the validation data (the title says when the input has no step).')

@@ -323,4 +323,8 @@ EFFECT = Effect(
                         ' per A^2, any sign); 0: no drift', '1/A', (-1.0e6, 1.0e6))),
     model_class=ThermalDriftModel, fit=fit_thermal_drift,
     parameter_count=lambda p: 2, signature=_signature, evidence=_evidence, plot=_plot,
-    plant=PLANT)
+    plant=PLANT, signature_test='hold',
+    caption='Thermal drift: residual against the lagged input power.',
+    separations={'creep': 'holds after steps up and down: creep follows log t in the'
+                          ' direction of the step, thermal drift follows the input power'
+                          ' whatever the step'})
