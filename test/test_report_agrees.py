@@ -196,10 +196,13 @@ def _check_sentences(facts, summary, err):
             if isinstance(value, list):
                 continue
             name = key.rsplit('.', 1)[-1].replace('_', ' ')
-            said = re.search(rf'(?:\| |; ){re.escape(name)} (\S+)( ms| s)?(?:;| \|)', row)
+            said = re.search(rf'(?:\| |; ){re.escape(name)} (\S+)( ms| s| [^;| ]+)?(?:;| \|)',
+                             row)
             assert said is not None, (key, row)
             scale = 1e3 if said.group(2) == ' ms' else 1.0
-            assert units.get(key) != 's' or said.group(2), (key, row)
+            assert units.get(key) != 's' or said.group(2) in (' ms', ' s'), (key, row)
+            # Every other unit is stated with its number (Hz, m, 1/A).
+            assert units.get(key) in ('', 's') or said.group(2) == f' {units[key]}', (key, row)
             assert _close(said.group(1), scale * value), (key, value, row)
             _count('fitted parameter (table)')
         for key in c.get('not_identified', {}):

@@ -503,6 +503,7 @@ def _parameters(parameters: Mapping[str, Any]) -> str:
                          f' ({len(values)} values)')
         elif isinstance(value, (int, float)):
             parts.append(f'{name} {_seconds(value)}' if unit == 's'
+                         else f'{name} {significant(value)} {unit}' if unit
                          else f'{name} {significant(value)}')
     return '; '.join(parts) or '-'
 

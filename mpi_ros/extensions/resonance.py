@@ -636,7 +636,7 @@ def _plot(ax: Any, time: FloatArray, current: FloatArray, measured: FloatArray,
             else 'no mode fitted')
     head = ('resonance: the output after the largest input step;\n' if stepped else
             'resonance: the validation input has no step\n(it moves by at most'
-            f' {100 * jump / max(float(np.ptp(x)), 1e-300):.2g} % of its range per sample); ')
+            f' {100 * jump / max(float(np.ptp(x)), 1e-300):.2g} % of its range per sample);\n')
     ax.set_title(f'{head}{mode}', fontsize=10)
 
 
