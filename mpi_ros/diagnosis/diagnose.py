@@ -89,7 +89,7 @@ from ..extensions.dead_time import DEAD_TIME
 from ..extensions.effect import separating_measurement, unidentified_parameters
 from ..extensions.fitting import rate_cross_correlation
 from ..identification import burn_in, output_sign
-from ..identification.dynamics import return_point_drift, step_onset, StepOnset
+from ..identification.dynamics import noise_std, return_point_drift, step_onset, StepOnset
 from ..identification.finding import DynamicsFinding, record_dynamics
 from ..identification.record import prepare_record, refuse_if_unmodellable
 from ..identification.start_states import estimate_start_state
@@ -99,7 +99,7 @@ from ..operators.filters import first_order_lag
 from ..operators.model import MPIModel, OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
-__all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'noise_floor', 'z_wording']
+__all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'z_wording']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -184,31 +184,6 @@ class DiagnosisReport:
     def parameters(self) -> dict[str, Any]:
         """Return the flat parameters of the extended model (what the compensator reads)."""
         return dict(self.model.to_params()) if self.model is not None else {}
-
-
-def noise_floor(displacement: npt.ArrayLike) -> float:
-    """
-    Estimate the white sensor-noise standard deviation from second differences.
-
-    ``sigma = 1.4826 MAD(d2 y) / sqrt(6)``: the second difference of a smooth, densely
-    sampled signal is almost only noise (variance ``6 sigma^2``); the median absolute
-    deviation ignores the few samples with fast content.
-
-    Parameters
-    ----------
-    displacement : array_like of float, shape (N,)
-        Output [m].
-
-    Returns
-    -------
-    float
-        Noise standard deviation [m] (an upper bound when the signal is not smooth).
-
-    """
-    d2 = np.diff(np.asarray(displacement, dtype=np.float64), 2)
-    if d2.size == 0:
-        return 0.0
-    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0))
 
 
 def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
@@ -379,7 +354,7 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     shift0 = _zero_shift(sim0[val], yv[val], reestimate)
     sim0 = sim0 + shift0
     r0 = yv[val] - sim0[val]
-    sigma = noise_floor(yv[val])
+    sigma = noise_std(yv[val])
     errors = _errors(sim0[val], yv[val])
     baseline = Baseline(
         (n, l), errors['rms_error'], errors['nonlinearity_error'], base.rms_error, shift0,
