@@ -12,11 +12,8 @@ of piezoelectric and magnetostrictive actuators (creep proportional to the displ
 change, with a spread of time constants).
 
 The creep acts on the displacement, not on the current: a current step that H hardly
-follows (a reversal inside the plays' thresholds) creeps hardly at all.  The first version
-fed the lags with the current (``S[H[u] + sum_j w_Cj C_j[u]]``, one convex QP); it fitted
-identification records as well, but on a tracking trajectory with another mean current it
-left a bias of 0.4-0.7 um (1-2 % of the stroke) where the plain model left 0.1-0.35 um, so
-its compensator tracked worse than the plain one (docs/diagnosis.md).
+follows (a reversal inside the plays' thresholds) creeps hardly at all (why not the current:
+docs/diagnosis.md, "Design choices of the effect models").
 
 Fit (:func:`fit_creep`): the generalised error (33) needs ``S'[G]`` with the creep-free
 output ``G = F^-1[v]`` (``F = 1 + sum_j w_Cj C_j``, undone exactly by

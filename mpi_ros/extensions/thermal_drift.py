@@ -8,9 +8,8 @@ in A^2 starts in steady state at the first sample, ``x(t_0)^2``).  The drift ent
 superposition operator S, in H's output unit (A), so that ``w_H``, ``w'_S`` and ``w_T``
 (any sign) are found together in one convex QP (34)-(36) for each trial ``tau_T``: ``T``
 is one more column of the generalised error (33).  Near an operating point the output
-drift is ``k_T T`` with ``k_T = w_T dS/dv`` [m/A^2]; an alternation between Gamma and an
-output-additive ``k_T`` was tried and rejected, because Gamma absorbs most of a slow drift
-and the alternation stalls far from the joint optimum.  ``tau_T`` is found by a 1-D search
+drift is ``k_T T`` with ``k_T = w_T dS/dv`` [m/A^2] (why not an output-additive drift:
+docs/diagnosis.md, "Design choices of the effect models").  ``tau_T`` is found by a 1-D search
 over slow time constants (a twentieth of the record to five records).  With the thermal
 state fixed, the step map is Gamma shifted inside, so (8)/(19) and the inverse still hold.
 
