@@ -34,8 +34,9 @@ import re
 import sys
 
 from typing import Any
+import warnings
 
-from ..errors import MPIError
+from ..errors import MPIError, MPIWarning
 
 __all__ = ['main', 'order_table_lines']
 
@@ -127,7 +128,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     if time_warning is not None:
         _progress(f'warning: {time_warning}')
     for note in result.notes:
-        _progress(f'note: {note}')
+        if not note.startswith('warning:'):     # the warnings were shown as they came
+            _progress(f'note: {note}')
     summary = dict(result.summary(), source=str(args.data))
     text = params_yaml_text(
         identified_parameters(result, recording), node_name=args.node_name,
@@ -667,6 +669,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args_list and args_list[0] in _NODE_COMMANDS:
         from ..nodes.launcher import run_node
         return int(run_node(args_list[0], args_list[1:]))
+    with warnings.catch_warnings():
+        warnings.showwarning = show_warning
+        return _run_command(args_list)
+
+
+def show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                 file: Any = None, line: str | None = None) -> None:
+    """
+    Print a warning as the commands print theirs: one line ``warning: ...`` on stderr.
+
+    Python's default form names the source file and line of the call that warned, and
+    repeats that line of code: noise to a user of the command.  The parameters are those of
+    :func:`warnings.showwarning`.
+    """
+    text = ' '.join(str(message).split())
+    if not issubclass(category, MPIWarning):
+        text = f'{category.__name__}: {text}'
+    if not text.startswith('warning:'):
+        text = f'warning: {text}'
+    print(text, file=sys.stderr if file is None else file)
+
+
+def _run_command(args_list: list[str]) -> int:
+    # The command, its errors as `error: ...` lines and its exit status.
     try:
         if args_list and args_list[0] == 'diagnose':
             return _cmd_diagnose(args_list[1:])
