@@ -68,6 +68,7 @@ Procedure (documented in ``docs/diagnosis.md``):
 
 from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass, field, replace
+from functools import partial
 import math
 from typing import Any, Callable
 from warnings import catch_warnings, simplefilter
@@ -89,7 +90,8 @@ from ..extensions.dead_time import DEAD_TIME
 from ..extensions.effect import separating_measurement, unidentified_parameters
 from ..extensions.fitting import rate_cross_correlation
 from ..identification import burn_in, output_sign
-from ..identification.dynamics import noise_std, return_point_drift, step_onset, StepOnset
+from ..identification.dynamics import noise_std, return_point_drift, ReturnPointDrift, \
+    step_onset, StepOnset
 from ..identification.finding import DynamicsFinding, record_dynamics
 from ..identification.record import prepare_record, refuse_if_unmodellable
 from ..identification.start_states import estimate_start_state
@@ -249,56 +251,146 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
 
     """
     say = progress or (lambda line: None)
+    run = _Options(recording, validation, split, order, _asked_causes(causes), min_gain,
+                   z_critical, alpha, bandwidth, noise_factor, progress, validation_block)
+    separate = validation is not None
+    # The records: training, validation (a separate record or the split's tail), facts.
+    t, training, checked, start, data = _records(recording, validation, split,
+                                                 validation_block)
+    retry = partial(_validate_on_inner_block, run, checked[0].size - start, data, say)
+    # The class check, with the sign detected on the training data (outside: no fit).
+    sign = _detected_sign(training, data)
+    series = Series(*checked, start)
+    timed = bool(getattr(recording, 'timed', True))
+    refused = _outside_class(training, checked, start, sign, timed, separate, data, series,
+                             say)
+    if refused is not None:
+        return refused
+    # The baseline: Gamma on the training record, as `mpi-ros identify` fits it.
+    say(f'identifying the baseline MPI model on {training[0].size} samples (order {order})')
+    base = _identify_baseline(training, checked[:2], start, order, timed,
+                              split_record=not separate,
+                              block=validation_block is not None, retry=retry)
+    if isinstance(base, DiagnosisReport):
+        return base                     # validated on an inner block instead of the tail
+    # The dynamics finding `identify` states for the record, and its steps' onset.
+    whole, finding, onset = _dynamics(run, training, sign, timed, data, say)
+    data.training_burn_in = base.burn_in
+    # The scored part of the validation record, and each model's simulation of it.
+    start, on_validation = _scored(run, checked, start, sign, data, series)
+    # The baseline's errors on the scored part, beside the straight line's.
+    baseline, sim0, r0, sigma = _baseline_errors(base, on_validation, training, checked,
+                                                 start, separate, data, say)
+    # The validation input outside the training range, the drift at return points, and
+    # a baseline no better than the straight line refused (or validated on an inner block).
+    drift, outside = _range_and_drift(run, training, checked[1][start:], whole, data)
+    retried = _no_better_than_line(baseline, drift, outside, retry)
+    if retried is not None:
+        return retried
+    # The residual evidence: the baseline residual's structure and signature tests.
+    residual = _residual_evidence(checked, sim0, start, sigma, r0)
+    # The candidates: each effect fitted, scored, its signature tested.
+    scorer = _Scorer(on_validation, training, base.burn_in, checked[2], slice(start, None),
+                     r0, baseline, bandwidth, separate, say)
+    scorer.baseline_model = base.model
+    candidates, decision, excess = _judged_candidates(run, scorer, base, residual, r0, sigma,
+                                                      onset, whole[0])
+    # The choice: the rule, a pair, the ties, the agreement with the dynamics finding.
+    chosen = _choose(decision, candidates, scorer, finding, baseline.order, excess=excess,
+                     separate=separate)
+    series.baseline, series.candidates = sim0, scorer.sims
+    # The report: the verdict, its evidence and warnings.
+    records = ([('record', t)] if not separate
+               else [('training record', t), ('validation record', checked[0])])
+    return _report(chosen, base.model, baseline, candidates, residual, decision, data,
+                   (checked[2][start:], sigma), records, (drift, outside), series, say)
+
+
+@dataclass(frozen=True)
+class _Options:
+    """What diagnose was called with: a split's tail refused is diagnosed again with them."""
+
+    recording: Any
+    validation: Any
+    split: float
+    order: str | tuple[int, int]
+    causes: tuple[str, ...]
+    min_gain: float
+    z_critical: float
+    alpha: float
+    bandwidth: int | None
+    noise_factor: float
+    progress: Callable[[str], None] | None
+    validation_block: tuple[int, int] | None
+
+
+def _asked_causes(causes: tuple[str, ...] | None) -> tuple[str, ...]:
+    # The candidates asked for (default: every registered effect), each a registered one.
     catalogue = tuple(EFFECTS)
-    causes = catalogue if causes is None else tuple(causes)
-    unknown = [c for c in causes if c not in catalogue]
+    asked = catalogue if causes is None else tuple(causes)
+    unknown = [c for c in asked if c not in catalogue]
     if unknown:
         msg = f'unknown cause(s) {unknown}; the catalogue is {", ".join(catalogue)}'
         raise DataError(msg)
-    t, (tt, xt, yt), (tv, xv, yv), start, data = _records(recording, validation, split,
-                                                          validation_block)
+    return asked
 
-    def identify_whole() -> None:
-        # A record identify refuses whole is refused with identify's message (its cause).
-        tw, xw, yw = _arrays(recording, 'recording')
-        whole = {'order': 'auto'} if order == 'auto' else {'n': int(order[0]),
-                                                           'l': int(order[1])}
-        with catch_warnings():
-            simplefilter('ignore', MPIWarning)
-            identify(xw, yw, time=tw if timed else None, dynamics='off', **whole)
 
-    def inner_block(reason: str) -> DiagnosisReport | None:
-        # The tail of a split failed, for the split's sake: diagnose again on the latest block
-        # whose input lies inside the rest's range (None: none does, or not a split's tail).
-        if validation is not None or validation_block is not None:
-            return None
-        block = _inner_block(_arrays(recording, 'recording')[1], tv.size - start,
-                             data.leading_hold or 0)
-        if block is None:
-            return None
-        identify_whole()                # the record's own cause, not the split's
-        say(f'the tail after the split is refused ({reason}); validating on samples'
-            f' {block[0]}..{block[1] - 1} instead, whose input lies inside the range of the'
-            ' rest of the record')
-        report = diagnose(recording, split=split, order=order, causes=causes,
-                          min_gain=min_gain, z_critical=z_critical, alpha=alpha,
-                          bandwidth=bandwidth, noise_factor=noise_factor, progress=progress,
-                          validation_block=block)
-        report.data['validation'] += f'; the tail after the split was refused: {reason}'
-        return report
+def _identify_whole(recording: Any, order: str | tuple[int, int]) -> None:
+    # A record identify refuses whole is refused with identify's message (its cause).
+    tw, xw, yw = _arrays(recording, 'recording')
+    timed = bool(getattr(recording, 'timed', True))
+    whole = {'order': 'auto'} if order == 'auto' else {'n': int(order[0]),
+                                                       'l': int(order[1])}
+    with catch_warnings():
+        simplefilter('ignore', MPIWarning)
+        identify(xw, yw, time=tw if timed else None, dynamics='off', **whole)
+
+
+def _validate_on_inner_block(run: _Options, tail: int, data: RecordFacts,
+                             say: Callable[[str], None], reason: str) -> DiagnosisReport | None:
+    # The tail of a split failed, for the split's sake: diagnose again on the latest block
+    # whose input lies inside the rest's range (None: none does, or not a split's tail).
+    if run.validation is not None or run.validation_block is not None:
+        return None
+    block = _inner_block(_arrays(run.recording, 'recording')[1], tail,
+                         data.leading_hold or 0)
+    if block is None:
+        return None
+    _identify_whole(run.recording, run.order)   # the record's own cause, not the split's
+    say(f'the tail after the split is refused ({reason}); validating on samples'
+        f' {block[0]}..{block[1] - 1} instead, whose input lies inside the range of the'
+        ' rest of the record')
+    report = diagnose(run.recording, split=run.split, order=run.order, causes=run.causes,
+                      min_gain=run.min_gain, z_critical=run.z_critical, alpha=run.alpha,
+                      bandwidth=run.bandwidth, noise_factor=run.noise_factor,
+                      progress=run.progress, validation_block=block)
+    report.data['validation'] += f'; the tail after the split was refused: {reason}'
+    return report
+
+
+def _detected_sign(training: tuple[FloatArray, FloatArray, FloatArray],
+                   data: RecordFacts) -> int:
     # The sensor may fall as the actuator extends: the class check (a rising map) and the
     # model (model.output_sign) use the sign detected on the training data.
-    sign, _ = output_sign(xt, yt)
+    sign, _ = output_sign(training[1], training[2])
     data.output_sign = sign
-    series = Series(tv, xv, yv, start)
-    _refuse_constant_output(yt, yv, validation is not None)
-    timed = bool(getattr(recording, 'timed', True))
-    check = _class_check(xt, sign * yt, xv[start:], sign * yv[start:], validation is not None)
+    return sign
+
+
+def _outside_class(training: tuple[FloatArray, FloatArray, FloatArray],
+                   checked: tuple[FloatArray, FloatArray, FloatArray], start: int, sign: int,
+                   timed: bool, separate: bool, data: RecordFacts, series: Series,
+                   say: Callable[[str], None]) -> DiagnosisReport | None:
+    # Step 1: the invertible-class check; the report of a record outside it (None inside).
+    _, xt, yt = training
+    _, xv, yv = checked
+    _refuse_constant_output(yt, yv, separate)
+    check = _class_check(xt, sign * yt, xv[start:], sign * yv[start:], separate)
     if not check.inside:
         # One analysis: the identification's tests of the record (butterfly, switching,
         # drift, unrelated signals) name the cause, or explain the reversals (a lag).
         # Each record on its own; a split's whole record.
-        analysed = [(tt, xt, yt), (tv, xv, yv)] if validation is not None else [(tv, xv, yv)]
+        analysed = [training, checked] if separate else [checked]
         check = _with_analysis(check, analysed, timed)
         data.class_check = check.reason
     if not check.inside:
@@ -311,41 +403,61 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
             series=series)
     if data.class_check:
         say(f'invertible class: {check.reason}')
-    # One analysis of the record, as `mpi-ros identify` makes it: the time base (when the
-    # record has one), its segments, the ringing after steps left out, the start state.
-    say(f'identifying the baseline MPI model on {tt.size} samples (order {order})')
-    base = _identify_baseline((tt, xt, yt), (tv, xv), start, order, timed,
-                              split_record=validation is None,
-                              block=validation_block is not None, retry=inner_block)
-    if isinstance(base, DiagnosisReport):
-        return base                     # validated on an inner block instead of the tail
+    return None
+
+
+def _dynamics(run: _Options, training: tuple[FloatArray, FloatArray, FloatArray], sign: int,
+              timed: bool, data: RecordFacts, say: Callable[[str], None]) -> tuple[
+        tuple[FloatArray, FloatArray, FloatArray], DynamicsFinding, StepOnset]:
     # The dynamics finding `mpi-ros identify` states for DATA (the training record, or the
-    # whole record of a split), and the step response's onset that bounds a dead time.
-    td, xd, yd = (tt, xt, yt) if validation is not None else _arrays(recording, 'recording')
-    finding, onset = _record_dynamics(td, xd, yd, sign, timed, say)
+    # whole record of a split), and the step response's onset that bounds a dead time;
+    # returns that record too.
+    record = training if run.validation is not None else _arrays(run.recording, 'recording')
+    finding, onset = _record_dynamics(*record, sign, timed, say)
     data.dynamics_finding = finding
     if finding.kind != 'unavailable':
         say(finding.describe())
-    n, l = base.order  # noqa: E741
-    data.training_burn_in = base.burn_in
-    estimate_start = False
-    if validation is not None:
-        start, estimate_start = _scored_part(tv, xv, yv, sign, data)
-        series.start = start
-    val = slice(start, None)
+    return record, finding, onset
 
-    def on_validation(model: Any) -> FloatArray:
-        # The model's simulation of the validation record, from the start state that fits
-        # a separate record best (the split's validation continues the training record).
-        if not estimate_start:
-            return np.asarray(model.response(tv, xv), dtype=np.float64)
-        rows = np.arange(tv.size) >= start
-        fitted, _, _ = estimate_start_state(model, xv, yv, time=tv, rows=rows,
-                                            offset_free=True)
-        return np.asarray(fitted.response(tv, xv), dtype=np.float64)
-    # Only the validation record's output offset (its sensor zero) is re-estimated, for the
+
+def _scored(run: _Options, checked: tuple[FloatArray, FloatArray, FloatArray], start: int,
+            sign: int, data: RecordFacts,
+            series: Series) -> tuple[int, Callable[[Any], FloatArray]]:
+    # The first validation sample scored (a separate record: after its own burn-in) and
+    # each model's simulation of the validation record.
+    estimate_start = False
+    if run.validation is not None:
+        start, estimate_start = _scored_part(*checked, sign, data)
+        series.start = start
+    return start, partial(_on_validation, checked, start, estimate_start)
+
+
+def _on_validation(checked: tuple[FloatArray, FloatArray, FloatArray], start: int,
+                   estimate_start: bool, model: Any) -> FloatArray:
+    # The model's simulation of the validation record, from the start state that fits
+    # a separate record best (the split's validation continues the training record).
+    tv, xv, yv = checked
+    if not estimate_start:
+        return np.asarray(model.response(tv, xv), dtype=np.float64)
+    rows = np.arange(tv.size) >= start
+    fitted, _, _ = estimate_start_state(model, xv, yv, time=tv, rows=rows,
+                                        offset_free=True)
+    return np.asarray(fitted.response(tv, xv), dtype=np.float64)
+
+
+def _baseline_errors(base: Any, on_validation: Callable[[Any], FloatArray],
+                     training: tuple[FloatArray, FloatArray, FloatArray],
+                     checked: tuple[FloatArray, FloatArray, FloatArray], start: int,
+                     reestimate: bool, data: RecordFacts, say: Callable[[str], None]
+                     ) -> tuple[Baseline, FloatArray, FloatArray, float]:
+    # The baseline and the straight line of the training data on the scored part (the
+    # baseline's simulation, its residual there, and the noise floor returned too).  Only
+    # the validation record's output offset (its sensor zero) is re-estimated, for the
     # baseline, the straight line and every candidate alike; nothing else is refitted.
-    reestimate = validation is not None
+    _, xt, yt = training
+    _, xv, yv = checked
+    val = slice(start, None)
+    n, l = base.order  # noqa: E741
     data.output_offset_reestimated = reestimate
     line = _linear_fit(xt[base.burn_in:], yt[base.burn_in:])
     linear = np.asarray(np.polyval(line, xv), dtype=np.float64)
@@ -366,53 +478,98 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         f' {100 * baseline.linear_rms_error:.3g} %), (37)'
         f' {100 * baseline.nonlinearity_error:.3g} %'
         + (f'; validation output offset re-estimated: {shift0:+.4g} m' if reestimate else ''))
-    outside = _outside_training(xt, xv[val], data)
-    drift = return_point_drift(xd, yd)
-    if drift.drifts and validation is None:
-        identify_whole()                # a drift identify refuses the record for
+    return baseline, sim0, r0, sigma
+
+
+def _range_and_drift(run: _Options, training: tuple[FloatArray, FloatArray, FloatArray],
+                     scored: FloatArray, whole: tuple[FloatArray, FloatArray, FloatArray],
+                     data: RecordFacts) -> tuple[ReturnPointDrift, str]:
+    # The scored validation input outside the training range (its sentence) and the
+    # drift at the input's return points of the record the dynamics were found on; a
+    # split's record that drifts is refused with identify's message.
+    outside = _outside_training(training[1], scored, data)
+    drift = return_point_drift(whole[1], whole[2])
+    if drift.drifts and run.validation is None:
+        _identify_whole(run.recording, run.order)   # a drift identify refuses the record for
     data.return_point_drift = ReturnPoints(drift.visits, drift.change, drift.monotone,
                                            drift.end, drift.drifts)
-    if not baseline.rms_error < baseline.linear_rms_error:
-        retried = (inner_block(f'the baseline is no better than a straight line on it'
-                               f' ({100 * baseline.rms_error:.3g} % vs'
-                               f' {100 * baseline.linear_rms_error:.3g} %); {outside}')
-                   if outside and not drift.drifts else None)
-        if retried is not None:
-            return retried
-        likely = [text for text in (drift.describe(), outside) if text]
-        cause = (f'; the likely cause: {"; and ".join(likely)}' if likely else
-                 '; check that both records come from the same actuator, with the same'
-                 ' columns/topics, units and sign, and that the validation record sweeps the'
-                 ' range of the training record')
-        msg = (f'the baseline MPI model (n={n}, l={l}) is no better than a straight line on'
-               f' the validation data: RMS error {100 * baseline.rms_error:.3g} % of the'
-               f' output range vs {100 * baseline.linear_rms_error:.3g} % for the line'
-               f' fitted on the training data{cause}')
-        raise IdentificationError(msg)
+    return drift, outside
+
+
+def _no_better_than_line(baseline: Baseline, drift: ReturnPointDrift, outside: str,
+                         retry: Callable[[str], DiagnosisReport | None]
+                         ) -> DiagnosisReport | None:
+    # A baseline no better than the straight line on the validation data is refused, with
+    # its likely cause; a split's tail outside the training range is validated on an inner
+    # block instead (that report).  None: the baseline beats the line.
+    if baseline.rms_error < baseline.linear_rms_error:
+        return None
+    n, l = baseline.order  # noqa: E741
+    retried = (retry(f'the baseline is no better than a straight line on it'
+                     f' ({100 * baseline.rms_error:.3g} % vs'
+                     f' {100 * baseline.linear_rms_error:.3g} %); {outside}')
+               if outside and not drift.drifts else None)
+    if retried is not None:
+        return retried
+    likely = [text for text in (drift.describe(), outside) if text]
+    cause = (f'; the likely cause: {"; and ".join(likely)}' if likely else
+             '; check that both records come from the same actuator, with the same'
+             ' columns/topics, units and sign, and that the validation record sweeps the'
+             ' range of the training record')
+    msg = (f'the baseline MPI model (n={n}, l={l}) is no better than a straight line on'
+           f' the validation data: RMS error {100 * baseline.rms_error:.3g} % of the'
+           f' output range vs {100 * baseline.linear_rms_error:.3g} % for the line'
+           f' fitted on the training data{cause}')
+    raise IdentificationError(msg)
+
+
+def _residual_evidence(checked: tuple[FloatArray, FloatArray, FloatArray], sim0: FloatArray,
+                       start: int, sigma: float, r0: FloatArray) -> Residual:
+    # Step 3: the structure of the baseline residual on the scored part and the hold and
+    # burst signature tests (the step onset is added with the candidates).
+    tv, xv, yv = checked
+    val = slice(start, None)
     residual = _residual_structure(tv, xv, yv, sim0, start, sigma)
     residual.hold_signature = hold_signature(tv[val], xv[val], r0)
     residual.burst_signature = burst_signature(tv[val], xv[val], yv[val], sim0[val])
-    scorer = _Scorer(on_validation, (tt, xt, yt), base.burn_in, yv, val, r0, baseline,
-                     bandwidth, reestimate, say)
-    scorer.baseline_model = base.model
-    candidates = _fit_candidates(scorer, causes, (n, l), base.model)
-    excess = math.sqrt(float(np.mean(r0 ** 2))) > noise_factor * sigma
-    level = alpha / len(catalogue)               # Bonferroni over the catalogue
+    return residual
+
+
+def _judged_candidates(run: _Options, scorer: '_Scorer', base: Any, residual: Residual,
+                       r0: FloatArray, sigma: float, onset: StepOnset,
+                       time: FloatArray) -> tuple[list['Candidate'], Decision, Any]:
+    # Step 4: each effect fitted on the training record at the baseline's order and scored;
+    # its signature (at alpha over the catalogue, Bonferroni) and whether it is significant;
+    # a dead time longer than the steps' onset.  Returns them, the decision's thresholds
+    # and whether the baseline residual exceeds the noise floor.
+    n, l = base.order  # noqa: E741
+    candidates = _fit_candidates(scorer, run.causes, (n, l), base.model)
+    excess = math.sqrt(float(np.mean(r0 ** 2))) > run.noise_factor * sigma
+    level = run.alpha / len(tuple(EFFECTS))     # Bonferroni over the catalogue
     for c in candidates:
         c.signature = EFFECTS[c.cause].signature(residual, level)
-        c.significant = bool(excess and c.gain >= min_gain and c.z >= z_critical)
-    unphysical = _unphysical_dead_time(candidates, onset, td)
+        c.significant = bool(excess and c.gain >= run.min_gain and c.z >= run.z_critical)
+    unphysical = _unphysical_dead_time(candidates, onset, time)
     residual.step_onset = (StepOnsetCheck(onset.bound, onset.steps, unphysical)
                            if math.isfinite(onset.bound) else None)
-    decision = Decision(min_gain, z_critical, alpha, level, bandwidth, noise_factor, sigma,
-                        bool(excess))
+    decision = Decision(run.min_gain, run.z_critical, run.alpha, level, run.bandwidth,
+                        run.noise_factor, sigma, bool(excess))
     if unphysical:
         decision.steps.append(unphysical)
-    chosen = _choose(decision, candidates, scorer, finding, (n, l), excess=excess,
-                     separate=validation is not None)
-    series.baseline, series.candidates = sim0, scorer.sims
+    return candidates, decision, excess
+
+
+def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
+            candidates: list['Candidate'], residual: Residual, decision: Decision,
+            data: RecordFacts, scored: tuple[FloatArray, float],
+            records: list[tuple[str, FloatArray]], notes: tuple[ReturnPointDrift, str],
+            series: Series,
+            say: Callable[[str], None]) -> DiagnosisReport:
+    # The verdict, the extended model's errors, the evidence sentences, the
+    # warnings (time constants the time base makes implausible, the drift, the range).
+    (measured, sigma), (drift, outside) = scored, notes
     if chosen is None:
-        cause, model, extended, gain = 'none', base.model, baseline.to_dict(), 0.0
+        cause, model, extended, gain = 'none', base_model, baseline.to_dict(), 0.0
     else:
         cause, model, gain = chosen.cause, chosen.model, float(chosen.gain)
         extended = {'cause': cause, 'rms_error': chosen.rms_error,
@@ -422,8 +579,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     extended.setdefault('parameters', {})
     extended.setdefault('not_identified', {})
     public = [c.public() for c in candidates]
-    evidence = _evidence(cause, baseline, public, residual, sigma, yv[val], data)
-    evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(yv[val])))
+    evidence = _evidence(cause, baseline, public, residual, sigma, measured, data)
+    evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(measured)))
     if extended['not_identified']:
         evidence += ' ' + _unidentified_sentence(extended['not_identified'])
     if decision.ambiguous:
@@ -431,8 +588,6 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
         evidence += (f' Ambiguous: {tied} ({cause} ranks first by its validation gain;'
                      f' {_who_decided(chosen)}).'
                      f' To separate them: {decision.separate_by}.')
-    records = ([('record', t)] if validation is None
-               else [('training record', t), ('validation record', tv)])
     warning = time_base_warning(implausible_time_constants(public, residual), records)
     warnings = [] if warning is None else [warning]
     warnings += [text for text in (drift.describe(), outside) if text]
