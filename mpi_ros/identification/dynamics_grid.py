@@ -192,9 +192,9 @@ def estimate_dynamics(record: PreparedRecord, n: int, l: int,  # noqa: E741
                              choose=False, burn_in=burn_in, rule=rule)
         except (IdentificationError, DataError):
             return math.inf
-        residual = (fit.simulate() - record.displacement) / np.ptp(record.displacement)
-        blocks[dyn] = block_errors(residual, held)
-        error = _held_output_error(fit, record.displacement, held)
+        difference = fit.simulate() - record.displacement     # one simulation per trial
+        blocks[dyn] = block_errors(difference / np.ptp(record.displacement), held)
+        error = _held_error(difference, record.displacement, held)
         trials.append({'dead_time': dyn.dead_time, 'lag_time_constant': dyn.lag_time_constant,
                        'held_error': error})
         return error
@@ -267,9 +267,15 @@ def _persists(record: PreparedRecord, dynamics: InputDynamics,
 def _held_output_error(fit: RecordFit, displacement: FloatArray,
                        held: npt.NDArray[np.bool_]) -> float:
     # RMS error of the model's output on the held-out rows, over the output's range.
+    return _held_error(fit.simulate() - displacement, displacement, held)
+
+
+def _held_error(difference: FloatArray, displacement: FloatArray,
+                held: npt.NDArray[np.bool_]) -> float:
+    # The same from the model's output minus the measured output, already simulated.
     if not np.any(held):
         return math.nan
-    error = (fit.simulate() - displacement)[held]
+    error = difference[held]
     return float(np.sqrt(np.mean(error * error)) / np.ptp(displacement))
 
 
