@@ -29,15 +29,8 @@ from rclpy.parameter import Parameter
 RATE = 500.0
 
 
-@pytest.fixture(params=[False])
-def node_and_plant(ros_context, monkeypatch, request):
-    process = request.param
-    if not process:
-        monkeypatch.setattr(AdaptationWorker, 'start', lambda self: None)
-    t, x = identification_excitation(30.0, sample_rate=RATE, seed=11)
-    config = {'noise_std_m': 2e-8, 'sensor_zero_current_a': 0.2}
-    y = MagnetostrictiveActuator(ActuatorConfig(**config), seed=11).simulate(t, x)
-    model = identify(x, y, n=10, l=5).model
+def _adaptive_node(ros_context, model, process):
+    # A compensator node with MODEL, adapting (in a child process or not), on its executor.
     overrides = [Parameter(k, value=v) for k, v in model.to_params().items()] + [
         Parameter('output.min', value=0.0), Parameter('output.max', value=2.0),
         Parameter('sample_period', value=1 / RATE),
@@ -46,6 +39,18 @@ def node_and_plant(ros_context, monkeypatch, request):
     node = CompensatorNode(context=ros_context, parameter_overrides=overrides)
     executor = events_executor(ros_context)
     executor.add_node(node)
+    return node, executor
+
+
+@pytest.fixture(params=[False])
+def node_and_plant(ros_context, monkeypatch, request):
+    process = request.param
+    if not process:
+        monkeypatch.setattr(AdaptationWorker, 'start', lambda self: None)
+    t, x = identification_excitation(30.0, sample_rate=RATE, seed=11)
+    config = {'noise_std_m': 2e-8, 'sensor_zero_current_a': 0.2}
+    y = MagnetostrictiveActuator(ActuatorConfig(**config), seed=11).simulate(t, x)
+    node, executor = _adaptive_node(ros_context, identify(x, y, n=10, l=5).model, process)
     plant = MagnetostrictiveActuator(ActuatorConfig(
         thermal_gain_m_per_a2=3e-6, thermal_time_constant_s=30.0, **config), seed=111)
     yield node, executor, plant, (float(np.min(y)), float(np.max(y)))
@@ -148,14 +153,7 @@ def test_a_thermal_drift_model_is_adapted_with_its_weight(ros_context, monkeypat
     config = {'noise_std_m': 2e-8}
     y = MagnetostrictiveActuator(ActuatorConfig(**config), seed=12).simulate(t, x)
     model = ThermalDriftModel(identify(x, y, n=10, l=5).model, 30.0, 0.02)
-    overrides = [Parameter(k, value=v) for k, v in model.to_params().items()] + [
-        Parameter('output.min', value=0.0), Parameter('output.max', value=2.0),
-        Parameter('sample_period', value=1 / RATE),
-        Parameter('adaptation.enabled', value=True),
-        Parameter('adaptation.process', value=False)]
-    node = CompensatorNode(context=ros_context, parameter_overrides=overrides)
-    executor = events_executor(ros_context)
-    executor.add_node(node)
+    node, executor = _adaptive_node(ros_context, model, False)
     plant = MagnetostrictiveActuator(ActuatorConfig(
         thermal_gain_m_per_a2=3e-6, thermal_time_constant_s=30.0, **config), seed=112)
     try:
