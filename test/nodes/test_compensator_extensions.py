@@ -245,9 +245,9 @@ def test_dead_time_compensates_gamma_and_warns(make_node):
     assert node.get_parameter('model.dead_time').value == 0.0
 
 
-def test_messages_through_the_events_executor(ros_context, make_node):
-    """The message path (callback with message info, drained queue) feeds the time stamps."""
-    node = make_node(limits() + typed(dict(MODEL_A, **RATE)))
+def _exchange(ros_context, node, values, *, pause, wait):
+    # Publish VALUES on desired_displacement (PAUSE s apart) and collect the commands, on an
+    # events executor; up to WAIT s for the last command.
     helper = rclpy.create_node('desired_source', context=ros_context)
     received = []
     publisher = helper.create_publisher(Float64, 'desired_displacement', 1000)
@@ -260,16 +260,24 @@ def test_messages_through_the_events_executor(ros_context, make_node):
         deadline = time.monotonic() + 5.0
         while publisher.get_subscription_count() < 1 and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
-        for value in DESIRED[:100]:
+        for value in values:
             publisher.publish(Float64(data=float(value)))
-            time.sleep(1e-3)
+            if pause:
+                time.sleep(pause)
             executor.spin_once(timeout_sec=0.0)
-        deadline = time.monotonic() + 5.0
-        while len(received) < 100 and time.monotonic() < deadline:
+        deadline = time.monotonic() + wait
+        while len(received) < len(values) and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
     finally:
         executor.shutdown()
         helper.destroy_node()
+    return received
+
+
+def test_messages_through_the_events_executor(ros_context, make_node):
+    """The message path (callback with message info, drained queue) feeds the time stamps."""
+    node = make_node(limits() + typed(dict(MODEL_A, **RATE)))
+    received = _exchange(ros_context, node, DESIRED[:100], pause=1e-3, wait=5.0)
     assert len(received) == 100
     assert np.all(np.isfinite(received))
     assert np.all((np.array(received) >= OUTPUT_MIN) & (np.array(received) <= OUTPUT_MAX))
@@ -304,27 +312,7 @@ def test_message_path_does_not_depend_on_when_messages_arrive(ros_context, make_
         return readings[-1]
 
     node._arrival_clock = clock
-    helper = rclpy.create_node('desired_source', context=ros_context)
-    received = []
-    publisher = helper.create_publisher(Float64, 'desired_displacement', 1000)
-    helper.create_subscription(Float64, 'current_command', lambda m: received.append(m.data),
-                               1000)
-    executor = events_executor(ros_context)
-    executor.add_node(node)
-    executor.add_node(helper)
-    try:
-        deadline = time.monotonic() + 5.0
-        while publisher.get_subscription_count() < 1 and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.05)
-        for value in DESIRED[:200]:
-            publisher.publish(Float64(data=float(value)))
-            executor.spin_once(timeout_sec=0.0)
-        deadline = time.monotonic() + 10.0
-        while len(received) < 200 and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.05)
-    finally:
-        executor.shutdown()
-        helper.destroy_node()
+    received = _exchange(ros_context, node, DESIRED[:200], pause=0.0, wait=10.0)
     assert len(received) == 200
     assert len(readings) == (200 if message_time == 'arrival' else 0)
     nominal = Compensator(extended_model_from_params(dict(MODEL_A, **RATE)),
