@@ -113,7 +113,7 @@ from .identification.dynamics_grid import DynamicsEstimate
 from .identification.finding import DynamicsFinding, estimate_record_dynamics, finding_of, \
     reference_order
 from .identification.fitter import fit_record, fold_line_errors, RecordFit
-from .identification.folds import fold_index, FoldErrors, held_out_rows, RECORD_FOLDS
+from .identification.folds import FoldErrors, held_out_rows, RECORD_FOLDS
 from .identification.order_selection import ORDER_WINDOW, select_record_order
 from .identification.qp import ANCHORS, check_excitation, check_quality, check_signals, \
     FloatArray, output_sign
@@ -200,6 +200,11 @@ class IdentificationResult:
         The straight line's on the same folds (fitted on the others).
     line_held_out_errors : list of float
         The line's per fold.
+    held_out_judged : list of bool
+        Per fold: it judges the model (its input stays inside the range its model was fitted
+        on, :data:`~mpi_ros.identification.folds.JUDGED_MARGIN`); a fold that holds an
+        excursion the others never make is reported, not judged: the refusal against the
+        straight line reads the judged folds.
     weights_from : str
         Where the weights came from: ``'determined'`` (the rows after the plays are
         determined; the start state explains the rows before with those weights) or
@@ -232,6 +237,7 @@ class IdentificationResult:
     held_out_errors: list[float] = field(default_factory=list)
     line_held_out_error: float = math.nan
     line_held_out_errors: list[float] = field(default_factory=list)
+    held_out_judged: list[bool] = field(default_factory=list)
     weights_from: str = 'joint'
 
     @property
@@ -263,6 +269,7 @@ class IdentificationResult:
                              'per_fold': [_finite(v) for v in self.held_out_errors],
                              'line_rms_error': _finite(self.line_held_out_error),
                              'line_per_fold': [_finite(v) for v in self.line_held_out_errors],
+                             'judged': list(self.held_out_judged),
                              'weights_from': self.weights_from}}
 
 
@@ -436,6 +443,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         excluded=int(np.count_nonzero(~record.keep)), notes=notes, resonance=resonance,
         held_out_error=held_out.error, held_out_errors=list(held_out.per_fold),
         line_held_out_error=line.error, line_held_out_errors=list(line.per_fold),
+        held_out_judged=list(held_out.judged),
         weights_from=fit.rule)
 
 
@@ -615,54 +623,76 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
                     auto: bool, table: list[dict[str, Any]], x: FloatArray,
                     window: int) -> list[str]:
     # The fit on the record's own held-out blocks: refused when no better than a straight
-    # line there, a warning when far from its in-sample figure or from its order-table row.
+    # line on the folds that can judge it, a warning when far from its in-sample figure or
+    # from its order-table row.  A fold that holds an excursion no other fold makes (the
+    # record's widest cycle, once) is reported, not judged: its fold model extrapolates
+    # there, in the input and in the plays' memory, where the model of the whole record
+    # does not (JUDGED_MARGIN).
     n, l = order  # noqa: E741
     if not math.isfinite(held_out.error):
         return []
+    count = len(held_out.per_fold)
     folds = ', '.join(f'{100 * v:.3g}' for v in held_out.per_fold)
     lines = ', '.join(f'{100 * v:.3g}' for v in line.per_fold)
-    worst = int(np.nanargmax(np.where(np.isfinite(held_out.per_fold), held_out.per_fold,
-                                      -np.inf)))
-    outside = _outside_fraction(x, worst, len(held_out.per_fold))
-    where = (f'fold {worst + 1} of {len(held_out.per_fold)} is worst'
-             + (f'; {100 * outside:.3g} % of its input lies outside the range of the other'
-                ' folds (the model extrapolates there)' if outside > 0.0 else ''))
+    flags = held_out.judged or [True] * count
+    judged = [j and math.isfinite(m) and math.isfinite(b)
+              for j, m, b in zip(flags, held_out.per_fold, line.per_fold)]
     notes: list[str] = []
-    if (n + l > 0 or auto) and math.isfinite(line.error) and held_out.error >= line.error:
-        # Clearly worse (by more than _FAR_ABSOLUTE of the range: folds of small loops tie
-        # with the line at the noise) on most folds, where the input stays inside the range
-        # the fold was fitted on (a fold that holds the record's widest sweep extrapolates:
-        # a warning below, not a refusal).
-        pairs = [(m, b) for m, b in zip(held_out.interior_per_fold, line.interior_per_fold)
-                 if math.isfinite(m) and math.isfinite(b)]
-        worse = sum(1 for m, b in pairs if m > b + _FAR_ABSOLUTE)
-        if 2 * worse > len(held_out.per_fold):
-            msg = (f'the identified model (n={n}, l={l}) is no better than a straight line on'
-                   f" the record's held-out blocks ({RECORD_FOLDS} contiguous folds, each fitted"
-                   f' on the others): RMS {100 * held_out.error:.3g} % of the output range vs'
-                   f' {100 * line.error:.3g} % for the line (per fold {folds} % vs {lines} %;'
-                   f' {where}); in sample it is {100 * rms:.3g} %: the fit does not carry over'
-                   ' within its own record (drift or leakage, switching, or a part of the'
-                   ' record no other part resembles); record more cycles of the same'
-                   ' excitation, or remove the drift')
-            raise IdentificationError(msg)
-        note = (f"warning: on the record's held-out blocks the model is worse than a straight"
-                f' line ({100 * held_out.error:.3g} % vs {100 * line.error:.3g} % RMS; per'
-                f' fold {folds} % vs {lines} %; {where}), clearly so inside the range each fold'
-                f' was fitted on on {worse} of {len(held_out.per_fold)} folds only;'
-                f' {100 * held_out.outside:.3g} % of the held-out input lies outside that range:'
-                ' keep new inputs inside the identified range')
-        warnings.warn(note, MPIWarning, stacklevel=3)
-        notes.append(note)
-    # The median fold: the fold of the record's start (its transient, the input outside
-    # the range) alone is no reason to expect worse on new inputs; several folds are.
-    typical = float(np.nanmedian(held_out.per_fold))
+    beyond = [k for k in range(count) if not flags[k] and math.isfinite(held_out.per_fold[k])
+              and math.isfinite(held_out.excursions[k])]
+    if beyond:
+        which = ', '.join(
+            f'fold {k + 1} (its input goes {100 * held_out.excursions[k]:.3g} % of the span'
+            f' beyond the range its model was fitted on; {100 * held_out.per_fold[k]:.3g} % vs'
+            f' {100 * line.per_fold[k]:.3g} % for the line)' for k in beyond)
+        notes.append(f'held-out blocks not judged: {which} of {count}: each holds an excursion'
+                     ' the rows its model was fitted on never make, where that model'
+                     ' extrapolates; the model identified on the whole record covers that range')
+    used = sum(judged)
+    if n + l > 0 or auto:
+        if used >= 2:
+            model_error, line_error = held_out.pooled(judged), line.pooled(judged)
+            pairs = [(m, b) for m, b, j in zip(held_out.per_fold, line.per_fold, judged) if j]
+            worse = sum(1 for m, b in pairs if m > b + _FAR_ABSOLUTE)
+            scope = (f'judged on the {used} of {count} that stay inside the range they were'
+                     f' fitted on' if used < count else f'all {count} judged')
+            if model_error > line_error + _FAR_ABSOLUTE or 2 * worse > used:
+                msg = (f'the identified model (n={n}, l={l}) is no better than a straight line'
+                       f" on the record's held-out blocks ({RECORD_FOLDS} contiguous folds, each"
+                       f' fitted on the others; {scope}): RMS {100 * model_error:.3g} % of the'
+                       f' output range vs {100 * line_error:.3g} % for the line, clearly worse on'
+                       f' {worse} of {used} folds (per fold {folds} % vs {lines} %); in sample it'
+                       f' is {100 * rms:.3g} %: the fit does not carry over within its own record'
+                       ' (drift or leakage, switching, or a part of the record no other part'
+                       ' resembles); record more cycles of the same excitation, or remove the'
+                       ' drift')
+                raise IdentificationError(msg)
+            if model_error >= line_error:
+                note = (f"warning: on the record's held-out blocks ({scope}) the model ties with"
+                        f' a straight line: RMS {100 * model_error:.3g} % vs'
+                        f' {100 * line_error:.3g} % of the output range, within'
+                        f' {100 * _FAR_ABSOLUTE:.3g} %: a line would do as well')
+                warnings.warn(note, MPIWarning, stacklevel=3)
+                notes.append(note)
+        else:
+            note = (f"warning: the record's held-out blocks cannot judge the model: {used} of"
+                    f' {count} folds hold scored rows inside the range their model was fitted'
+                    f' on (per fold'
+                    f' {folds} % vs {lines} % for a straight line): the record holds too few'
+                    ' cycles of its widest excursions; the in-sample check alone passed it:'
+                    ' validate it on another record of the actuator (mpi-ros diagnose'
+                    ' --validate)')
+            warnings.warn(note, MPIWarning, stacklevel=3)
+            notes.append(note)
+    # The median judged fold: the fold of the record's start (its transient) alone is no
+    # reason to expect worse on new inputs; several folds are.
+    scored = [m for m, j in zip(held_out.per_fold, judged) if j]
+    typical = float(np.median(scored)) if scored else math.nan
     if typical > max(_FAR_FACTOR * rms, rms + _FAR_ABSOLUTE):
         note = (f"warning: on the record's held-out blocks the model is off by"
-                f' {100 * held_out.error:.3g} % RMS of the output range (per fold {folds} %,'
-                f' median {100 * typical:.3g} %; {where}), against {100 * rms:.3g} % in'
-                f' sample; better than a straight line there ({100 * line.error:.3g} %), but'
-                ' expect the larger figure on new inputs')
+                f' {100 * typical:.3g} % RMS of the output range (the median of the judged'
+                f' folds; per fold {folds} % vs {lines} % for a straight line), against'
+                f' {100 * rms:.3g} % in sample: expect the larger figure on new inputs')
         warnings.warn(note, MPIWarning, stacklevel=3)
         notes.append(note)
     row = next((r for r in table if (r['n'], r['l']) == order), None)
@@ -673,18 +703,8 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
                      f" {100 * row['rms_error']:.3g} %) and the chosen model's held-out error"
                      f' ({100 * held_out.error:.3g} %) differ: the table holds out 30 short'
                      f' blocks of {scope} (every kind of excitation on both sides), the'
-                     f' model {RECORD_FOLDS} long contiguous folds of the record ({where})')
+                     f' model {RECORD_FOLDS} long contiguous folds of the record')
     return notes
-
-
-def _outside_fraction(x: FloatArray, fold: int, folds: int) -> float:
-    # Fraction of a fold's input outside the range of the other folds' input.
-    size = min(x.size, 100000)
-    index = fold_index(size, folds)
-    mine, others = x[:size][index == fold], x[:size][index != fold]
-    if not mine.size or not others.size:
-        return 0.0
-    return float(np.mean((mine < np.min(others)) | (mine > np.max(others))))
 
 
 def _excited_order(x: FloatArray, y: FloatArray, order: tuple[int, int],

@@ -284,3 +284,21 @@ def test_regressor_gram_chunks_and_classes_match_the_regressor_matrix():
         assert parts.counts[c] == rows.shape[0]
         np.testing.assert_allclose(parts.grams[c], rows.T @ rows, rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(parts.sums[c], rows.sum(axis=0), rtol=1e-12, atol=1e-12)
+
+
+def test_an_unfinished_infeasible_solve_is_finished_not_refused():
+    """
+    A creep bank's QP round that OSQP left at its iteration limit 3.4e-5 outside (19).
+
+    Captured from a 60 s training record of the wide diagnosis sweep (creep on a Preisach
+    core), where it ended the whole diagnosis ("violates the invertibility constraints").
+    The solve goes on from where it stopped, polished, and the weights are feasible.
+    """
+    from pathlib import Path
+    from mpi_ros.identification.qp import fit_generalized_error
+    data = np.load(Path(__file__).parent / 'data' / 'unfinished_creep_qp.npz')
+    w_h, w_s, extra, info = fit_generalized_error(
+        data['gram'], data['equality_row'], n_hysteresis=11, n_superposition=11,
+        superposition_center=5, epsilon=1e-6, fixed_zero=data['fixed_zero'], outer_slope=3.0)
+    assert np.all(np.isfinite(w_h)) and np.all(np.isfinite(w_s)) and np.all(np.isfinite(extra))
+    assert w_h[0] >= 1e-6 and np.all(w_h[1:] >= 0.0) and np.all(w_h[[9, 10]] == 0.0)

@@ -448,3 +448,49 @@ def test_forc_twin_extrapolates_at_a_bounded_slope_and_simulate_warns(tmp_path, 
     assert f'warning: {below} of {x.size} currents ({100 * below / x.size:.3g} %) lie outside' \
         in err, err
     assert 'the model extrapolates there' in err
+
+
+# --- The held-out check judges the folds that can judge the model -------------------------
+
+def test_a_fold_that_holds_the_widest_cycle_once_is_reported_not_judged():
+    """
+    A sine whose amplitude grows through the record (TUM's ``rs`` captures): the last fold.
+
+    Its input goes beyond every other fold's, so its fold model extrapolates there (in the
+    input and in the plays' memory) where the model of the whole record does not: reported
+    with its numbers, not judged.  The other four judge the model, and it beats the line
+    on them.
+    """
+    import warnings
+    from mpi_ros import identify
+    t = np.arange(20000) / 1000.0
+    x = 1.0 + (0.15 + 0.8 * t / t[-1]) * np.sin(2.0 * np.pi * 2.0 * t)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=7).simulate(t, x)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        result = identify(x, y, order=(6, 3))
+    assert result.held_out_judged == [True, True, True, True, False]
+    judged = np.array(result.held_out_judged)
+    model = np.array(result.held_out_errors)[judged]
+    line = np.array(result.line_held_out_errors)[judged]
+    assert np.sqrt(np.mean(model ** 2)) < np.sqrt(np.mean(line ** 2))
+    [note] = [n for n in result.notes if n.startswith('held-out blocks not judged')]
+    assert note.startswith('held-out blocks not judged: fold 5 (its input goes')
+    assert f'{100 * result.held_out_errors[4]:.3g} % vs' in note
+    assert result.summary()['held_out']['judged'] == result.held_out_judged
+
+
+def test_fold_excursion_and_the_pooled_error_of_the_judged_folds():
+    """The excursion beyond the fitted range over the span; pooling weights folds by rows."""
+    from mpi_ros.identification.folds import fold_excursion, FoldErrors, JUDGED_MARGIN
+    fitted = np.linspace(0.0, 1.0, 11)
+    assert fold_excursion(np.array([0.2, 0.9]), fitted, 2.0) == 0.0
+    assert fold_excursion(np.array([-0.5, 0.9]), fitted, 2.0) == pytest.approx(0.25)
+    assert fold_excursion(np.array([0.5, 1.3]), fitted, 2.0) == pytest.approx(0.15)
+    assert fold_excursion(np.array([]), fitted, 2.0) == np.inf
+    errors = FoldErrors(per_fold=[0.1, 0.2, 5.0], counts=[100, 300, 50],
+                        excursions=[0.0, JUDGED_MARGIN, 0.5])
+    assert errors.judged == [True, True, False]
+    assert errors.pooled(errors.judged) == pytest.approx(np.sqrt((100 * 0.01 + 300 * 0.04)
+                                                                 / 400))
+    assert np.isnan(errors.pooled([False, False, False]))

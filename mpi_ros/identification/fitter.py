@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .dynamics import InputDynamics
-from .folds import better_on_folds, fold_index, FoldErrors, RECORD_FOLDS
+from .folds import better_on_folds, fold_excursion, fold_index, FoldErrors, RECORD_FOLDS
 from .qp import fit_generalized_error, FloatArray, GramParts, IDLE_PLAY, OUTER_SLOPE, \
     regressor_gram, scaled_design, ScaledDesign
 from .record import PreparedRecord, Segment
@@ -301,10 +301,15 @@ def fold_line_errors(current: FloatArray, displacement: FloatArray,
     span = float(np.ptp(displacement))
     per_fold: list[float] = []
     inner_per_fold: list[float] = []
+    excursions: list[float] = []
+    counts: list[int] = []
     total, count, inner, inner_count = 0.0, 0, 0.0, 0
+    input_span = float(np.ptp(x))
     for k in range(folds):
         train, test = keep & (fold != k), keep & (fold == k)
         inner_per_fold.append(math.nan)
+        excursions.append(fold_excursion(x[test], x[train], input_span))
+        counts.append(int(np.count_nonzero(test)))
         if int(np.count_nonzero(train)) < 2 or not np.any(test):
             per_fold.append(math.nan)
             continue
@@ -325,7 +330,8 @@ def fold_line_errors(current: FloatArray, displacement: FloatArray,
     pooled = math.sqrt(total / count) / span if count else math.nan
     interior = math.sqrt(inner / inner_count) / span if inner_count else math.nan
     return FoldErrors(pooled, per_fold, 'line', interior,
-                      1.0 - inner_count / count if count else 0.0, inner_per_fold)
+                      1.0 - inner_count / count if count else 0.0, inner_per_fold,
+                      excursions, counts)
 
 
 def _finish(record: PreparedRecord, design: ScaledDesign, fitter: '_Fitter',
@@ -663,19 +669,24 @@ class _Fitter:
         span = float(np.ptp(displacement))
         per_fold: list[float] = []
         inner_per_fold: list[float] = []
+        excursions: list[float] = []
+        counts: list[int] = []
         total, count = 0.0, 0
         inner, inner_count = 0.0, 0
+        input_span = float(np.ptp(self.xs[:size]))
         for k in range(folds):
             rows = train & (fold == k)
             others = tuple(c for c in range(folds) if c != k)
             fitted = np.isin(classes[:size], others)
-            if np.any(fitted):
-                seen = self.xs[:size][fitted]
+            seen = self.xs[:size][fitted]
+            if seen.size:
                 inside = (self.xs[:size] >= float(np.min(seen))) & (
                     self.xs[:size] <= float(np.max(seen)))
             else:
                 inside = np.zeros(size, dtype=bool)
             inner_per_fold.append(math.nan)
+            excursions.append(fold_excursion(self.xs[:size][rows], seen, input_span))
+            counts.append(int(np.count_nonzero(rows)))
             if not np.any(rows):
                 per_fold.append(math.nan)
                 continue
@@ -704,7 +715,8 @@ class _Fitter:
         pooled = math.sqrt(total / count) / span if count else math.nan
         interior = math.sqrt(inner / inner_count) / span if inner_count else math.nan
         return FoldErrors(pooled, per_fold, rule, interior,
-                          1.0 - inner_count / count if count else 0.0, inner_per_fold)
+                          1.0 - inner_count / count if count else 0.0, inner_per_fold,
+                          excursions, counts)
 
     def _refine_memory(self, chosen: list[Segment], i: int,
                        best: tuple[float, StartState | None, Any],

@@ -524,6 +524,20 @@ def generalized_error_gram(*blocks: FloatArray) -> FloatArray:
     return quadratic
 
 
+#: Largest violation of the invertibility constraints a solve may leave (projected away).
+_FEASIBLE = 1e-6
+#: Tolerance of the second, polished solve of a QP that ended unfinished and infeasible.
+_RETRY_TOLERANCE = 1e-7
+
+
+def _violation(a_mat: Any, lo: FloatArray, v: FloatArray) -> float:
+    # How far a solution breaks the constraints: the equality (36) in row 0, the lower
+    # bounds of the others.
+    resid = a_mat @ np.asarray(v, dtype=np.float64)
+    violation = float(np.max(np.maximum(lo - resid, 0.0)[1:]))
+    return max(violation, abs(float(resid[0]) - 1.0))
+
+
 def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
                           n_hysteresis: int, n_superposition: int,
                           superposition_center: int, epsilon: float = 1e-6,
@@ -618,6 +632,16 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     if warm_start is not None:
         solver.warm_start(x=np.asarray(warm_start, dtype=np.float64))
     res = solver.solve(raise_error=False)
+    if res.info.status_val in (osqp.SolverStatus.OSQP_SOLVED_INACCURATE,
+                               osqp.SolverStatus.OSQP_MAX_ITER_REACHED) and \
+            np.all(np.isfinite(res.x)) and _violation(a_mat, lo, res.x) > _FEASIBLE:
+        # An unfinished solve that is not yet feasible (seen on a creep bank's round of a
+        # 60 s record: 3.4e-5 after 200000 iterations): once more from where it stopped,
+        # to a looser tolerance, polished (the active set's KKT system solved exactly).
+        solver.update_settings(eps_abs=max(tolerance, _RETRY_TOLERANCE),
+                               eps_rel=max(tolerance, _RETRY_TOLERANCE), polishing=True)
+        solver.warm_start(x=res.x, y=res.y)
+        res = solver.solve(raise_error=False)
     # 'solved inaccurate' and 'maximum iterations reached' (tolerances of 1e-9 not met,
     # typical when the data determine some weights only weakly, e.g. no hysteresis) are
     # accepted when the result is finite and feasible: the constraints are re-checked and
@@ -634,10 +658,8 @@ def fit_generalized_error(gram: FloatArray, equality_row: FloatArray, *,
     if not np.all(np.isfinite(v)):
         msg = 'the identification QP returned non-finite weights; check the data for outliers'
         raise IdentificationError(msg)
-    resid = a_mat @ v
-    violation = float(np.max(np.maximum(lo - resid, 0.0)[1:]))
-    violation = max(violation, abs(float(resid[0]) - 1.0))
-    if violation > 1e-6:
+    violation = _violation(a_mat, lo, v)
+    if violation > _FEASIBLE:
         msg = (f'the identification QP result violates the invertibility constraints by'
                f' {violation:.3g} (OSQP status {res.info.status!r}); the data may be'
                ' degenerate')

@@ -120,11 +120,18 @@ class DiscretePreisachCore:
 
 def random_preisach_core(seed: int, *, threshold_min: float = -0.2,
                          threshold_max: float = 2.2, grid: int = 24,
-                         displacement_scale: float = 4.0e-5) -> DiscretePreisachCore:
+                         displacement_scale: float = 4.0e-5,
+                         relays: int | None = None) -> DiscretePreisachCore:
     """
     Draw a discrete Preisach core with a random weight density.
 
-    The relays sit on a ``grid`` x ``grid`` lattice of the half plane ``alpha >= beta``.
+    The relays sit on a ``grid`` x ``grid`` lattice of the half plane ``alpha >= beta``, or,
+    with ``relays``, at that many points drawn uniformly in it.  On the lattice the output
+    is a staircase: it moves only where the input crosses one of the ``grid`` levels, by the
+    weight of the relays there (measured 2026-11-26 on seeds 101, 103 and 105 of the wide
+    diagnosis sweep, 24 levels: a (14, 7) MPI fit misses 2.0-2.6 % of the range on new
+    inputs, the quantisation; with 2000 drawn relays 0.7-1.2 %, as on the smooth built-in
+    core).  A real material switches in many small steps: use ``relays`` for a plant of one.
     Each weight is a gamma draw (shape 0.7: rough, many small and a few large) times a broad
     envelope (a wide Gaussian in the interaction coordinate around a random centre in
     0.7-1.3 A and an exponential in the coercive one with a random scale in 0.15-0.6 A);
@@ -141,6 +148,8 @@ def random_preisach_core(seed: int, *, threshold_min: float = -0.2,
         Lattice points per axis (>= 3).
     displacement_scale : float
         ``s_max`` [m].
+    relays : int, optional
+        Relays drawn uniformly in the half plane instead of the lattice (>= 1).
 
     Returns
     -------
@@ -151,15 +160,23 @@ def random_preisach_core(seed: int, *, threshold_min: float = -0.2,
     if grid < 3 or not threshold_max > threshold_min:
         msg = 'grid must be >= 3 and threshold_max > threshold_min'
         raise ModelError(msg)
+    if relays is not None and relays < 1:
+        msg = f'relays must be >= 1; found {relays}'
+        raise ModelError(msg)
     rng = np.random.default_rng(seed)
-    levels = np.linspace(threshold_min, threshold_max, grid)
-    a, b = np.meshgrid(levels, levels, indexing='ij')
-    keep = a >= b
-    up, down = a[keep], b[keep]
-    coercive, interaction = 0.5 * (up - down), 0.5 * (up + down)
+    if relays is None:
+        levels = np.linspace(threshold_min, threshold_max, grid)
+        a, b = np.meshgrid(levels, levels, indexing='ij')
+        keep = a >= b
+        up, down = a[keep], b[keep]
     centre = rng.uniform(0.7, 1.3)
     spread = rng.uniform(0.35, 0.7)
     scale = rng.uniform(0.15, 0.6)
+    if relays is not None:
+        # Uniform in the half plane: the larger of two uniform draws switches up.
+        pair = rng.uniform(threshold_min, threshold_max, (2, relays))
+        up, down = np.max(pair, axis=0), np.min(pair, axis=0)
+    coercive, interaction = 0.5 * (up - down), 0.5 * (up + down)
     envelope = np.exp(-0.5 * ((interaction - centre) / spread) ** 2 - coercive / scale)
     weights = rng.gamma(0.7, 1.0, up.size) * envelope
     weights /= weights.sum()
