@@ -216,6 +216,105 @@ def read(folder, out, only=None):
               flush=True)
 
 
+#: The compensator's command range [A] in the loop (the excitation's 0.2-1.8 A).
+LOOP_OUTPUT = (0.2, 1.8)
+#: Length of the tracked trajectory [s] after a 1 s lead from rest.
+LOOP_SECONDS = 20.0
+
+
+def loop(folder, results, out):
+    """
+    Track a new trajectory with the plain and the extended compensator, offline.
+
+    For every plant of ``results`` whose verdict names an effect: the plain model is
+    ``identify(order='auto')`` of the training record (the diagnosis' baseline), the
+    extended one the named effect's own fit (two effects: ``fit_composite``), both at
+    order auto, as the closed-loop benchmark fits them.  Each drives a fresh plant through
+    its compensator (feed-forward) along
+    :func:`~mpi_ros.plant.excitation.tracking_trajectory` in the middle 80 % of the
+    training output, 20 s at 1 kHz after a 1 s lead; the row gets the RMS tracking errors
+    (over max|s_c|) and their ratio extended / plain.  Before the compensator takes over,
+    the plant is driven once up to the training record's largest current and down to its
+    smallest (1 s each): it is then in the state every compensator assumes by default
+    (``start='rest_low'``, at rest after a descent to the lowest identified input), so the
+    two models are compared, not two guesses of the record's start.
+    """
+    import warnings
+    from mpi_ros.compensation import Compensator
+    from mpi_ros.extensions import EFFECTS, extended_model_from_params, fit_composite
+    from mpi_ros.model_fit import identify
+    from mpi_ros.plant.excitation import tracking_trajectory
+    rows = _rows(results)
+    done = set()
+    if out.exists():
+        done = {json.loads(line)['name'] for line in out.read_text().splitlines() if line}
+    for row in rows:
+        verdict = row['verdict']
+        if verdict in ('none', 'refused', 'outside_invertible_class') or row['name'] in done:
+            continue
+        meta = json.loads((folder / f'{row["name"]}.json').read_text())
+        d = np.load(folder / f'{row["name"]}.npz')
+        t, x, y = d['t'], d['x'], d['y']
+        started = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore')
+            plain = identify(x, y, order='auto', time=t).model
+            parts = verdict.split(' + ')
+            extended = (fit_composite(t, x, y, parts, order='auto') if len(parts) > 1
+                        else EFFECTS[verdict].fit(t, x, y, order='auto'))
+        keep = t >= t[0] + 1.0
+        lo, hi = np.percentile(y[keep], [0.5, 99.5])
+        span = hi - lo
+        _, tracked = tracking_trajectory(LOOP_SECONDS, sample_rate=RATE, low=lo + 0.1 * span,
+                                         high=hi - 0.1 * span)
+        sweep = np.concatenate([np.linspace(float(np.min(x)), float(np.max(x)), int(RATE)),
+                                np.linspace(float(np.max(x)), float(np.min(x)), int(RATE))])
+        low = float(np.median(y[np.abs(x - np.min(x)) < 0.01 * np.ptp(x)]))
+        lead = np.linspace(low, tracked[0], int(RATE))
+        desired = np.concatenate([lead, tracked])
+        times = (sweep.size + np.arange(desired.size)) / RATE
+        values = {k: v for k, v in meta['values'].items() if k != 'relays'}
+        run = plant(values, meta['seed'], meta['values'].get('relays'))
+        errors = {}
+        for label, model in (('plain', plain), ('extended', extended)):
+            with warnings.catch_warnings():
+                warnings.simplefilter('ignore')
+                comp = Compensator(extended_model_from_params(model.to_params()),
+                                   output_min=LOOP_OUTPUT[0], output_max=LOOP_OUTPUT[1],
+                                   sample_period=1.0 / RATE, start='rest_low')
+                command = comp.command_batch(desired, times)
+            whole = np.arange(sweep.size + desired.size) / RATE
+            measured = run(whole, np.concatenate([sweep, command]),
+                           meta['seed'] + 102)[sweep.size:]
+            e = (measured - desired)[lead.size:]
+            errors[label] = float(np.sqrt(np.mean(e ** 2)) / np.max(np.abs(desired[lead.size:])))
+        line = {'name': row['name'], 'cause': row['cause'], 'verdict': verdict,
+                'core': meta['values']['core'], 'loop_plain': errors['plain'],
+                'loop_extended': errors['extended'],
+                'loop_ratio': errors['extended'] / errors['plain'],
+                'seconds': time.perf_counter() - started}
+        with out.open('a') as f:
+            f.write(json.dumps(line) + '\n')
+        print(row['name'], verdict, f'plain {100 * errors["plain"]:.2f} %',
+              f'extended {100 * errors["extended"]:.2f} %',
+              f'ratio {line["loop_ratio"]:.2f}', flush=True)
+
+
+def loop_summary(path):
+    """Print the loop table of a ``--loop`` results file."""
+    rows = _rows(path)
+    print('| plant | core | verdict | plain RMS % | extended RMS % | ratio |')
+    print('|---|---|---|---|---|---|')
+    for r in rows:
+        print(f'| {r["name"]} | {r["core"]} | {r["verdict"]} | {100 * r["loop_plain"]:.2f} |'
+              f' {100 * r["loop_extended"]:.2f} | {r["loop_ratio"]:.2f} |')
+    right = [r for r in rows if r['verdict'] == r['cause']]
+    ok = [r for r in right if r['loop_ratio'] <= 0.85]
+    ratios = ', '.join(f'{r["loop_ratio"]:.2f}' for r in right)
+    print(f'\nnamed right: {len(right)}; extended <= 0.85 x plain on {len(ok)} of them'
+          f' (ratios {ratios})')
+
+
 def summary(path):
     """Print the confusion matrix, the gains and the acceptance counts of a results file."""
     rows = _rows(path)
@@ -299,11 +398,18 @@ def main(argv=None):
     p.add_argument('--only', nargs='*', help='plant name prefixes to diagnose')
     p.add_argument('--summary', type=Path)
     p.add_argument('--compare', type=Path, nargs=2, metavar=('THIS', 'OTHER'))
+    p.add_argument('--loop', type=Path, nargs=2, metavar=('RESULTS', 'OUT'),
+                   help='with --read: offline tracking, plain vs extended, of the named plants')
+    p.add_argument('--loop-summary', type=Path)
     args = p.parse_args(argv)
     if args.write:
         write(args.write, None if args.lattice_core else PREISACH_RELAYS)
-    if args.read:
+    if args.read and args.loop:
+        loop(args.read, *args.loop)
+    elif args.read:
         read(args.read, args.out, args.only)
+    if args.loop_summary:
+        loop_summary(args.loop_summary)
     if args.summary:
         summary(args.summary)
     if args.compare:
