@@ -29,7 +29,7 @@ from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, Plan
     PlantParameter, SLOW_TIME_LIMIT
 from .fitting import AxisUnits, bound_note, check_series, choose_out_of_sample, \
     fixed_held_out_error, fold_simulations, held_out_error, hold_evidence, Order, residual_axes, \
-    resolve_order, scalar_parameter
+    resolve_order, scalar_parameter, with_record_start
 from .plant_steps import lag_add, lag_state
 from ..identification import identify_weights
 from ..identification.folds import blocked_folds
@@ -244,14 +244,16 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
         np.geomspace(duration / 20.0, 5.0 * duration, 7), refine=2,
         off_error=fixed_held_out_error(baseline, y, folds, scored))
     unknown = {THERMAL_TIME_CONSTANT: 'not identified: no drift (weight 0), no time constant'}
-    if choice.value is None:
-        return replace(off, not_identified=unknown)
-    model, error, _ = _fit_at(t, x, y, n, l, choice.value, epsilon)
-    if not error < off_error:
-        return replace(off, not_identified=unknown)
-    if choice.bound:
-        return replace(model, not_identified={THERMAL_TIME_CONSTANT: bound_note(choice)})
-    return model
+    if choice.value is not None:
+        model, error, _ = _fit_at(t, x, y, n, l, choice.value, epsilon)
+        if error < off_error:
+            started: ThermalDriftModel = with_record_start(model, t, x, y)
+            if choice.bound:
+                return replace(started,
+                               not_identified={THERMAL_TIME_CONSTANT: bound_note(choice)})
+            return started
+    rest: ThermalDriftModel = with_record_start(off, t, x, y)
+    return replace(rest, not_identified=unknown)
 
 
 def _signature(residual: Mapping[str, Any], level: float) -> str:
