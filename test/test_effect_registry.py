@@ -163,10 +163,12 @@ def test_toy_effect_is_fitted_and_a_diagnosis_candidate(toy, tmp_path):
     assert isinstance(fitted, DriveGainModel)
     report = diagnose(Recording(t, x, y, source='toy'), order=(4, 2),
                       causes=('creep', 'drive_gain'))
-    names = [c['cause'] for c in report.candidates]
+    names = [c.cause for c in report.candidates]
     assert names == ['creep', 'drive_gain']
     toy_row = report.candidates[1]
-    assert toy_row['signature'] == 'unavailable' and toy_row['parameter_count'] == 1
+    assert toy_row.signature == 'unavailable' and toy_row.parameter_count == 1
+    # Its fitted value with the unit its effect registers (none: k is a ratio).
+    assert [(p.key, p.unit) for p in toy_row.fitted()] == [(GAIN, '')]
     # The report: a row in the table of models, its signature plot with its own caption.
     files = write_report(report, tmp_path)
     assert 'signature_drive_gain.png' in [f.name for f in files]

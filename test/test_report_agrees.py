@@ -28,8 +28,8 @@ import re
 from mpi_ros.app import diagnose_cli
 from mpi_ros.app.cli import main
 from mpi_ros.diagnosis.diagnose import DiagnosisReport
-from mpi_ros.diagnosis.facts import Extended, RecordFacts, Refusal, Reversals, \
-    ScoredCandidate, Series
+from mpi_ros.diagnosis.facts import Baseline, Extended, OperatingPoint, RecordFacts, \
+    Refusal, Reversals, ScoredCandidate, Series
 from mpi_ros.diagnosis.report import data_units, markdown, report_facts, summary_lines, \
     z_wording
 from mpi_ros.extensions import EFFECTS
@@ -723,6 +723,31 @@ def test_measured_records(tmp_path, capsys, monkeypatch, name, options):
         _count('refusal: verdict, why, holds, units', 4)
         return
     _check_agreement(report, facts, summary, err)
+
+
+def test_json_keys_of_the_candidates_and_the_extended_model():
+    """The JSON keys of a candidate and of the extended model, as users read them."""
+    single = ScoredCandidate('dead_time', 0.01, 0.02, 0.3, 4.0, 7, 0.011, 1e-6, 1,
+                             {'model.dead_time': 0.002}, {}, 'present', True)
+    keys = ['cause', 'rms_error', 'nonlinearity_error', 'gain', 'z', 'bandwidth',
+            'training_rms_error', 'validation_output_offset', 'parameter_count',
+            'parameters', 'not_identified', 'signature', 'significant']
+    assert list(single.to_json()) == keys
+    pair = replace(single, cause='creep + dead_time', parts=['creep', 'dead_time'],
+                   part_gains={'creep': 0.1, 'dead_time': 0.2},
+                   part_z={'creep': 2.0, 'dead_time': 3.0})
+    assert list(pair.to_json()) == [*keys, 'parts', 'part_gains', 'part_z']
+    assert pair.effects == ['creep', 'dead_time'] and single.effects == ['dead_time']
+    assert [(p.name, p.value, p.unit) for p in single.fitted()] == [('dead time', 0.002, 's')]
+    chosen = Extended.of_candidate(single)
+    assert chosen.to_json() == {'cause': 'dead_time', 'rms_error': 0.01,
+                                'nonlinearity_error': 0.02,
+                                'parameters': {'model.dead_time': 0.002}, 'not_identified': {}}
+    baseline = Baseline((8, 4), 0.02, 0.05, 0.018, 0.0, 0.2,
+                        OperatingPoint(0.0, 1e-6, 1))
+    none = Extended.of_baseline(baseline)
+    assert none.to_json() == {**baseline.to_json(), 'parameters': {}, 'not_identified': {}}
+    assert list(none.to_json()) == [*baseline.to_json(), 'parameters', 'not_identified']
 
 
 @pytest.fixture(scope='module', autouse=True)

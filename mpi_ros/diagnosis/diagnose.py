@@ -578,7 +578,8 @@ def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
         extended = Extended.of_baseline(baseline)
     else:
         cause, model, gain = chosen.cause, chosen.model, float(chosen.gain)
-        extended = Extended.of_candidate(public[candidates.index(chosen)])
+        extended = Extended.of_candidate(next(p for c, p in zip(candidates, public)
+                                              if c is chosen))
     evidence = _evidence(cause, baseline, public, residual, sigma, measured, data)
     evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(measured)))
     if extended.not_identified:
