@@ -336,10 +336,37 @@ def _check_candidates(report, summary, err):
     if decision.strength != 'present, weak':
         assert label == f'present, ambiguous: tied with {" and ".join(decision.tied_with)}'
     line = next(x for x in err.splitlines() if x.startswith('ambiguous: '))
+    z_of = {r.cause: r.z_against_chosen for r in decision.ranking}
     for cause in decision.tied_with:
         reason = decision.tie_reasons.get(cause)
         assert f'{cause} is tied with {report.cause}' + (f': {reason}' if reason else '') in line
+        # A tie on the validation data words its z as the z test does (within the noise:
+        # not significant; significantly better: the chosen one significantly worse).
+        said = [re.search(r'(within the noise of|significantly better than) (\S+) on the'
+                          r' validation data \(z (\S+) (<|<=) (\S+)\)', reason or '')]
+        said += [re.match(rf'{re.escape(cause)} is (within the noise of|significantly better'
+                          r' than) (\S+) \(z (\S+) (<|<=) (\S+)\)[^:]*: ambiguous$', step)
+                 for step in decision.steps if step.startswith(f'{cause} is ')]
+        for got in (g for g in said if g is not None):
+            assert got.group(2) == report.cause and _close(got.group(3), z_of[cause])
+            assert got.group(1) == ('within the noise of'
+                                    if z_wording(z_of[cause], zc) == 'not significant'
+                                    else 'significantly better than'), (got.group(0), zc)
+            assert float(got.group(5)) == (zc if got.group(4) == '<' else -zc)
+            if got.group(1) == 'significantly better than':
+                assert (f"{cause}'s physical signature is {by_cause[cause].signature},"
+                        f" {report.cause}'s {chosen.signature}") in got.string
+            _count('tie: z worded as the z test')
         _count('tie: who and why')
+    # The evidence says whether the chosen one ranks first by its gain.
+    top = ranked[0]
+    if chosen.gain >= top.gain:
+        assert f'{chosen.cause} ranks first by its validation gain' in evidence
+    else:
+        assert (f'{chosen.cause} is chosen although {top.cause} has a larger validation gain'
+                in evidence), evidence
+    assert 'ranks first by its validation gain' not in evidence or chosen.gain >= top.gain
+    _count('tie: who ranks first by gain')
     section = summary.split('## Ambiguous', 1)[1].split('\n## ', 1)[0]
     tied = [report.cause, *decision.tied_with]
     shown = re.findall(r'^\d+\. (\S+): gain ([-+]\S+) % \((.+); signature (\w+)\)$', section,

@@ -586,7 +586,7 @@ def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
         evidence += ' ' + _unidentified_sentence(extended.not_identified)
     if decision.ambiguous:
         tied = '; '.join(f'{k} is tied ({v})' for k, v in decision.tie_reasons.items())
-        evidence += (f' Ambiguous: {tied} ({cause} ranks first by its validation gain;'
+        evidence += (f' Ambiguous: {tied} ({_first(chosen, candidates)};'
                      f' {_who_decided(chosen)}).'
                      f' To separate them: {decision.separate_by}.')
     warning = time_base_warning(implausible_time_constants(public, residual), records)
@@ -871,11 +871,33 @@ def _state_ties(decision: Decision, chosen: Candidate | None,
     # Why each is tied, in words written from the same z as the ranking's.
     z_of = {row.cause: row.z_against_chosen for row in decision.ranking}
     decision.tie_reasons = {
-        c.cause: (f'within the noise of {chosen.cause} on the validation data (z'
-                  f' {z_of[c.cause]:.3g} < {z_critical:.4g})' if chosen is not None else '')
+        c.cause: (_tie_reason(c, chosen, z_of[c.cause], z_critical, ' on the validation data')
+                  if chosen is not None else '')
         for c in ties}
     decision.separate_by = (_separation([chosen.cause, *decision.tied_with])
                             if chosen is not None and ties else '')
+
+
+def _first(chosen: Candidate | None, candidates: list[Candidate]) -> str:
+    # Whether the chosen candidate ranks first by its validation gain, in words.
+    name = chosen.cause if chosen is not None else 'none'
+    top = max(candidates, key=lambda c: c.gain)
+    if chosen is None or top.gain <= chosen.gain:
+        return f'{name} ranks first by its validation gain'
+    return f'{name} is chosen although {top.cause} has a larger validation gain'
+
+
+def _tie_reason(c: Candidate, chosen: Candidate, z: float, z_critical: float,
+                where: str = '') -> str:
+    # A tied candidate is one the chosen one does not beat significantly (Z, of the chosen
+    # against it, below z_critical), worded as the z test words Z: within the noise, or
+    # significantly better than the chosen one (which its signature, or the record's
+    # dynamics finding, chose).
+    if z <= -z_critical:
+        return (f'significantly better than {chosen.cause}{where} (z {z:.3g} <='
+                f" -{z_critical:.4g}); {c.cause}'s physical signature is {c.signature},"
+                f" {chosen.cause}'s {chosen.signature}")
+    return f'within the noise of {chosen.cause}{where} (z {z:.3g} < {z_critical:.4g})'
 
 
 def _who_decided(chosen: Candidate | None) -> str:
@@ -1238,8 +1260,7 @@ def _ties(best: Candidate | None, candidates: list[Candidate],
         z, _ = _dm_statistic(residuals[c.cause], residuals[best.cause], bandwidth)
         if z < z_critical:
             tied.append(c)
-            steps.append(f'{c.cause} is within the noise of {best.cause} (z {z:.3g} <'
-                         f' {z_critical:.4g}): ambiguous')
+            steps.append(f'{c.cause} is {_tie_reason(c, best, z, z_critical)}: ambiguous')
     return tied
 
 
