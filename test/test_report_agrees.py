@@ -438,8 +438,10 @@ def _check_sentences(report, facts, summary, err):
         for number in re.finditer(r'(?:error|gain|noise floor|line) ([-+]?\d[\d.]*(?:e[-+]?\d+)?)'
                                   r'(?=[ ,;)])( %)?', line):
             assert number.group(2), line
-        for number in re.finditer(r'offset re-estimated: (\S+)( m)?', line):
+        for number in re.finditer(r'offset re-estimated: (\S+)( [pnµm]?m\b)?', line):
             assert number.group(2), line
+            # 3 significant digits, as every other number.
+            assert len(number.group(1).lstrip('+-').replace('.', '').lstrip('0')) <= 3, line
     _count('stderr units')
 
 

@@ -82,6 +82,7 @@ from .facts import Baseline, Decision, Extended, HoldCount, jsonable, OperatingP
     ScoredPart, Series, StepOnsetCheck
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
+from .notation import length
 from .signatures import burst_signature, hold_segments, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError, MPIWarning
@@ -481,7 +482,8 @@ def _baseline_errors(base: Any, on_validation: Callable[[Any], FloatArray],
         f' {100 * baseline.rms_error:.3g} % of the output range (straight line'
         f' {100 * baseline.linear_rms_error:.3g} %), (37)'
         f' {100 * baseline.nonlinearity_error:.3g} %'
-        + (f'; validation output offset re-estimated: {shift0:+.4g} m' if reestimate else ''))
+        + (f'; validation output offset re-estimated: {"+" if shift0 >= 0.0 else ""}'
+           f'{length(shift0)}' if reestimate else ''))
     return baseline, sim0, r0, sigma
 
 

@@ -31,6 +31,7 @@ from scipy.stats import norm
 
 from .diagnose import DiagnosisReport, z_wording
 from .facts import Baseline, Decision, Residual, Reversals, ScoredCandidate
+from .notation import length, LENGTH_PREFIXES, significant
 from ..extensions import EFFECTS
 from ..extensions.effect import effect_caption, separating_measurement
 from ..extensions.fitting import AxisUnits
@@ -41,8 +42,6 @@ from ..units import INPUT_UNITS, OUTPUT_UNITS, resolve_units
 __all__ = ['report_facts', 'write_report', 'write_json', 'write_extended_params', 'summary_lines',
            'markdown', 'data_units', 'significant', 'z_wording', 'INPUT_UNITS',
            'OUTPUT_UNITS']
-
-_PREFIXES = ((1.0, 'm'), (1e-3, 'mm'), (1e-6, 'µm'), (1e-9, 'nm'), (1e-12, 'pm'))
 
 
 def write_json(report: DiagnosisReport | Mapping[str, Any],
@@ -134,30 +133,6 @@ def data_units(input_name: str = '', output_name: str = '', *, input_scale: floa
     found = units.found or 'input: A, output: m (SI)'
     return {'time': 's', 'input': units.si_input, 'output': 'm',
             'from': f'{found}; read as s, {units.si_input}, m'}
-
-
-def significant(value: Any, digits: int = 3) -> str:
-    """
-    Format a number with ``digits`` significant digits (plain, or exponent when tiny/huge).
-
-    Examples
-    --------
-    >>> significant(0.0065317), significant(66.93), significant(48351.0), significant(5e-23)
-    ('0.00653', '66.9', '4.84e+04', '5.00e-23')
-
-    """
-    if value is None or isinstance(value, bool):
-        return 'n/a'
-    v = float(value)
-    if not math.isfinite(v):
-        return 'n/a'
-    if v == 0.0:
-        return '0'
-    rounded = float(f'{v:.{digits - 1}e}')
-    exponent = math.floor(math.log10(abs(rounded)))
-    if -3 <= exponent < digits:
-        return f'{rounded:.{max(digits - 1 - exponent, 0)}f}'
-    return f'{rounded:.{digits - 1}e}'
 
 
 def summary_lines(report: DiagnosisReport) -> list[str]:
@@ -396,7 +371,7 @@ def _axis_units(units: Mapping[str, str], y: Any) -> AxisUnits:
     if units['output'] != 'm':
         return AxisUnits(current=units['input'], displacement=units['output'])
     span = float(np.ptp(y)) if len(y) else 0.0
-    factor, prefix = next(((f, p) for f, p in _PREFIXES if span >= f), _PREFIXES[-1])
+    factor, prefix = next(((f, p) for f, p in LENGTH_PREFIXES if span >= f), LENGTH_PREFIXES[-1])
     return AxisUnits(current=units['input'], displacement=prefix, scale=1.0 / factor)
 
 
@@ -407,17 +382,6 @@ def _percent(fraction: Any) -> str:
 def _signed_percent(fraction: Any) -> str:
     text = _percent(fraction)
     return text if text.startswith('-') else '+' + text
-
-
-def _length(value: Any, unit: str) -> str:
-    # A length in the data's output unit; metres get the prefix that suits the value.
-    if value is None:
-        return 'n/a'
-    v = float(value)
-    if unit != 'm' or v == 0.0:
-        return f'{significant(v)} {unit}'
-    factor, prefix = next(((f, p) for f, p in _PREFIXES if abs(v) >= f), _PREFIXES[-1])
-    return f'{significant(v / factor)} {prefix}'
 
 
 def _seconds(value: Any) -> str:
@@ -545,7 +509,7 @@ def _candidate_section(report: DiagnosisReport, b: Baseline, decision: Decision,
               ' physical signature is present (or unavailable in this record); the'
               ' largest gain among those wins.  The baseline residual'
               f' {above} {significant(decision.noise_factor)} times the noise'
-              f' floor ({_length(decision.noise_floor, units["output"])}).']
+              f' floor ({length(decision.noise_floor, units["output"])}).']
     return lines + ['']
 
 
@@ -573,16 +537,16 @@ def _evidence_section(residual: Residual, decision: Decision,
                       units: Mapping[str, str]) -> list[str]:
     out = units['output']
     lines = ['## Physical evidence (baseline residual, validation data)', '',
-             f'- Baseline residual RMS {_length(residual.rms, out)}; noise floor'
-             f' {_length(residual.noise_floor, out)}'
+             f'- Baseline residual RMS {length(residual.rms, out)}; noise floor'
+             f' {length(residual.noise_floor, out)}'
              f' ({_percent(residual.noise_floor_relative)} of the output range).',
              f'- Holds: {_holds_of(residual)}.']
     holds = residual.hold_signature
     if holds is not None:
         lines.append(f'- During {holds.holds} hold(s) the residual has a log(t) component'
-                     f' of {_length(holds.log_amplitude, out)} RMS'
+                     f' of {length(holds.log_amplitude, out)} RMS'
                      f' (p = {significant(holds.log_p)}) and a smooth drift of'
-                     f' {_length(holds.drift_amplitude, out)} RMS'
+                     f' {length(holds.drift_amplitude, out)} RMS'
                      f' (p = {significant(holds.drift_p)}).')
     bursts = residual.burst_signature
     if bursts is None:
@@ -625,7 +589,7 @@ def _data_section(report: DiagnosisReport, units: Mapping[str, str]) -> list[str
                  else None)
         lines.append('- The validation record has its own sensor zero: only its output offset'
                      ' is re-estimated, for every model alike (baseline:'
-                     f' {_length(shift, units["output"])}).')
+                     f' {length(shift, units["output"])}).')
     if data.output_sign is not None:
         lines.append(f'- Output sign: {data.output_sign:+d}'
                      + (' (a falling sensor)' if data.output_sign < 0 else '') + '.')
