@@ -103,11 +103,11 @@ def main(argv=None):
             elapsed = time.perf_counter() - started
             ok = r.cause == cause and (cause == 'none' or r.gain >= 0.2)
             failures += not ok
-            cands = '; '.join(f'{c["cause"]} {c["gain"]:+.2f} z{c["z"]:.1f}'
-                              f' {c["signature"][:4]}' for c in r.candidates)
-            chosen = next((c for c in r.candidates if c['cause'] == r.cause), {})
-            each = ', '.join(f'{name} {gain:+.2f}'
-                             for name, gain in chosen.get('part_gains', {}).items())
+            cands = '; '.join(f'{c.cause} {c.gain:+.2f} z{c.z:.1f} {c.signature[:4]}'
+                              for c in r.candidates)
+            chosen = next((c for c in r.candidates if c.cause == r.cause), None)
+            parts = (chosen.part_gains if chosen is not None else None) or {}
+            each = ', '.join(f'{name} {gain:+.2f}' for name, gain in parts.items())
             tie = (f'tied with {", ".join(r.decision["tied_with"])}'
                    if r.decision.get('ambiguous') else 'no')
             print(f'| {cause} | {seed} | {r.cause}{"" if ok else " (FAIL)"} | {r.gain:.2f} |'

@@ -80,9 +80,10 @@ def test_diagnose_names_the_hidden_effect(cause, seed):
         assert report.gain == 0.0
     else:
         assert report.gain > 0.05
-        assert report.extended['rms_error'] < report.baseline['rms_error']
-        chosen = next(c for c in report.candidates if c['cause'] == cause)
-        assert chosen['signature'] == 'present' and chosen['significant']
+        assert report.extended.rms_error < report.baseline.rms_error
+        chosen = next(c for c in report.candidates if c.cause == cause)
+        assert chosen.signature == 'present' and chosen.significant
+        assert report.extended.cause == cause and report.extended.parameters == chosen.parameters
     assert report.baseline['rms_error'] > 0.0       # the truth is not an MPI model
     json.dumps(report.to_json())
 
@@ -95,12 +96,12 @@ def test_an_effect_its_fit_switched_off_is_the_baseline_itself():
     train, val = _experiment('none', 1)
     report = diagnose(train, validation=val)
     off = [c for c in report.candidates
-           if c['parameters'].get('model.rate_dependence.time_constant') == 0.0
-           or c['parameters'].get('model.dead_time') == 0.0]
-    assert off, [c['parameters'] for c in report.candidates]
+           if c.parameters.get('model.rate_dependence.time_constant') == 0.0
+           or c.parameters.get('model.dead_time') == 0.0]
+    assert off, [c.parameters for c in report.candidates]
     for c in off:
-        assert c['gain'] == 0.0 and c['z'] == 0.0, c
-        assert c['rms_error'] == report.baseline['rms_error']
+        assert c.gain == 0.0 and c.z == 0.0, c
+        assert c.rms_error == report.baseline.rms_error
 
 
 @pytest.mark.parametrize('cause', ['none', 'creep', 'rate_dependence', 'thermal_drift',
@@ -118,7 +119,7 @@ def test_diagnose_with_the_sensor_zeroed_in_operation(cause):
     shift = report.baseline['validation_output_offset']
     assert abs(shift - VALIDATION_ZERO) < ZERO_TOLERANCE, shift
     for c in report.candidates:
-        assert abs(c['validation_output_offset'] - VALIDATION_ZERO) < ZERO_TOLERANCE
+        assert abs(c.validation_output_offset - VALIDATION_ZERO) < ZERO_TOLERANCE
     assert 'sensor zero' in report.evidence and f'{shift:+.3g} m' in report.evidence
     assert report.baseline['rms_error'] < 0.1 * report.baseline['linear_rms_error']
 
@@ -142,8 +143,8 @@ def test_verdict_does_not_depend_on_the_zero_or_the_sign():
     for report in (moved, falling):
         assert report.cause == reference.cause
         for a, b in zip(report.candidates, reference.candidates):
-            assert a['gain'] == pytest.approx(b['gain'], abs=1e-6)
-            assert a['rms_error'] == pytest.approx(b['rms_error'], rel=1e-6)
+            assert a.gain == pytest.approx(b.gain, abs=1e-6)
+            assert a.rms_error == pytest.approx(b.rms_error, rel=1e-6)
 
 
 def test_validation_from_another_device_is_refused():
@@ -170,7 +171,7 @@ def test_bag_to_diagnose_report_and_params(tmp_path):
     write_extended_params(report, tmp_path / 'extended.yaml')
     model = extended_model_from_params(read_params_yaml(tmp_path / 'extended.yaml'))
     assert model.cause == 'dead_time'
-    assert abs(model.dead_time - report.extended['parameters']['model.dead_time']) < 1e-12
+    assert abs(model.dead_time - report.extended.parameters['model.dead_time']) < 1e-12
 
 
 def test_split_without_validation_scores_only_the_tail():

@@ -12,7 +12,7 @@ input-side gain, ``actuator.drive_gain``), the simulated actuator and the plant 
 node, over DDS.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import re
 import time
 from typing import Any
@@ -20,7 +20,7 @@ from typing import Any
 from mpi_ros import MPIModel
 from mpi_ros.compensation import Compensator
 from mpi_ros.diagnosis import diagnose
-from mpi_ros.diagnosis.report import markdown, report_facts, write_report
+from mpi_ros.diagnosis.report import markdown, write_report
 from mpi_ros.errors import ModelError
 from mpi_ros.extensions import (Effect, EffectParameter, EFFECTS, extended_model_from_params,
                                 ExtendedModelBase, register_effect, unregister_effect)
@@ -163,10 +163,12 @@ def test_toy_effect_is_fitted_and_a_diagnosis_candidate(toy, tmp_path):
     assert isinstance(fitted, DriveGainModel)
     report = diagnose(Recording(t, x, y, source='toy'), order=(4, 2),
                       causes=('creep', 'drive_gain'))
-    names = [c['cause'] for c in report.candidates]
+    names = [c.cause for c in report.candidates]
     assert names == ['creep', 'drive_gain']
     toy_row = report.candidates[1]
-    assert toy_row['signature'] == 'unavailable' and toy_row['parameter_count'] == 1
+    assert toy_row.signature == 'unavailable' and toy_row.parameter_count == 1
+    # Its fitted value with the unit its effect registers (none: k is a ratio).
+    assert [(p.key, p.unit) for p in toy_row.fitted()] == [(GAIN, '')]
     # The report: a row in the table of models, its signature plot with its own caption.
     files = write_report(report, tmp_path)
     assert 'signature_drive_gain.png' in [f.name for f in files]
@@ -175,10 +177,9 @@ def test_toy_effect_is_fitted_and_a_diagnosis_candidate(toy, tmp_path):
     assert f'![signature_drive_gain.png](signature_drive_gain.png)\n\n*{TOY.caption}*' in summary
     # A tie with creep says what separates them, as the toy's module states it.
     assert separating_measurement(['creep', 'drive_gain']) == SEPARATION
-    facts = report_facts(report)
-    tied = {**facts, 'cause': 'creep',
-            'decision': {**facts['decision'], 'ambiguous': True, 'tied_with': ['drive_gain'],
-                         'tie_reasons': {'drive_gain': 'within the noise'}}}
+    tied = replace(report, cause='creep', decision=replace(
+        report.decision, ambiguous=True, tied_with=['drive_gain'],
+        tie_reasons={'drive_gain': 'within the noise'}))
     assert f'5-40 Hz: {SEPARATION}.' in markdown(tied)
 
 

@@ -1,26 +1,37 @@
 # Copyright 2026 The mpi_ros authors. Licensed under the Apache License, Version 2.0.
 """
-``mpi-ros diagnose``: summary.md, the stderr summary and the plots say what the JSON says.
+``mpi-ros diagnose``: summary.md, the stderr summary and the plots say what the fields say.
 
-Each record goes through the command line as a user runs it; summary.md is parsed back and
-every sentence that states a fact is checked against report.json: the verdict and its
-label (clear, weak, ambiguous), the holds count and the holds the signature test used, the
-bursts, the scored part, every model's errors, gain, z and the z test's wording (table,
-summary line, decision steps, evidence), who decided (the signature or the gain alone), the
-fitted parameters (table, evidence, plot titles and legends, read back from each PNG's
-text), the captions (each effect's own, from the registry) and the units.  No line of
-summary.md may look like JSON or carry more than 4 significant digits, and every error or
-gain printed on stderr is a percentage.  The records: synthetic plants of every effect
-(mpi_ros.plant) and the measured records of ``../shared/data/measured`` when present.
+Each record goes through the command line as a user runs it, and the typed report it
+wrote is kept: its JSON form must be report.json, and summary.md, stderr and the plots'
+words are parsed back and every sentence that states a fact is checked against the typed
+fields (:mod:`mpi_ros.diagnosis.facts`): the verdict and its label (clear, weak,
+ambiguous), the holds count and the holds the signature test used, the bursts, the scored
+part; every candidate's errors, gain, z and the z test's wording (table, summary line,
+decision steps, stderr, evidence), its signature, fitted values with their units and the
+parameters not identified; the extended model (the chosen candidate), who decided (the
+signature or the gain alone), a pair's effects, a weak verdict, the ties (who, why, the
+ranking's gains and z against the chosen one); the fitted parameters in the plot titles
+and legends (read back from each PNG's text), the captions (each effect's own, from the
+registry) and the units.  No line of summary.md may look like JSON or carry more than 4
+significant digits, and every error or gain printed on stderr is a percentage.  The
+records: synthetic plants of every effect (mpi_ros.plant) and the measured records of
+``../shared/data/measured`` when present.
 """
 
+from dataclasses import replace
 import json
 import math
 from pathlib import Path
 import re
 
+from mpi_ros.app import diagnose_cli
 from mpi_ros.app.cli import main
-from mpi_ros.diagnosis.report import data_units, markdown, summary_lines, z_wording
+from mpi_ros.diagnosis.diagnose import DiagnosisReport
+from mpi_ros.diagnosis.facts import Baseline, Extended, OperatingPoint, RecordFacts, \
+    Refusal, Reversals, ScoredCandidate, Series
+from mpi_ros.diagnosis.report import data_units, markdown, report_facts, summary_lines, \
+    z_wording
 from mpi_ros.extensions import EFFECTS
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
@@ -42,15 +53,38 @@ def _record(path, config, *, seconds=20.0, seed=1, **excitation):
     write_csv_columns(path, {'time': t, 'current': x, 'displacement': y})
 
 
-def _diagnose(tmp_path, capsys, data, *extra, order=('8', '4')):
+def _diagnose(tmp_path, capsys, monkeypatch, data, *extra, order=('8', '4')):
     argv = ['diagnose', str(data), '--order', *order, '--json', str(tmp_path / 'r.json'),
             '--report', str(tmp_path / 'report'), *extra]
+    reports = _capture(monkeypatch)
     assert main(argv) == 0, capsys.readouterr().err
     err = capsys.readouterr().err
     facts = json.loads((tmp_path / 'r.json').read_text(encoding='utf-8'))
     summary = (tmp_path / 'report' / 'summary.md').read_text(encoding='utf-8')
-    _check_plots(facts, summary, tmp_path / 'report')
-    return facts, summary, err
+    report = reports[-1]
+    _check_typed_is_json(report, facts)
+    _check_plots(report, summary, tmp_path / 'report')
+    return facts, summary, err, report
+
+
+def _capture(monkeypatch):
+    """Keep the typed report the command line writes (its last call of diagnose)."""
+    reports = []
+    real = diagnose_cli.diagnose
+
+    def keep(*args, **kwargs):
+        reports.append(real(*args, **kwargs))
+        return reports[-1]
+    monkeypatch.setattr(diagnose_cli, 'diagnose', keep)
+    return reports
+
+
+def _check_typed_is_json(report, facts):
+    """Check that the JSON is the typed fields' form, candidates and extended model typed."""
+    assert json.loads(json.dumps(report_facts(report))) == facts
+    assert all(isinstance(c, ScoredCandidate) for c in report.candidates)
+    assert isinstance(report.extended, Extended) == (report.baseline is not None)
+    _count('typed report is the JSON')
 
 
 def _close(text, value):
@@ -58,13 +92,13 @@ def _close(text, value):
     return math.isclose(float(text), value, rel_tol=ROUNDING, abs_tol=1e-12)
 
 
-def _check_agreement(facts, summary, err):
+def _check_agreement(report, facts, summary, err):
     lines = summary.splitlines()
     # Verdict.
     verdict = re.fullmatch(r'\*\*Verdict: (.+?)\*\* \((.+)\)', lines[2])
     assert verdict is not None, lines[:4]
-    assert verdict.group(1) == facts['cause']
-    assert verdict.group(2).startswith('no effect found' if facts['cause'] == 'none'
+    assert verdict.group(1) == report.cause == facts['cause']
+    assert verdict.group(2).startswith('no effect found' if report.cause == 'none'
                                        else 'present')
     # Holds: the count of the JSON, and the holds the signature test used.
     residual = facts['residual']
@@ -82,57 +116,10 @@ def _check_agreement(facts, summary, err):
     assert scored is not None
     assert int(scored.group(1)) == facts['data']['validation_scored']['from_sample']
     assert int(scored.group(2)) == facts['data']['validation_scored']['samples']
-    # Every candidate's gain, errors and z, and the z test's wording.
-    zc = facts['decision']['z_critical']
-    rows = {}
-    for line in lines:
-        row = re.fullmatch(r'\| (\d+) \| (\S+)( \(chosen\))? \| (\S+) % \| (\S+) % \|'
-                           r' (\S+) % \| (\S+) \| ([a-z ]+) \| .*', line)
-        if row:
-            rows[row.group(2)] = row
-    assert sorted(rows) == sorted(c['cause'] for c in facts['candidates'])
-    for c in facts['candidates']:
-        row = rows[c['cause']]
-        assert _close(row.group(4), 100 * c['rms_error'])
-        assert _close(row.group(5), 100 * c['nonlinearity_error'])
-        assert _close(row.group(6), 100 * c['gain'])
-        assert _close(row.group(7), c['z'])
-        wording = ('significantly better' if c['z'] >= zc else
-                   'significantly worse' if c['z'] <= -zc else 'not significant')
-        assert row.group(8) == wording
-        assert bool(row.group(3)) == (c['cause'] == facts['cause'])
-    ranks = [int(rows[c['cause']].group(1)) for c in
-             sorted(facts['candidates'], key=lambda c: -c['gain'])]
-    assert ranks == list(range(1, len(ranks) + 1))
     # Units.
     units = re.search(r'Units: input (\S+), output (\S+), time s', summary)
     assert (units.group(1), units.group(2)) == (facts['data']['units']['input'],
                                                 facts['data']['units']['output'])
-    # Ties.
-    if facts['decision']['ambiguous']:
-        tied = [facts['cause'], *facts['decision']['tied_with']]
-        section = summary.split('## Ambiguous', 1)[1].split('\n## ', 1)[0]
-        for row in facts['decision']['ranking']:
-            if row['cause'] in tied:
-                gain = re.search(rf'\d+\. {row["cause"]}: gain (\S+) %', section)
-                assert gain is not None and _close(gain.group(1), 100 * row['gain'])
-        assert '`mpi-ros diagnose --excitation' in section
-    else:
-        assert '## Ambiguous' not in summary
-    # The decision steps word each z as the table does and say whether it counts (never
-    # "not significant" beside a table's "significantly better").
-    steps = facts['decision'].get('steps', [])
-    for c in facts['candidates']:
-        for step in (s for s in steps if s.startswith(f'{c["cause"]}: gain ')):
-            assert f'({z_wording(c["z"], zc)})' in step, (step, c['z'])
-            assert (', counts;' in step) == c['significant'], step
-    # What decided, worded from the chosen candidate's signature, everywhere.
-    chosen = next((c for c in facts['candidates'] if c['cause'] == facts['cause']), None)
-    said = ' '.join([facts['evidence'], *steps])
-    if chosen is not None and chosen['signature'] == 'unavailable':
-        assert 'the signature decided' not in said
-    elif chosen is not None:
-        assert 'decided on the gain alone' not in said
     # The holds the evidence speaks of are the holds the signature test used.
     if residual['hold_signature'] is not None:
         assert 'no hold of' not in facts['evidence']
@@ -142,14 +129,15 @@ def _check_agreement(facts, summary, err):
                                   line):
             assert number.group(2), line
     # The stderr summary is the summary's head, line by line.
-    for line in summary_lines(facts):
+    for line in summary_lines(report):
         assert line in err.splitlines()
         assert f'- {line[0].upper()}{line[1:]}' in lines
     _check_prose(summary)
-    _check_sentences(facts, summary, err)
+    _check_candidates(report, summary, err)
+    _check_sentences(report, facts, summary, err)
 
 
-#: Sentences checked against the JSON, by kind (counted over the whole module's records).
+#: Sentences checked against the typed fields, by kind (counted over the module's records).
 CHECKED = {}
 
 
@@ -157,70 +145,270 @@ def _count(kind, n=1):
     CHECKED[kind] = CHECKED.get(kind, 0) + n
 
 
-def _check_sentences(facts, summary, err):
-    """Check the sentences beyond the table: label, summary gains, evidence, baseline."""
+def _table_rows(summary):
+    rows = {}
+    for line in summary.splitlines():
+        row = re.fullmatch(r'\| (\d+) \| (.+?)( \(chosen\))? \| (\S+) % \| (\S+) % \|'
+                           r' (\S+) % \| (\S+) \| ([a-z ]+) \| (\w+) \| (.*) \|', line)
+        if row:
+            rows[row.group(2)] = row
+    return rows
+
+
+def _check_fitted(c, text):
+    """Every fitted value of candidate C, with its unit, as TEXT (a table cell) states it."""
+    for p in c.fitted():
+        name = re.escape(p.name)
+        if isinstance(p.value, tuple):
+            if not p.value:
+                continue
+            said = re.search(rf'(?:^|; ){name} (\S+)( [^;| ]+)? to (\S+)( [^;| (]+)?'
+                             r' \((\d+) values\)', text)
+            assert said is not None, (p, text)
+            assert int(said.group(5)) == len(p.value)
+            for number, unit, value in ((said.group(1), said.group(2), min(p.value)),
+                                        (said.group(3), said.group(4), max(p.value))):
+                _check_unit(p, unit, text)
+                assert _close(number, (1e3 if unit == ' ms' else 1.0) * value), (p, text)
+        else:
+            said = re.search(rf'(?:^|; ){name} (\S+)( [^;| ]+)?(?:;|$)', text)
+            assert said is not None, (p, text)
+            _check_unit(p, said.group(2), text)
+            scale = 1e3 if said.group(2) == ' ms' else 1.0
+            assert _close(said.group(1), scale * p.value), (p, text)
+        _count('fitted parameter with its unit (table)')
+
+
+def _check_unit(p, unit, text):
+    # A time in ms or s, every other unit stated with its number (Hz, m, 1/A), none for a
+    # dimensionless value.
+    if p.unit == 's':
+        assert unit in (' ms', ' s'), (p, text)
+    else:
+        assert (unit or '') == (f' {p.unit}' if p.unit else ''), (p, text)
+
+
+def _check_candidates(report, summary, err):
+    """Every sentence naming a candidate's fact, against the typed fields."""
+    decision = report.decision
+    zc = decision.z_critical
+    by_cause = {c.cause: c for c in report.candidates}
+    chosen = by_cause.get(report.cause)
+    assert (chosen is None) == (report.cause == 'none')
+    # The extended model is the chosen candidate (the baseline for none).
+    ext = report.extended
+    if chosen is None:
+        assert ext.cause is None and ext.rms_error == report.baseline.rms_error
+        assert ext.order == report.baseline.order and not ext.parameters
+        assert report.gain == 0.0
+    else:
+        assert (ext.cause, ext.rms_error, ext.nonlinearity_error) == (
+            chosen.cause, chosen.rms_error, chosen.nonlinearity_error)
+        assert ext.parameters == chosen.parameters
+        assert ext.not_identified == chosen.not_identified and report.gain == chosen.gain
+    for c in report.candidates:
+        assert not set(c.not_identified) & set(c.parameters), c
+    _count('extended model is the chosen candidate')
+    # The table: rank by gain, errors, gain, z and its wording, signature, fitted values,
+    # the parameters not identified.
+    rows = _table_rows(summary)
+    assert sorted(rows) == sorted(by_cause)
+    ranked = sorted(report.candidates, key=lambda c: -c.gain)
+    for rank, c in enumerate(ranked, 1):
+        row = rows[c.cause]
+        assert int(row.group(1)) == rank
+        assert bool(row.group(3)) == (c is chosen)
+        assert _close(row.group(4), 100 * c.rms_error)
+        assert _close(row.group(5), 100 * c.nonlinearity_error)
+        assert _close(row.group(6), 100 * c.gain)
+        assert _close(row.group(7), c.z)
+        assert row.group(8) == z_wording(c.z, zc)
+        assert row.group(9) == c.signature
+        cell = row.group(10)
+        _check_fitted(c, cell)
+        said = re.findall(r'; (\S+) not identified \(at a search bound\)', cell)
+        assert said == list(c.not_identified), (cell, c.not_identified)
+        _count('candidate row: rank, errors, gain, z, test, signature', 8)
+        _count('not identified (table)', len(said))
+    # The summary line of gains (summary.md and stderr): every gain, z and wording.
+    line = next(x for x in summary.splitlines() if x.startswith('- Gains on the validation'))
+    said = re.findall(r'(\S+(?: \+ \S+)?) ([-+]\S+) % \(z (\S+), ([a-z ]+)\)',
+                      line.split(': ', 1)[1])
+    assert [cause for cause, *_ in said] == [c.cause for c in ranked]
+    for cause, gain, z, wording in said:
+        c = by_cause[cause]
+        assert _close(gain, 100 * c.gain) and _close(z, c.z)
+        assert wording == z_wording(c.z, zc)
+        _count('gain and significance (summary line)')
+    # A pair: each effect beyond the other alone.
+    each = next((x for x in summary.splitlines() if x.startswith('- Each effect beyond')),
+                None)
+    assert (each is not None) == bool(chosen is not None and chosen.parts)
+    if each is not None:
+        for name in chosen.parts:
+            got = re.search(rf'{re.escape(name)} ([-+]\S+) % \(z (\S+), ([a-z ]+)\)', each)
+            assert _close(got.group(1), 100 * chosen.part_gains[name])
+            assert _close(got.group(2), chosen.part_z[name])
+            assert got.group(3) == z_wording(chosen.part_z[name], zc)
+            _count('pair: each effect')
+    # The decision steps: each candidate's gain, z, wording, whether it counts, signature.
+    for c in report.candidates:
+        for step in (s for s in decision.steps if s.startswith(f'{c.cause}: gain ')):
+            got = re.match(rf'{re.escape(c.cause)}: gain ([-+]\S+) %, z (\S+) \(([a-z ]+)\)',
+                           step)
+            assert _close(got.group(1), 100 * c.gain) and _close(got.group(2), c.z), step
+            assert got.group(3) == z_wording(c.z, zc), step
+            if c.parts:
+                continue
+            assert (', counts;' in step) == c.significant, step
+            assert step.endswith(f'; signature {c.signature}'), step
+            _count('decision step: gain, z, counts, signature', 4)
+    best = [s for s in decision.steps if s.startswith('largest gain among the eligible: ')]
+    for step in best:
+        got = re.match(r'largest gain among the eligible: (\S+) \((\S+) %; (.+)\)$', step)
+        c = by_cause[got.group(1)]
+        assert _close(got.group(2), 100 * c.gain), step
+        assert got.group(3) == (
+            'its signature is unavailable in this record: decided on the gain alone'
+            if c.signature == 'unavailable' else f'its physical signature is {c.signature}')
+        _count('who decided (decision step)')
+    # stderr: each candidate's line as scored, and the verdict's gain and unidentified keys.
+    for c in report.candidates:
+        got = list(re.finditer(rf'^  {re.escape(c.cause)}: validation RMS error (\S+) %'
+                               r' of the output range, gain (\S+) %, z (\S+)$', err,
+                               re.MULTILINE))
+        assert got, c.cause
+        assert _close(got[-1].group(1), 100 * c.rms_error)
+        assert _close(got[-1].group(2), 100 * c.gain) and _close(got[-1].group(3), c.z)
+        _count('stderr: candidate scored', 3)
+    verdict = re.findall(r'^verdict: (.+) \(validation gain (\S+) %(?:; not identified: (.+))?\)$',
+                         err, re.MULTILINE)
+    cause, gain, unknown = verdict[-1]
+    assert cause == report.cause and _close(gain, 100 * report.gain)
+    head = re.fullmatch(r'verdict: (.+?) \((.+?)\)(?:, validation gain (\S+) %)?',
+                        summary_lines(report)[0])
+    assert head.group(1) == report.cause
+    assert (head.group(3) is None) == (report.gain == 0.0)
+    assert head.group(3) is None or _close(head.group(3), 100 * report.gain)
+    assert (unknown.split(', ') if unknown else []) == list(report.extended.not_identified)
+    _count('stderr: verdict, gain, not identified', 3)
+    # The evidence: the chosen gain and z, every gain, who decided, weak, not identified.
+    evidence = report.evidence
+    listing = re.search(r'(?:all: |significantly \()([^;)]+)', evidence).group(1)
+    said = re.findall(r'(\S+(?: \+ \S+)?) ([-+]\d+) %', listing)
+    assert [cause for cause, _ in said] == [c.cause for c in ranked], listing
+    for cause, gain in said:
+        assert int(gain) == round(100 * by_cause[cause].gain), (cause, listing)
+    _count('evidence: every gain', len(said))
+    cut = re.search(r'extension cuts it by (-?\d+) % \(z = (\S+);', evidence)
+    assert (cut is None) == (chosen is None), evidence
+    if chosen is not None:
+        assert int(cut.group(1)) == round(100 * chosen.gain)
+        assert math.isclose(float(cut.group(2)), chosen.z, abs_tol=0.051)
+        for says in re.findall(r'its physical signature is (\w+)', evidence):
+            assert says == chosen.signature, evidence
+        assert ('decided on the gain alone' in evidence) <= (chosen.signature == 'unavailable')
+        _count('evidence: chosen gain, z, who decided', 3)
+    weak = re.search(r'(\S+) is present, weak: its extension cuts the validation error by only'
+                     r' (\d+) %.*physical signature is (\w+);', evidence)
+    assert (weak is not None) == (decision.strength == 'present, weak')
+    if weak is not None:
+        assert weak.group(1) == chosen.cause and int(weak.group(2)) == round(100 * chosen.gain)
+        assert weak.group(3) == chosen.signature
+        _count('evidence: weak', 3)
+    unknown = re.search(r'Not identified \(.*?\): (.+)\.', evidence)
+    assert (unknown is not None) == bool(report.extended.not_identified)
+    if unknown is not None:
+        for key, why in report.extended.not_identified.items():
+            assert f'{key} {why}' in unknown.group(1)
+            _count('evidence: not identified')
+    # Ties: who, why, the ranking's gains and z against the chosen one.
+    assert decision.ambiguous == bool(decision.tied_with)
+    for row in decision.ranking:
+        c = by_cause[row.cause]
+        assert (row.gain, row.significant, row.signature) == (c.gain, c.significant,
+                                                              c.signature)
+    assert [row.cause for row in decision.ranking] == [c.cause for c in ranked]
+    if not decision.ambiguous:
+        assert '## Ambiguous' not in summary and 'ambiguous:' not in err
+        return
+    label = re.search(r'\*\*Verdict: .+?\*\* \((.+)\)', summary).group(1)
+    if decision.strength != 'present, weak':
+        assert label == f'present, ambiguous: tied with {" and ".join(decision.tied_with)}'
+    line = next(x for x in err.splitlines() if x.startswith('ambiguous: '))
+    z_of = {r.cause: r.z_against_chosen for r in decision.ranking}
+    for cause in decision.tied_with:
+        reason = decision.tie_reasons.get(cause)
+        assert f'{cause} is tied with {report.cause}' + (f': {reason}' if reason else '') in line
+        # A tie on the validation data words its z as the z test does (within the noise:
+        # not significant; significantly better: the chosen one significantly worse).
+        said = [re.search(r'(within the noise of|significantly better than) (\S+) on the'
+                          r' validation data \(z (\S+) (<|<=) (\S+)\)', reason or '')]
+        said += [re.match(rf'{re.escape(cause)} is (within the noise of|significantly better'
+                          r' than) (\S+) \(z (\S+) (<|<=) (\S+)\)[^:]*: ambiguous$', step)
+                 for step in decision.steps if step.startswith(f'{cause} is ')]
+        for got in (g for g in said if g is not None):
+            assert got.group(2) == report.cause and _close(got.group(3), z_of[cause])
+            assert got.group(1) == ('within the noise of'
+                                    if z_wording(z_of[cause], zc) == 'not significant'
+                                    else 'significantly better than'), (got.group(0), zc)
+            assert float(got.group(5)) == (zc if got.group(4) == '<' else -zc)
+            if got.group(1) == 'significantly better than':
+                assert (f"{cause}'s physical signature is {by_cause[cause].signature},"
+                        f" {report.cause}'s {chosen.signature}") in got.string
+            _count('tie: z worded as the z test')
+        _count('tie: who and why')
+    # The evidence says whether the chosen one ranks first by its gain.
+    top = ranked[0]
+    if chosen.gain >= top.gain:
+        assert f'{chosen.cause} ranks first by its validation gain' in evidence
+    else:
+        assert (f'{chosen.cause} is chosen although {top.cause} has a larger validation gain'
+                in evidence), evidence
+    assert 'ranks first by its validation gain' not in evidence or chosen.gain >= top.gain
+    _count('tie: who ranks first by gain')
+    section = summary.split('## Ambiguous', 1)[1].split('\n## ', 1)[0]
+    tied = [report.cause, *decision.tied_with]
+    shown = re.findall(r'^\d+\. (\S+): gain ([-+]\S+) % \((.+); signature (\w+)\)$', section,
+                       re.MULTILINE)
+    assert [cause for cause, *_ in shown] == [r.cause for r in decision.ranking
+                                              if r.cause in tied]
+    rows = {r.cause: r for r in decision.ranking}
+    for cause, gain, against, signature in shown:
+        row = rows[cause]
+        assert _close(gain, 100 * row.gain) and signature == row.signature
+        if cause == report.cause:
+            assert against == 'chosen'
+        else:
+            z = re.fullmatch(rf'z (\S+) against {re.escape(report.cause)}', against)
+            assert _close(z.group(1), row.z_against_chosen), against
+        _count('tie: ranked gain, z against the chosen one, signature', 3)
+    assert '`mpi-ros diagnose --excitation' in section
+
+
+def _check_sentences(report, facts, summary, err):
+    """Check the sentences beyond the candidates: label, baseline, holds, bursts, noise."""
     decision, residual = facts['decision'], facts['residual']
-    zc = decision['z_critical']
-    chosen = next((c for c in facts['candidates'] if c['cause'] == facts['cause']), None)
-    by_cause = {c['cause']: c for c in facts['candidates']}
     # The label: ambiguous, weak or clear as the decision says.
     label = re.search(r'\*\*Verdict: .+?\*\* \((.+)\)', summary).group(1)
     assert label.startswith('present, ambiguous') == (
         decision['ambiguous'] and decision.get('strength') != 'present, weak'), label
     assert (label == 'present, weak') == (decision.get('strength') == 'present, weak'), label
     _count('verdict label')
-    # The summary line of gains: every candidate's gain, z and wording.
-    line = next(x for x in summary.splitlines() if x.startswith('- Gains on the validation'))
-    said = re.findall(r'(\S+) ([-+]\S+) % \(z (\S+), ([a-z ]+)\)', line.split(': ', 1)[1])
-    assert sorted(c for c, *_ in said) == sorted(by_cause)
-    for cause, gain, z, wording in said:
-        c = by_cause[cause]
-        assert _close(gain, 100 * c['gain']) and _close(z, c['z'])
-        assert wording == z_wording(c['z'], zc)
-        _count('gain and significance (summary line)')
     # The baseline's row and the straight line.
-    base = facts['baseline']
+    base = report.baseline
     row = re.search(r'\| - \| baseline MPI, order (\d+), (\d+) \| (\S+) % \| (\S+) % \|', summary)
-    assert [int(row.group(1)), int(row.group(2))] == base['order']
-    assert _close(row.group(3), 100 * base['rms_error'])
-    assert _close(row.group(4), 100 * base['nonlinearity_error'])
+    assert (int(row.group(1)), int(row.group(2))) == tuple(base.order)
+    assert _close(row.group(3), 100 * base.rms_error)
+    assert _close(row.group(4), 100 * base.nonlinearity_error)
     line = re.search(r'Straight line fitted on the training data: (\S+) % RMS', summary)
-    assert _close(line.group(1), 100 * base['linear_rms_error'])
+    assert _close(line.group(1), 100 * base.linear_rms_error)
     _count('baseline errors', 2)
-    # Each candidate's fitted scalar parameters, as the table states them.
-    units = {p.key: p.unit for e in EFFECTS.values() for p in e.parameters}
-    for c in facts['candidates']:
-        row = next(x for x in summary.splitlines()
-                   if re.match(rf'\| \d+ \| {re.escape(c["cause"])}( \(chosen\))? \|', x))
-        for key, value in c['parameters'].items():
-            if isinstance(value, list):
-                continue
-            name = key.rsplit('.', 1)[-1].replace('_', ' ')
-            said = re.search(rf'(?:\| |; ){re.escape(name)} (\S+)( ms| s| [^;| ]+)?(?:;| \|)',
-                             row)
-            assert said is not None, (key, row)
-            scale = 1e3 if said.group(2) == ' ms' else 1.0
-            assert units.get(key) != 's' or said.group(2) in (' ms', ' s'), (key, row)
-            # Every other unit is stated with its number (Hz, m, 1/A).
-            assert units.get(key) in ('', 's') or said.group(2) == f' {units[key]}', (key, row)
-            assert _close(said.group(1), scale * value), (key, value, row)
-            _count('fitted parameter (table)')
-        for key in c.get('not_identified', {}):
-            assert f'{key} not identified' in row
-            _count('not identified (table)')
     # The evidence sentence (JSON) and the evidence section (summary.md).
     evidence = facts['evidence']
     miss = re.search(r'misses (\S+) % of the output range', evidence)
-    assert _close(miss.group(1), 100 * base['rms_error'])
+    assert _close(miss.group(1), 100 * base.rms_error)
     _count('evidence: baseline error')
-    cut = re.search(r'extension cuts it by (-?\d+) % \(z = (\S+);', evidence)
-    if chosen is None:
-        assert cut is None and 'no extension reduces it significantly' in evidence
-    else:
-        assert cut is not None, evidence
-        assert int(cut.group(1)) == round(100 * chosen['gain'])
-        assert math.isclose(float(cut.group(2)), chosen['z'], abs_tol=0.051)
-    _count('evidence: chosen gain and z')
     holds = residual['hold_signature']
     used = re.search(r'the hold signature test used (\d+) hold', evidence)
     assert used is None or (holds is not None and int(used.group(1)) == holds['holds'])
@@ -241,13 +429,6 @@ def _check_sentences(facts, summary, err):
     tested = re.search(r'the burst signature test used bursts at (\d+) frequencies', evidence)
     assert tested is None or int(tested.group(1)) == len(bursts['frequencies'])
     _count('bursts (evidence)', 2)
-    # Who decided: the chosen candidate's signature, worded the same everywhere.
-    if chosen is not None:
-        for says in re.findall(r'its physical signature is (\w+)', evidence):
-            assert says == chosen['signature'], evidence
-        gain_alone = 'decided on the gain alone' in evidence
-        assert gain_alone <= (chosen['signature'] == 'unavailable')
-        _count('who decided')
     # The noise floor of the evidence section.
     floor = re.search(r'noise floor \S+ \S+ \((\S+) % of the output range\)', summary)
     assert _close(floor.group(1), 100 * residual['noise_floor_relative'])
@@ -257,8 +438,10 @@ def _check_sentences(facts, summary, err):
         for number in re.finditer(r'(?:error|gain|noise floor|line) ([-+]?\d[\d.]*(?:e[-+]?\d+)?)'
                                   r'(?=[ ,;)])( %)?', line):
             assert number.group(2), line
-        for number in re.finditer(r'offset re-estimated: (\S+)( m)?', line):
+        for number in re.finditer(r'offset re-estimated: (\S+)( [pnµm]?m\b)?', line):
             assert number.group(2), line
+            # 3 significant digits, as every other number.
+            assert len(number.group(1).lstrip('+-').replace('.', '').lstrip('0')) <= 3, line
     _count('stderr units')
 
 
@@ -267,18 +450,19 @@ def _png_text(path):
         return dict(image.text)
 
 
-def _check_plots(facts, summary, folder):
-    """Check each plot's words (title, labels, legend) and its caption against the JSON."""
+def _check_plots(report, summary, folder):
+    """Check each plot's words (title, labels, legend) and its caption against the fields."""
     images = re.findall(r'^!\[(\S+)\]\(\S+\)\n\n\*(.+)\*$', summary, flags=re.MULTILINE)
     assert images, summary[-500:]
-    parameters = {c['cause']: c['parameters'] for c in facts['candidates']}
+    parameters = {c.cause: c.parameters for c in report.candidates}
+    fitted_model = report.baseline is not None
     for name, caption in images:
         text = _png_text(folder / name)
         title, words = text['Title'], text['Description']
         if name in ('loops.png', 'residual.png'):
-            assert ('no extension was chosen' in title) == (facts['cause'] == 'none'), title
-            assert ('no model was fitted' in title) == (not facts['baseline']), title
-            assert ('simulated' in caption) == bool(facts['baseline']), caption
+            assert ('no extension was chosen' in title) == (report.cause == 'none'), title
+            assert ('no model was fitted' in title) == (not fitted_model), title
+            assert ('simulated' in caption) == fitted_model, caption
             _count('plot title: chosen or not')
             continue
         cause = name.removeprefix('signature_').removesuffix('.png')
@@ -327,31 +511,35 @@ def _check_prose(summary):
             assert len(mantissa) <= 4, (number, line)
 
 
-def test_no_effect_record(tmp_path, capsys):
+def test_no_effect_record(tmp_path, capsys, monkeypatch):
     _record(tmp_path / 'data.csv', {})
-    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
-    _check_agreement(facts, summary, err)
+    facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
+                                            tmp_path / 'data.csv')
+    _check_agreement(report, facts, summary, err)
     assert facts['data']['units'] == data_units('current', 'displacement')
     assert (facts['data']['units']['input'], facts['data']['units']['output']) == ('A', 'm')
 
 
-def test_creep_record_with_holds(tmp_path, capsys):
+def test_creep_record_with_holds(tmp_path, capsys, monkeypatch):
     _record(tmp_path / 'data.csv', {'creep_gain': 0.06}, seconds=30.0, hold_duration=2.0)
-    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
+                                            tmp_path / 'data.csv')
     assert facts['residual']['holds']['count'] > 0          # the record holds the input
-    _check_agreement(facts, summary, err)
+    _check_agreement(report, facts, summary, err)
 
 
-def test_tie_is_ranked_with_how_to_separate(tmp_path, capsys):
+def test_tie_is_ranked_with_how_to_separate(tmp_path, capsys, monkeypatch):
     """A 10 ms dead time without holds or bursts: the record cannot separate the causes."""
     _record(tmp_path / 'data.csv', {'dead_time_s': 0.01}, holds=False, bursts=False)
-    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
+    facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
+                                            tmp_path / 'data.csv')
     assert facts['decision']['ambiguous'], facts['decision']['steps']
-    _check_agreement(facts, summary, err)
+    _check_agreement(report, facts, summary, err)
     assert 'ambiguous' in err
 
 
-def test_dead_time_validation_scored_from_a_later_sample_in_volts_and_nm(tmp_path, capsys):
+def test_dead_time_validation_scored_from_a_later_sample_in_volts_and_nm(
+        tmp_path, capsys, monkeypatch):
     """A separate validation record in V and nm, with its own zero, scored after its burn-in."""
     cfg = ActuatorConfig(noise_std_m=NOISE, dead_time_s=0.0099)
     t, x = identification_excitation(20.0, sample_rate=1000.0, seed=1)
@@ -361,19 +549,20 @@ def test_dead_time_validation_scored_from_a_later_sample_in_volts_and_nm(tmp_pat
         y = MagnetostrictiveActuator(cfg, seed=seed).simulate(tk, xk)
         columns = {'time': tk, 'u_V': 10.0 * xk, 'D1_nm': (zero - y) * 1e9}
         write_csv_columns(tmp_path / f'{name}.csv', columns)
-    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv', '--validate',
-                                    str(tmp_path / 'val.csv'), '--output-scale', '1e-9')
+    facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
+                                            tmp_path / 'data.csv', '--validate',
+                                            str(tmp_path / 'val.csv'), '--output-scale', '1e-9')
     assert facts['data']['validation_scored']['from_sample'] > 0
     assert (facts['data']['units']['input'], facts['data']['units']['output']) == ('V', 'm')
-    _check_agreement(facts, summary, err)
+    _check_agreement(report, facts, summary, err)
     assert 'current [A]' not in summary and 'input V' in summary
     # The fitted dead time, 3 significant digits, in the table; the sensor zero in nm or um.
-    chosen = next(c for c in facts['candidates'] if c['cause'] == 'dead_time')
+    chosen = next(c for c in report.candidates if c.cause == 'dead_time')
     fitted = re.search(r'\| dead time (\S+) ms \|', summary)
-    assert _close(fitted.group(1), 1e3 * chosen['parameters']['model.dead_time'])
+    assert _close(fitted.group(1), 1e3 * chosen.parameters['model.dead_time'])
     shift = re.search(r'\(baseline: (\S+) (µm|nm)\)', summary)
     factor = 1e6 if shift.group(2) == 'µm' else 1e9
-    assert _close(shift.group(1), factor * facts['baseline']['validation_output_offset'])
+    assert _close(shift.group(1), factor * report.baseline.validation_output_offset)
 
 
 @pytest.mark.parametrize('names, scales, expected', [
@@ -390,21 +579,22 @@ def test_units_from_the_names_and_scales(names, scales, expected):
     assert (units['input'], units['output']) == expected
 
 
-def test_combined_and_weak_verdicts_are_written(tmp_path, capsys):
+def test_combined_and_weak_verdicts_are_written(tmp_path, capsys, monkeypatch):
     """A verdict of two causes joined by ' + ' and the label 'present, weak' reach the prose."""
     _record(tmp_path / 'data.csv', {})
-    facts, _, _ = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
-    first, second = facts['candidates'][:2]
-    combined = {**first, 'cause': f'{first["cause"]} + {second["cause"]}',
-                'parameters': {**first['parameters'], **second['parameters']}}
-    facts = {**facts, 'cause': combined['cause'], 'gain': 0.1,
-             'candidates': [*facts['candidates'], combined],
-             'decision': {**facts['decision'], 'verdict': 'present, weak',
-                          'weak_reason': 'the gain 0.1 is below 0.2'}}
-    text = markdown(facts)
-    assert f'**Verdict: {combined["cause"]}** (present, weak)' in text
+    _, _, _, report = _diagnose(tmp_path, capsys, monkeypatch, tmp_path / 'data.csv')
+    first, second = report.candidates[:2]
+    combined = replace(first, cause=f'{first.cause} + {second.cause}',
+                       parameters={**first.parameters, **second.parameters})
+    report = replace(report, cause=combined.cause, gain=0.1,
+                     candidates=[*report.candidates, combined],
+                     decision=replace(report.decision, strength='present, weak',
+                                      weak_reason='the gain 0.1 is below 0.2'))
+    text = markdown(report)
+    assert f'**Verdict: {combined.cause}** (present, weak)' in text
     assert 'Weak: the gain 0.1 is below 0.2' in text
-    assert re.search(rf'\| \d+ \| {re.escape(combined["cause"])} \(chosen\) \|', text)
+    assert re.search(rf'\| \d+ \| {re.escape(combined.cause)} \(chosen\) \|', text)
+    _check_fitted(combined, _table_rows(text)[combined.cause].group(10))
     _check_prose(text)
 
 
@@ -481,29 +671,30 @@ def test_resonance_plot_of_a_sine_says_there_is_no_step_and_has_a_caption():
     EFFECTS['resonance'].plot(ax, t, x, x, x, x, 0, parameters={})
     assert 'after the largest input step' in ax.get_title()
     plt.close(fig)
-    facts = {'cause': 'none', 'gain': 0.0, 'candidates': [], 'baseline': {}, 'data': {},
-             'evidence': ''}
-    text = markdown(facts, images=['signature_resonance.png', 'signature_creep.png'])
+    report = DiagnosisReport(cause='none', baseline=None, extended=None, gain=0.0,
+                             candidates=[], evidence='', residual=Reversals(0.0, 0),
+                             decision=Refusal(''), data=RecordFacts('', 0, ''),
+                             series=Series(t, x, x, 0))
+    text = markdown(report, images=['signature_resonance.png', 'signature_creep.png'])
     captions = re.findall(r'^\*(.+)\*$', text, flags=re.MULTILINE)
     assert len(captions) == 2 and all(not c.endswith('.png') for c in captions), captions
     assert captions[0].startswith('Resonance:')
 
 
-def test_a_pair_states_each_effect_and_a_weak_strength(tmp_path, capsys):
+def test_a_pair_states_each_effect_and_a_weak_strength(tmp_path, capsys, monkeypatch):
     """The diagnosis' keys: a pair's parts with each gain, decision.strength 'present, weak'."""
     _record(tmp_path / 'data.csv', {})
-    facts, _, _ = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
-    first, second = facts['candidates'][:2]
-    names = sorted([first['cause'], second['cause']])
-    pair = {**first, 'cause': ' + '.join(names), 'gain': 0.15, 'parts': names,
-            'part_gains': {names[0]: 0.12, names[1]: 0.09},
-            'part_z': {names[0]: 2.5, names[1]: -1.8}}
-    facts = {**facts, 'cause': pair['cause'], 'gain': 0.15,
-             'candidates': [*facts['candidates'], pair],
-             'decision': {**facts['decision'], 'strength': 'present, weak',
-                          'weak_reason': f'{pair["cause"]} is present, weak'}}
-    text = markdown(facts)
-    assert f'**Verdict: {pair["cause"]}** (present, weak)' in text
+    _, _, _, report = _diagnose(tmp_path, capsys, monkeypatch, tmp_path / 'data.csv')
+    first, second = report.candidates[:2]
+    names = sorted([first.cause, second.cause])
+    pair = replace(first, cause=' + '.join(names), gain=0.15, parts=names,
+                   part_gains={names[0]: 0.12, names[1]: 0.09},
+                   part_z={names[0]: 2.5, names[1]: -1.8})
+    report = replace(report, cause=pair.cause, gain=0.15, candidates=[*report.candidates, pair],
+                     decision=replace(report.decision, strength='present, weak',
+                                      weak_reason=f'{pair.cause} is present, weak'))
+    text = markdown(report)
+    assert f'**Verdict: {pair.cause}** (present, weak)' in text
     assert (f'{names[0]} +12.0 % (z 2.50, significantly better), {names[1]} +9.00 % (z -1.80,'
             ' significantly worse)') in text
     _check_prose(text)
@@ -514,11 +705,12 @@ def test_a_pair_states_each_effect_and_a_weak_strength(tmp_path, capsys):
     {'thermal_gain_m_per_a2': 1.2e-6},
     {'resonance_frequency_hz': 120.0},
 ], ids=['rate_dependence', 'thermal_drift', 'resonance'])
-def test_synthetic_plants_of_every_effect(tmp_path, capsys, config):
+def test_synthetic_plants_of_every_effect(tmp_path, capsys, monkeypatch, config):
     """A plant of each other effect (seeds fixed before looking), through the command line."""
     _record(tmp_path / 'data.csv', config, seed=3)
-    facts, summary, err = _diagnose(tmp_path, capsys, tmp_path / 'data.csv')
-    _check_agreement(facts, summary, err)
+    facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
+                                            tmp_path / 'data.csv')
+    _check_agreement(report, facts, summary, err)
 
 
 @pytest.mark.parametrize('name, options', [
@@ -527,13 +719,14 @@ def test_synthetic_plants_of_every_effect(tmp_path, capsys, config):
     ('pnzt-aixacct-tue/csv/SLOW_table01_TEST_0_1Hz.csv',
      ('--time-column', 'Time_s', '--input-column', 'Vplus_V', '--output-column', 'D1_nm')),
 ])
-def test_measured_records(tmp_path, capsys, name, options):
+def test_measured_records(tmp_path, capsys, monkeypatch, name, options):
     """Real records of ../shared/data/measured (skipped when absent), with their own units."""
     path = MEASURED / name
     if not path.exists():
         pytest.skip(f'{name} is not in ../shared/data/measured')
     argv = ['diagnose', str(path), *options, '--order', '8', '4', '--json',
             str(tmp_path / 'r.json'), '--report', str(tmp_path / 'report')]
+    reports = _capture(monkeypatch)
     code = main(argv)
     err = capsys.readouterr().err
     if code != 0:                          # a refusal: one line naming the cause, no report
@@ -542,8 +735,10 @@ def test_measured_records(tmp_path, capsys, name, options):
         pytest.skip(f'diagnose refuses {name}: {err.strip().splitlines()[-1]}')
     facts = json.loads((tmp_path / 'r.json').read_text(encoding='utf-8'))
     summary = (tmp_path / 'report' / 'summary.md').read_text(encoding='utf-8')
-    _check_plots(facts, summary, tmp_path / 'report')
-    if facts['cause'] == 'outside_invertible_class':
+    report = reports[-1]
+    _check_typed_is_json(report, facts)
+    _check_plots(report, summary, tmp_path / 'report')
+    if report.cause == 'outside_invertible_class':
         # No model: the verdict, why, and the units; no table, no gains.
         assert summary.splitlines()[2] == ('**Verdict: outside_invertible_class** (outside the'
                                            ' invertible class: no model fitted)')
@@ -556,12 +751,37 @@ def test_measured_records(tmp_path, capsys, name, options):
         _check_prose(summary)
         _count('refusal: verdict, why, holds, units', 4)
         return
-    _check_agreement(facts, summary, err)
+    _check_agreement(report, facts, summary, err)
+
+
+def test_json_keys_of_the_candidates_and_the_extended_model():
+    """The JSON keys of a candidate and of the extended model, as users read them."""
+    single = ScoredCandidate('dead_time', 0.01, 0.02, 0.3, 4.0, 7, 0.011, 1e-6, 1,
+                             {'model.dead_time': 0.002}, {}, 'present', True)
+    keys = ['cause', 'rms_error', 'nonlinearity_error', 'gain', 'z', 'bandwidth',
+            'training_rms_error', 'validation_output_offset', 'parameter_count',
+            'parameters', 'not_identified', 'signature', 'significant']
+    assert list(single.to_json()) == keys
+    pair = replace(single, cause='creep + dead_time', parts=['creep', 'dead_time'],
+                   part_gains={'creep': 0.1, 'dead_time': 0.2},
+                   part_z={'creep': 2.0, 'dead_time': 3.0})
+    assert list(pair.to_json()) == [*keys, 'parts', 'part_gains', 'part_z']
+    assert pair.effects == ['creep', 'dead_time'] and single.effects == ['dead_time']
+    assert [(p.name, p.value, p.unit) for p in single.fitted()] == [('dead time', 0.002, 's')]
+    chosen = Extended.of_candidate(single)
+    assert chosen.to_json() == {'cause': 'dead_time', 'rms_error': 0.01,
+                                'nonlinearity_error': 0.02,
+                                'parameters': {'model.dead_time': 0.002}, 'not_identified': {}}
+    baseline = Baseline((8, 4), 0.02, 0.05, 0.018, 0.0, 0.2,
+                        OperatingPoint(0.0, 1e-6, 1))
+    none = Extended.of_baseline(baseline)
+    assert none.to_json() == {**baseline.to_json(), 'parameters': {}, 'not_identified': {}}
+    assert list(none.to_json()) == [*baseline.to_json(), 'parameters', 'not_identified']
 
 
 @pytest.fixture(scope='module', autouse=True)
 def _sentences_checked():
     """Print how many sentences of each kind were checked (shown with -s or -rA)."""
     yield
-    print('\nsentences checked against the JSON:', ', '.join(
+    print('\nsentences checked against the typed report:', ', '.join(
         f'{kind} {n}' for kind, n in sorted(CHECKED.items())), f'(total {sum(CHECKED.values())})')

@@ -224,5 +224,5 @@ def test_the_diagnosis_names_the_resonance_on_a_ringing_record():
                       order=(10, 5))
     assert report.cause == 'resonance', report.decision['steps']
     assert report.gain > 0.5
-    chosen = next(c for c in report.candidates if c['cause'] == 'resonance')
-    assert chosen['signature'] == 'unavailable' and chosen['significant']
+    chosen = next(c for c in report.candidates if c.cause == 'resonance')
+    assert chosen.signature == 'unavailable' and chosen.significant

@@ -236,11 +236,11 @@ def diagnose_main(argv: Sequence[str] | None = None) -> int:
         report = diagnose(data, validation=validation, split=args.split, order=order,
                           progress=say)
         report.data['units'] = _units(args)
-        facts = report_facts(report)       # the JSON, the summary and summary.md: one dict
+        # The JSON, the summary and summary.md are written from the report's typed fields.
         # The folder first, the JSON last: a JSON of this run means a complete folder.
-        files = write_report(report, args.report, facts=facts)
-        write_json(facts, args.json)
-        for line in summary_lines(facts):
+        files = write_report(report, args.report)
+        write_json(report_facts(report), args.json)
+        for line in summary_lines(report):
             progress.say(line)
         say(f'wrote {args.json} and {len(files)} file(s) in {args.report}')
         if args.params_out:

@@ -67,7 +67,8 @@ Procedure (documented in ``docs/diagnosis.md``):
 """
 
 from collections.abc import Iterator, Mapping
-from dataclasses import asdict, dataclass, field, replace
+from copy import deepcopy
+from dataclasses import dataclass, field, replace
 from functools import partial
 import math
 from typing import Any, Callable
@@ -76,11 +77,12 @@ from warnings import catch_warnings, simplefilter
 import numpy as np
 import numpy.typing as npt
 
-from .facts import Baseline, Decision, HoldCount, jsonable, OperatingPoint, Ranked, \
-    RecordFacts, Refusal, Residual, ReturnPoints, Reversals, ScoredPart, Series, \
-    StepOnsetCheck
+from .facts import Baseline, Decision, Extended, HoldCount, jsonable, OperatingPoint, \
+    Ranked, RecordFacts, Refusal, Residual, ReturnPoints, Reversals, ScoredCandidate, \
+    ScoredPart, Series, StepOnsetCheck
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
+from .notation import length
 from .signatures import burst_signature, hold_segments, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError, MPIWarning
@@ -127,15 +129,17 @@ class DiagnosisReport:
     baseline : Baseline or None
         Gamma on the validation data (:class:`~mpi_ros.diagnosis.facts.Baseline`); None
         when no model was fitted.
-    extended : dict
-        The same for the chosen model (the baseline for ``none``), plus ``parameters``.
+    extended : Extended or None
+        The same for the chosen model (the baseline for ``none``), plus ``parameters`` and
+        ``not_identified`` (:class:`~mpi_ros.diagnosis.facts.Extended`); None when no
+        model was fitted.
     gain : float
         Relative reduction of the validation RMS error, 0..1 (0 for ``none``).
-    candidates : list of dict
-        Per candidate: ``cause``, ``rms_error``, ``nonlinearity_error``, ``gain``,
-        ``validation_output_offset``,
-        ``z`` (Diebold-Mariano statistic), ``bandwidth`` (HAC lags), ``significant``,
-        ``signature`` (``present``, ``absent`` or ``unavailable``), ``parameters``.
+    candidates : list of ScoredCandidate
+        Per candidate: ``cause``, its errors, ``gain``, ``z`` (Diebold-Mariano statistic),
+        ``bandwidth`` (HAC lags), ``significant``, ``signature`` (``present``, ``absent`` or
+        ``unavailable``), ``parameters`` (with units: ``fitted()``), ``not_identified``, a
+        pair's ``parts`` (:class:`~mpi_ros.diagnosis.facts.ScoredCandidate`).
     evidence : str
         One or two sentences a control engineer can check.
     residual : Residual or Reversals
@@ -162,9 +166,9 @@ class DiagnosisReport:
 
     cause: str
     baseline: Baseline | None
-    extended: dict[str, Any]
+    extended: Extended | None
     gain: float
-    candidates: list[dict[str, Any]]
+    candidates: list[ScoredCandidate]
     evidence: str
     residual: Residual | Reversals
     decision: Decision | Refusal
@@ -178,7 +182,8 @@ class DiagnosisReport:
         form: dict[str, Any] = jsonable({
             'cause': self.cause, 'gain': self.gain, 'evidence': self.evidence,
             'baseline': self.baseline if self.baseline is not None else {},
-            'extended': self.extended, 'candidates': self.candidates,
+            'extended': self.extended if self.extended is not None else {},
+            'candidates': self.candidates,
             'residual': self.residual, 'decision': self.decision, 'data': self.data,
             'warnings': self.warnings})
         return form
@@ -396,7 +401,7 @@ def _outside_class(training: tuple[FloatArray, FloatArray, FloatArray],
     if not check.inside:
         say(f'outside the invertible class: {check.reason}')
         return DiagnosisReport(
-            cause=OUTSIDE_INVERTIBLE_CLASS, baseline=None, extended={}, gain=0.0,
+            cause=OUTSIDE_INVERTIBLE_CLASS, baseline=None, extended=None, gain=0.0,
             candidates=[], evidence=check.reason[0].upper() + check.reason[1:] + '.',
             residual=Reversals(check.reversal_ratio, check.branches),
             decision=Refusal('invertible-class check failed; no model fitted'), data=data,
@@ -477,7 +482,8 @@ def _baseline_errors(base: Any, on_validation: Callable[[Any], FloatArray],
         f' {100 * baseline.rms_error:.3g} % of the output range (straight line'
         f' {100 * baseline.linear_rms_error:.3g} %), (37)'
         f' {100 * baseline.nonlinearity_error:.3g} %'
-        + (f'; validation output offset re-estimated: {shift0:+.4g} m' if reestimate else ''))
+        + (f'; validation output offset re-estimated: {"+" if shift0 >= 0.0 else ""}'
+           f'{length(shift0)}' if reestimate else ''))
     return baseline, sim0, r0, sigma
 
 
@@ -568,24 +574,21 @@ def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
     # The verdict, the extended model's errors, the evidence sentences, the
     # warnings (time constants the time base makes implausible, the drift, the range).
     (measured, sigma), (drift, outside) = scored, notes
+    public = [c.public() for c in candidates]
     if chosen is None:
-        cause, model, extended, gain = 'none', base_model, baseline.to_dict(), 0.0
+        cause, model, gain = 'none', base_model, 0.0
+        extended = Extended.of_baseline(baseline)
     else:
         cause, model, gain = chosen.cause, chosen.model, float(chosen.gain)
-        extended = {'cause': cause, 'rms_error': chosen.rms_error,
-                    'nonlinearity_error': chosen.nonlinearity_error,
-                    'parameters': chosen.parameters,
-                    'not_identified': dict(chosen.not_identified)}
-    extended.setdefault('parameters', {})
-    extended.setdefault('not_identified', {})
-    public = [c.public() for c in candidates]
+        extended = Extended.of_candidate(next(p for c, p in zip(candidates, public)
+                                              if c is chosen))
     evidence = _evidence(cause, baseline, public, residual, sigma, measured, data)
     evidence += _strength(decision, chosen, baseline, sigma, float(np.ptp(measured)))
-    if extended['not_identified']:
-        evidence += ' ' + _unidentified_sentence(extended['not_identified'])
+    if extended.not_identified:
+        evidence += ' ' + _unidentified_sentence(extended.not_identified)
     if decision.ambiguous:
         tied = '; '.join(f'{k} is tied ({v})' for k, v in decision.tie_reasons.items())
-        evidence += (f' Ambiguous: {tied} ({cause} ranks first by its validation gain;'
+        evidence += (f' Ambiguous: {tied} ({_first(chosen, candidates)};'
                      f' {_who_decided(chosen)}).'
                      f' To separate them: {decision.separate_by}.')
     warning = time_base_warning(implausible_time_constants(public, residual), records)
@@ -593,8 +596,8 @@ def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
     warnings += [text for text in (drift.describe(), outside) if text]
     for text in warnings:
         say(f'warning: {text}')
-    unidentified = (f'; not identified: {", ".join(extended["not_identified"])}'
-                    if extended['not_identified'] else '')
+    unidentified = (f'; not identified: {", ".join(extended.not_identified)}'
+                    if extended.not_identified else '')
     say(f'verdict: {cause} (validation gain {100 * gain:.3g} %{unidentified})')
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
@@ -730,14 +733,15 @@ class Candidate:
     part_gains: dict[str, float] = field(default_factory=dict)
     part_z: dict[str, float] = field(default_factory=dict)
 
-    def public(self) -> dict[str, Any]:
+    def public(self) -> ScoredCandidate:
         """Return the report's form (no model; a pair's parts only for a pair)."""
-        form = {k: v for k, v in asdict(self).items()
-                if k not in ('model', 'parts', 'part_gains', 'part_z')}
-        if self.parts:
-            form.update(parts=list(self.parts), part_gains=dict(self.part_gains),
-                        part_z=dict(self.part_z))
-        return form
+        pair = bool(self.parts)
+        return ScoredCandidate(
+            self.cause, self.rms_error, self.nonlinearity_error, self.gain, self.z,
+            self.bandwidth, self.training_rms_error, self.validation_output_offset,
+            self.parameter_count, deepcopy(self.parameters), dict(self.not_identified),
+            self.signature, self.significant, list(self.parts) if pair else None,
+            dict(self.part_gains) if pair else None, dict(self.part_z) if pair else None)
 
 
 class _Scorer:
@@ -869,11 +873,33 @@ def _state_ties(decision: Decision, chosen: Candidate | None,
     # Why each is tied, in words written from the same z as the ranking's.
     z_of = {row.cause: row.z_against_chosen for row in decision.ranking}
     decision.tie_reasons = {
-        c.cause: (f'within the noise of {chosen.cause} on the validation data (z'
-                  f' {z_of[c.cause]:.3g} < {z_critical:.4g})' if chosen is not None else '')
+        c.cause: (_tie_reason(c, chosen, z_of[c.cause], z_critical, ' on the validation data')
+                  if chosen is not None else '')
         for c in ties}
     decision.separate_by = (_separation([chosen.cause, *decision.tied_with])
                             if chosen is not None and ties else '')
+
+
+def _first(chosen: Candidate | None, candidates: list[Candidate]) -> str:
+    # Whether the chosen candidate ranks first by its validation gain, in words.
+    name = chosen.cause if chosen is not None else 'none'
+    top = max(candidates, key=lambda c: c.gain)
+    if chosen is None or top.gain <= chosen.gain:
+        return f'{name} ranks first by its validation gain'
+    return f'{name} is chosen although {top.cause} has a larger validation gain'
+
+
+def _tie_reason(c: Candidate, chosen: Candidate, z: float, z_critical: float,
+                where: str = '') -> str:
+    # A tied candidate is one the chosen one does not beat significantly (Z, of the chosen
+    # against it, below z_critical), worded as the z test words Z: within the noise, or
+    # significantly better than the chosen one (which its signature, or the record's
+    # dynamics finding, chose).
+    if z <= -z_critical:
+        return (f'significantly better than {chosen.cause}{where} (z {z:.3g} <='
+                f" -{z_critical:.4g}); {c.cause}'s physical signature is {c.signature},"
+                f" {chosen.cause}'s {chosen.signature}")
+    return f'within the noise of {chosen.cause}{where} (z {z:.3g} < {z_critical:.4g})'
 
 
 def _who_decided(chosen: Candidate | None) -> str:
@@ -1168,10 +1194,11 @@ def z_wording(z: float | None, z_critical: float) -> str:
 
     ``z >= z_critical``: significantly better; ``z <= -z_critical``: significantly worse;
     else not significant (``z_critical`` the one-sided critical value the diagnosis used).
-    The decision steps, the JSON and the report word every z with this one function.
+    The decision steps, the JSON and the report word every z with this one function; a z
+    that is no number (None in the JSON, NaN in the report's fields) is 'not tested'.
 
     """
-    if z is None:
+    if z is None or not math.isfinite(z):
         return 'not tested'
     if z >= z_critical:
         return 'significantly better'
@@ -1235,8 +1262,7 @@ def _ties(best: Candidate | None, candidates: list[Candidate],
         z, _ = _dm_statistic(residuals[c.cause], residuals[best.cause], bandwidth)
         if z < z_critical:
             tied.append(c)
-            steps.append(f'{c.cause} is within the noise of {best.cause} (z {z:.3g} <'
-                         f' {z_critical:.4g}): ambiguous')
+            steps.append(f'{c.cause} is {_tie_reason(c, best, z, z_critical)}: ambiguous')
     return tied
 
 
@@ -1402,7 +1428,7 @@ def _corr(a: FloatArray, b: FloatArray) -> float:
     return float(np.corrcoef(a, b)[0, 1])
 
 
-def _evidence(cause: str, baseline: Baseline, candidates: list[dict[str, Any]],
+def _evidence(cause: str, baseline: Baseline, candidates: list[ScoredCandidate],
               residual: Residual, sigma: float, y: FloatArray, data: RecordFacts) -> str:
     span = float(np.ptp(y))
     shift = baseline.validation_output_offset
@@ -1411,12 +1437,12 @@ def _evidence(cause: str, baseline: Baseline, candidates: list[dict[str, Any]],
             if data.output_offset_reestimated else '')
     base = (f'The MPI simulation misses {100 * baseline.rms_error:.2f} % of the output range'
             f' (RMS) on validation data (noise floor {100 * sigma / span:.2f} %{zero})')
-    ranked = sorted(candidates, key=lambda c: -c['gain'])
-    listing = ', '.join(f'{c["cause"]} {100 * c["gain"]:+.0f} %' for c in ranked)
+    ranked = sorted(candidates, key=lambda c: -c.gain)
+    listing = ', '.join(f'{c.cause} {100 * c.gain:+.0f} %' for c in ranked)
     if cause == 'none':
         return f'{base}; no extension reduces it significantly ({listing}).'
-    c = next(c for c in candidates if c['cause'] == cause)
-    parts = c.get('parts', [cause])
+    c = next(c for c in candidates if c.cause == cause)
+    parts = c.effects
     details = [EFFECTS[p].evidence(residual) for p in parts if p in EFFECTS]
     detail = '; '.join(d for d in details if d is not None)
     if not detail:
@@ -1430,10 +1456,10 @@ def _evidence(cause: str, baseline: Baseline, candidates: list[dict[str, Any]],
         rates = (f'the burst signature test used bursts at {len(bursts.frequencies)}'
                  ' frequencies' if bursts is not None else 'no bursts the signature tests can'
                  ' use')
-        detail = f'{used}, {rates}: its physical signature is {c.get("signature", "-")}'
+        detail = f'{used}, {rates}: its physical signature is {c.signature}'
     each = ''
-    if len(parts) > 1:
+    if c.part_gains:
         each = ('; each adds beyond the other alone: ' + ', '.join(
-            f'{p} {100 * c["part_gains"][p]:.0f} %' for p in parts))
-    return (f'{base}; the {cause} extension cuts it by {100 * c["gain"]:.0f} % (z ='
-            f' {c["z"]:.1f}; all: {listing}{each}), and {detail}.')
+            f'{p} {100 * c.part_gains[p]:.0f} %' for p in parts))
+    return (f'{base}; the {cause} extension cuts it by {100 * c.gain:.0f} % (z ='
+            f' {c.z:.1f}; all: {listing}{each}), and {detail}.')

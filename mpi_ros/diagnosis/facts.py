@@ -2,9 +2,10 @@
 """
 The parts of a diagnosis report as typed records: one field per fact, named as in the JSON.
 
-:class:`~mpi_ros.diagnosis.diagnose.DiagnosisReport` holds a :class:`Baseline`, a
-:class:`Residual`, a :class:`Decision`, the :class:`RecordFacts` and the :class:`Series`
-(a record outside the invertible class: :class:`Reversals` and :class:`Refusal`).  The
+:class:`~mpi_ros.diagnosis.diagnose.DiagnosisReport` holds a :class:`Baseline`, the
+:class:`Extended` model, the :class:`ScoredCandidate` list, a :class:`Residual`, a
+:class:`Decision`, the :class:`RecordFacts` and the :class:`Series` (a record outside the
+invertible class: :class:`Reversals` and :class:`Refusal`, no baseline, no extended model).  The
 JSON (``to_json``), the summary lines, ``summary.md``, the plot titles and the captions
 are written from these fields, so they cannot disagree; a field's name is its JSON key.
 
@@ -25,11 +26,13 @@ import numpy as np
 import numpy.typing as npt
 
 from .signatures import BurstSignature, HoldSignature
+from ..extensions import EFFECTS
 from ..identification.finding import DynamicsFinding
 
 __all__ = ['ReportPart', 'Baseline', 'OperatingPoint', 'Residual', 'HoldCount', 'StepOnsetCheck',
            'Reversals', 'Decision', 'Ranked', 'Refusal', 'RecordFacts', 'ScoredPart',
-           'ReturnPoints', 'Series', 'jsonable']
+           'ReturnPoints', 'Series', 'FittedParameter', 'ScoredCandidate', 'Extended',
+           'jsonable', 'parameter_units']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -135,6 +138,175 @@ class Baseline(ReportPart):
     validation_output_offset: float
     linear_rms_error: float
     operating_point: OperatingPoint
+
+
+@dataclass(frozen=True)
+class FittedParameter:
+    """
+    One fitted parameter of a candidate, with its unit from the registry.
+
+    Attributes
+    ----------
+    key : str
+        The parameter key (``model.dead_time``, ``model.creep.time_constants``).
+    value : float or tuple of float
+        The fitted value, in ``unit``.
+    unit : str
+        Its SI unit (:attr:`mpi_ros.extensions.effect.EffectParameter.unit`; '' when
+        dimensionless or not registered).
+
+    """
+
+    key: str
+    value: float | tuple[float, ...]
+    unit: str
+
+    @property
+    def name(self) -> str:
+        """Return the key's last part in words (``model.resonance.frequency``: frequency)."""
+        return self.key.rsplit('.', 1)[-1].replace('_', ' ')
+
+
+@dataclass(frozen=True, eq=False)
+class ScoredCandidate(ReportPart):
+    """
+    One candidate extension as the report states it, scored on the validation data.
+
+    Attributes
+    ----------
+    cause : str
+        The effect's name (two joined by ``' + '`` for a pair).
+    rms_error, nonlinearity_error : float
+        Its validation errors, fractions of the output range.
+    gain : float
+        Relative reduction of the baseline's validation RMS error.
+    z : float
+        Diebold-Mariano statistic against the baseline (one-sided).
+    bandwidth : int
+        Its HAC lags.
+    training_rms_error : float
+        Its RMS error on the training record's determined samples, a fraction of that
+        output's range.
+    validation_output_offset : float
+        The validation record's re-estimated sensor zero for it [m].
+    parameter_count : int
+        Free parameters of the effect(s).
+    parameters : dict of str to float or list of float
+        The effect's identified parameters, in the units of :meth:`fitted` (Gamma's left
+        out, and those in ``not_identified``).
+    not_identified : dict of str to str
+        Parameter key -> why the fit could not identify it (at a bound of its search range).
+    signature : str
+        ``present``, ``absent`` or ``unavailable`` (the physical signature).
+    significant : bool
+        Gain and z above the bars, and the baseline above the noise.
+    parts : list of str or None
+        A pair's effects (None, and absent from the JSON, for one effect).
+    part_gains, part_z : dict of str to float or None
+        For a pair: each effect's gain beyond the other alone, and its z.
+
+    """
+
+    optional: ClassVar[frozenset[str]] = frozenset({'parts', 'part_gains', 'part_z'})
+
+    cause: str
+    rms_error: float
+    nonlinearity_error: float
+    gain: float
+    z: float
+    bandwidth: int
+    training_rms_error: float
+    validation_output_offset: float
+    parameter_count: int
+    parameters: dict[str, Any]
+    not_identified: dict[str, str]
+    signature: str
+    significant: bool
+    parts: list[str] | None = None
+    part_gains: dict[str, float] | None = None
+    part_z: dict[str, float] | None = None
+
+    @property
+    def effects(self) -> list[str]:
+        """Return the effects it is made of: a pair's parts, or its own name."""
+        return list(self.parts) if self.parts else [self.cause]
+
+    def fitted(self) -> list[FittedParameter]:
+        """
+        Return the identified parameters, in the order of :attr:`parameters`, with units.
+
+        A number becomes a float, a list of numbers a tuple of floats; the unit is the
+        registry's (:func:`parameter_units`).
+
+        """
+        units = parameter_units()
+        out = []
+        for key, value in self.parameters.items():
+            if isinstance(value, (list, tuple, np.ndarray)):
+                out.append(FittedParameter(key, tuple(float(v) for v in value),
+                                           units.get(key, '')))
+            elif isinstance(value, (int, float, np.number)) and not isinstance(value, bool):
+                out.append(FittedParameter(key, float(value), units.get(key, '')))
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class Extended(ReportPart):
+    """
+    The chosen model on the validation data: an extension, or the baseline for ``none``.
+
+    For ``none`` it is the :class:`Baseline` (its fields, no ``cause``); for an effect the
+    chosen candidate's errors.  Both have ``parameters`` and ``not_identified`` (empty for
+    the baseline).
+
+    Attributes
+    ----------
+    cause : str or None
+        The chosen candidate (None, and absent from the JSON, for the baseline).
+    order : (int, int) or None
+        The baseline's ``(n, l)`` (only for the baseline).
+    rms_error, nonlinearity_error : float
+        Its RMS error and (37) on the scored validation data, fractions of the output's
+        range.
+    training_rms_error, validation_output_offset, linear_rms_error : float or None
+        The baseline's (only for the baseline; see :class:`Baseline`).
+    operating_point : OperatingPoint or None
+        The baseline's (only for the baseline).
+    parameters : dict of str to float or list of float
+        The chosen candidate's identified parameters (:attr:`ScoredCandidate.parameters`).
+    not_identified : dict of str to str
+        Its parameters at a bound of their search range, with why.
+
+    """
+
+    optional: ClassVar[frozenset[str]] = frozenset({
+        'cause', 'order', 'training_rms_error', 'validation_output_offset',
+        'linear_rms_error', 'operating_point'})
+
+    cause: str | None
+    order: tuple[int, int] | None
+    rms_error: float
+    nonlinearity_error: float
+    training_rms_error: float | None
+    validation_output_offset: float | None
+    linear_rms_error: float | None
+    operating_point: OperatingPoint | None
+    parameters: dict[str, Any]
+    not_identified: dict[str, str]
+
+    @classmethod
+    def of_baseline(cls, baseline: Baseline) -> 'Extended':
+        """Return the baseline as the chosen model (no effect named)."""
+        return cls(None, baseline.order, baseline.rms_error, baseline.nonlinearity_error,
+                   baseline.training_rms_error, baseline.validation_output_offset,
+                   baseline.linear_rms_error, baseline.operating_point, {}, {})
+
+    @classmethod
+    def of_candidate(cls, candidate: ScoredCandidate) -> 'Extended':
+        """Return the chosen candidate's model."""
+        return cls(candidate.cause, None, candidate.rms_error, candidate.nonlinearity_error,
+                   None, None, None, None, dict(candidate.parameters),
+                   dict(candidate.not_identified))
 
 
 @dataclass(eq=False)
@@ -491,6 +663,11 @@ class Series(ReportPart):
     start: int
     baseline: FloatArray | None = None
     candidates: dict[str, FloatArray] = field(default_factory=dict)
+
+
+def parameter_units() -> dict[str, str]:
+    """Return every registered effect parameter's unit by its key (the registry's)."""
+    return {p.key: p.unit for e in EFFECTS.values() for p in e.parameters}
 
 
 def jsonable(value: Any) -> Any:

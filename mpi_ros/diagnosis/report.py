@@ -3,9 +3,10 @@
 Report for people: a markdown summary and PNG plots of a :class:`DiagnosisReport`.
 
 **One set of facts feeds everything.**  The JSON (``report.to_json()``), the summary lines
-the command line prints and ``summary.md`` are all written from the report's typed parts
-(:mod:`mpi_ros.diagnosis.facts`, read through their JSON keys); the prose only rounds their
-numbers (3 significant digits) and never computes a number of its own.  Errors are
+the command line prints, ``summary.md``, the plot titles and the captions are all written
+from the report's typed fields (:mod:`mpi_ros.diagnosis.facts`: the JSON is their form, a
+field's name its key); the prose only rounds their numbers (3 significant digits) and
+never computes a number of its own.  Errors are
 percentages of the output's range, gains percentages of the baseline's error, lengths and
 times carry their units.  The units are the data's (``data['units']``: input ``A`` or
 ``V``, output ``m``, ``µm``, ``nm``, ...; see :func:`data_units`), A and m (SI, REP 103)
@@ -29,6 +30,8 @@ import numpy as np
 from scipy.stats import norm
 
 from .diagnose import DiagnosisReport, z_wording
+from .facts import Baseline, Decision, Residual, Reversals, ScoredCandidate
+from .notation import length, LENGTH_PREFIXES, significant
 from ..extensions import EFFECTS
 from ..extensions.effect import effect_caption, separating_measurement
 from ..extensions.fitting import AxisUnits
@@ -39,8 +42,6 @@ from ..units import INPUT_UNITS, OUTPUT_UNITS, resolve_units
 __all__ = ['report_facts', 'write_report', 'write_json', 'write_extended_params', 'summary_lines',
            'markdown', 'data_units', 'significant', 'z_wording', 'INPUT_UNITS',
            'OUTPUT_UNITS']
-
-_PREFIXES = ((1.0, 'm'), (1e-3, 'mm'), (1e-6, 'µm'), (1e-9, 'nm'), (1e-12, 'pm'))
 
 
 def write_json(report: DiagnosisReport | Mapping[str, Any],
@@ -134,38 +135,15 @@ def data_units(input_name: str = '', output_name: str = '', *, input_scale: floa
             'from': f'{found}; read as s, {units.si_input}, m'}
 
 
-def significant(value: Any, digits: int = 3) -> str:
-    """
-    Format a number with ``digits`` significant digits (plain, or exponent when tiny/huge).
-
-    Examples
-    --------
-    >>> significant(0.0065317), significant(66.93), significant(48351.0), significant(5e-23)
-    ('0.00653', '66.9', '4.84e+04', '5.00e-23')
-
-    """
-    if value is None or isinstance(value, bool):
-        return 'n/a'
-    v = float(value)
-    if not math.isfinite(v):
-        return 'n/a'
-    if v == 0.0:
-        return '0'
-    rounded = float(f'{v:.{digits - 1}e}')
-    exponent = math.floor(math.log10(abs(rounded)))
-    if -3 <= exponent < digits:
-        return f'{rounded:.{max(digits - 1 - exponent, 0)}f}'
-    return f'{rounded:.{digits - 1}e}'
-
-
-def summary_lines(facts: Mapping[str, Any]) -> list[str]:
+def summary_lines(report: DiagnosisReport) -> list[str]:
     """
     Return the short summary (printed on stderr, and the head of ``summary.md``).
 
     Parameters
     ----------
-    facts : Mapping
-        The report's dictionary (``report.to_json()``), the same the JSON holds.
+    report : DiagnosisReport
+        The diagnosis; every statement is written from its typed fields (the JSON holds
+        the same fields).
 
     Returns
     -------
@@ -173,50 +151,49 @@ def summary_lines(facts: Mapping[str, Any]) -> list[str]:
         One statement per line: verdict, gains, ties, scored part, holds, units.
 
     """
-    units = _units(facts)
-    lines = [f'verdict: {facts["cause"]} ({_verdict_label(facts)})'
-             + (f', validation gain {_percent(facts["gain"])}' if facts['gain'] else '')]
-    decision = facts.get('decision', {})
-    reason = decision.get('weak_reason') or decision.get('reason')
-    if reason and 'weak' in _verdict_label(facts):
+    units = _units(report)
+    decision = _decision(report)
+    label = _verdict_label(report)
+    lines = [f'verdict: {report.cause} ({label})'
+             + (f', validation gain {_percent(report.gain)}' if report.gain else '')]
+    reason = decision.weak_reason if decision is not None else None
+    if reason and 'weak' in label:
         lines.append(f'weak: {reason}')
-    if facts.get('baseline'):
-        zc = float(decision.get('z_critical', 1.645))
+    zc = decision.z_critical if decision is not None else 1.645
+    if report.baseline is not None:
         lines.append('gains on the validation data (Diebold-Mariano z against the baseline): '
-                     + ', '.join(f'{c["cause"]} {_signed_percent(c["gain"])} (z'
-                                 f' {significant(c["z"])}, {z_wording(c["z"], zc)})'
-                                 for c in _ranked(facts)))
-    chosen: Mapping[str, Any] = next(
-        (c for c in facts.get('candidates', []) if c['cause'] == facts['cause']), {})
-    if chosen.get('parts'):
-        zc = float(decision.get('z_critical', 1.645))
+                     + ', '.join(f'{c.cause} {_signed_percent(c.gain)} (z'
+                                 f' {significant(c.z)}, {z_wording(c.z, zc)})'
+                                 for c in _ranked(report)))
+    chosen = _chosen(report)
+    if chosen is not None and chosen.parts and chosen.part_gains and chosen.part_z:
+        gains, z = chosen.part_gains, chosen.part_z
         lines.append('each effect beyond the other alone (the pair against the other effect'
                      ' alone): ' + ', '.join(
-                         f'{name} {_signed_percent(chosen["part_gains"][name])} (z'
-                         f' {significant(chosen["part_z"][name])},'
-                         f' {z_wording(chosen["part_z"][name], zc)})'
-                         for name in chosen['parts']))
-    if decision.get('ambiguous'):
-        lines.append(f'ambiguous: {_tie_reasons(facts)}; separate them with'
+                         f'{name} {_signed_percent(gains[name])} (z {significant(z[name])},'
+                         f' {z_wording(z[name], zc)})' for name in chosen.parts))
+    if decision is not None and decision.ambiguous:
+        lines.append(f'ambiguous: {_tie_reasons(report)}; separate them with'
                      ' mpi-ros diagnose --excitation (see summary.md)')
-    finding = facts.get('data', {}).get('dynamics_finding') or {}
-    if finding.get('text'):
-        lines.append(finding['text'])
-    lines.append(f'scored part: {_scored(facts)}')
-    lines.append(f'holds: {_holds(facts)}')
+    finding = report.data.dynamics_finding
+    text = finding.describe() if finding is not None else ''
+    if text:
+        lines.append(text)
+    lines.append(f'scored part: {_scored(report)}')
+    lines.append(f'holds: {_holds(report)}')
     lines.append(f'units: input {units["input"]}, output {units["output"]},'
                  f' time s ({units["from"]})')
     return lines
 
 
-def markdown(facts: Mapping[str, Any], images: Sequence[str] = ()) -> str:
+def markdown(report: DiagnosisReport, images: Sequence[str] = ()) -> str:
     """
-    Return ``summary.md`` for the report's dictionary.
+    Return ``summary.md`` for the report.
 
     Parameters
     ----------
-    facts : Mapping
-        The report's dictionary (``report.to_json()``), the same the JSON holds.
+    report : DiagnosisReport
+        The diagnosis; the prose is written from its typed fields.
     images : sequence of str
         File names of the plots, in the report folder.
 
@@ -226,31 +203,31 @@ def markdown(facts: Mapping[str, Any], images: Sequence[str] = ()) -> str:
         Markdown; every number rounded to 3 significant digits (counts exactly).
 
     """
-    units = _units(facts)
-    decision = facts.get('decision', {})
+    units = _units(report)
+    decision = _decision(report)
     lines = ['# mpi_ros diagnosis', '',
-             f'**Verdict: {facts["cause"]}** ({_verdict_label(facts)})', '']
-    lines += [f'- {line[0].upper()}{line[1:]}' for line in summary_lines(facts)]
+             f'**Verdict: {report.cause}** ({_verdict_label(report)})', '']
+    lines += [f'- {line[0].upper()}{line[1:]}' for line in summary_lines(report)]
     lines.append('')
-    lines += [f'**Warning:** {warning}\n' for warning in facts.get('warnings', [])]
-    if not facts.get('baseline'):
-        lines += ['## Why no model was fitted', '', facts.get('evidence', ''), '']
+    lines += [f'**Warning:** {warning}\n' for warning in report.warnings]
+    residual = report.residual
+    if report.baseline is None or decision is None or not isinstance(residual, Residual):
+        lines += ['## Why no model was fitted', '', report.evidence, '']
     else:
-        lines += _candidate_section(facts, units)
-        if decision.get('ambiguous'):
-            lines += _tie_section(facts)
-        lines += _evidence_section(facts, units)
-    lines += _data_section(facts, units)
+        lines += _candidate_section(report, report.baseline, decision, units)
+        if decision.ambiguous:
+            lines += _tie_section(report, decision)
+        lines += _evidence_section(residual, decision, units)
+    lines += _data_section(report, units)
     if images:
-        fitted = bool(facts.get('baseline'))
+        fitted = report.baseline is not None
         lines += ['## Plots', '']
         for name in images:
             lines += [f'![{name}]({name})', '', f'*{_caption(name, fitted)}*', '']
     return '\n'.join(lines).rstrip('\n') + '\n'
 
 
-def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
-                 facts: Mapping[str, Any] | None = None) -> list[Path]:
+def write_report(report: DiagnosisReport, directory: str | os.PathLike[str]) -> list[Path]:
     """
     Write ``summary.md`` and the PNG plots into ``directory`` (created if missing).
 
@@ -264,9 +241,6 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
         The diagnosis.
     directory : str or PathLike
         Output directory.
-    facts : Mapping, optional
-        The report's dictionary the JSON was written from (default ``report.to_json()``):
-        the prose is written from it.
 
     Returns
     -------
@@ -278,13 +252,12 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
 
-    facts = report_facts(report) if facts is None else facts
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     s = report.series
     written = []
     t, x, y, k0 = s.time, s.current, s.displacement, s.start
-    axes = _axis_units(_units(facts), y[k0:])
+    axes = _axis_units(_units(report), y[k0:])
     val = slice(k0, None)
     sims = {} if s.baseline is None else {'baseline MPI': s.baseline}
     if report.cause in s.candidates:
@@ -319,7 +292,7 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
                      ' drift in holds or spikes at fast moves', fontsize=10)
         ax.legend(fontsize=8)
         written.append(_save(fig, out / 'residual.png', plt))
-        parameters = {c['cause']: c.get('parameters', {}) for c in facts.get('candidates', [])}
+        parameters = {c.cause: c.parameters for c in report.candidates}
         for cause, sim in s.candidates.items():
             plot = _signature(cause, t, x, y, s.baseline, sim, k0,
                               out / f'signature_{cause}.png', plt, axes,
@@ -328,7 +301,7 @@ def write_report(report: DiagnosisReport, directory: str | os.PathLike[str], *,
                 written.append(plot)
     summary = out / 'summary.md'
     with atomic_write(summary) as handle:
-        handle.write(markdown(facts, [p.name for p in written]))
+        handle.write(markdown(report, [p.name for p in written]))
     written.append(summary)
     return written
 
@@ -379,9 +352,18 @@ def _caption(name: str, fitted: bool = True) -> str:
     return effect_caption(name.removeprefix('signature_').removesuffix('.png'))
 
 
-def _units(facts: Mapping[str, Any]) -> dict[str, str]:
-    units = facts.get('data', {}).get('units')
+def _units(report: DiagnosisReport) -> dict[str, str]:
+    units = report.data.units
     return dict(units) if units else data_units()
+
+
+def _decision(report: DiagnosisReport) -> Decision | None:
+    # The decision of a fitted record (None: outside the invertible class, a refusal).
+    return report.decision if isinstance(report.decision, Decision) else None
+
+
+def _chosen(report: DiagnosisReport) -> ScoredCandidate | None:
+    return next((c for c in report.candidates if c.cause == report.cause), None)
 
 
 def _axis_units(units: Mapping[str, str], y: Any) -> AxisUnits:
@@ -389,7 +371,7 @@ def _axis_units(units: Mapping[str, str], y: Any) -> AxisUnits:
     if units['output'] != 'm':
         return AxisUnits(current=units['input'], displacement=units['output'])
     span = float(np.ptp(y)) if len(y) else 0.0
-    factor, prefix = next(((f, p) for f, p in _PREFIXES if span >= f), _PREFIXES[-1])
+    factor, prefix = next(((f, p) for f, p in LENGTH_PREFIXES if span >= f), LENGTH_PREFIXES[-1])
     return AxisUnits(current=units['input'], displacement=prefix, scale=1.0 / factor)
 
 
@@ -402,115 +384,102 @@ def _signed_percent(fraction: Any) -> str:
     return text if text.startswith('-') else '+' + text
 
 
-def _length(value: Any, unit: str) -> str:
-    # A length in the data's output unit; metres get the prefix that suits the value.
-    if value is None:
-        return 'n/a'
-    v = float(value)
-    if unit != 'm' or v == 0.0:
-        return f'{significant(v)} {unit}'
-    factor, prefix = next(((f, p) for f, p in _PREFIXES if abs(v) >= f), _PREFIXES[-1])
-    return f'{significant(v / factor)} {prefix}'
-
-
 def _seconds(value: Any) -> str:
     v = float(value)
     return f'{significant(1e3 * v)} ms' if abs(v) < 1.0 else f'{significant(v)} s'
 
 
-def _verdict_label(facts: Mapping[str, Any]) -> str:
-    # The diagnosis' own label when it gives one (e.g. 'present, weak'), else by the cause.
-    for source in (facts, facts.get('decision', {})):
-        label = source.get('verdict')
-        if isinstance(label, str) and label:
-            return label
-    if facts.get('decision', {}).get('strength') == 'present, weak':
+def _verdict_label(report: DiagnosisReport) -> str:
+    # The strength the diagnosis states (e.g. 'present, weak'), else by the cause.
+    decision = _decision(report)
+    if decision is not None and decision.strength == 'present, weak':
         return 'present, weak'
-    cause = facts['cause']
-    if cause == 'none':
+    if report.cause == 'none':
         return 'no effect found'
-    if cause == 'outside_invertible_class':
+    if report.cause == 'outside_invertible_class':
         return 'outside the invertible class: no model fitted'
-    if facts.get('decision', {}).get('ambiguous'):
-        return f'present, ambiguous: tied with {" and ".join(_tied(facts)[1:])}'
+    if decision is not None and decision.ambiguous:
+        return f'present, ambiguous: tied with {" and ".join(decision.tied_with)}'
     return 'present'
 
 
-def _ranked(facts: Mapping[str, Any]) -> list[Mapping[str, Any]]:
-    return sorted(facts.get('candidates', []), key=lambda c: -c['gain'])
+def _ranked(report: DiagnosisReport) -> list[ScoredCandidate]:
+    return sorted(report.candidates, key=lambda c: -c.gain)
 
 
-def _tied(facts: Mapping[str, Any]) -> list[str]:
-    return [facts['cause'], *facts.get('decision', {}).get('tied_with', [])]
-
-
-def _tie_reasons(facts: Mapping[str, Any]) -> str:
+def _tie_reasons(report: DiagnosisReport) -> str:
     # Each tied cause with the reason the diagnosis gave (the validation data's z, or the
     # analysis of the record that identify states), in one sentence.
-    decision = facts.get('decision', {})
-    reasons = decision.get('tie_reasons') or {}
-    return '; '.join(f'{cause} is tied with {facts["cause"]}'
+    decision = _decision(report)
+    if decision is None:
+        return ''
+    reasons = decision.tie_reasons
+    return '; '.join(f'{cause} is tied with {report.cause}'
                      + (f': {reasons[cause]}' if reasons.get(cause) else '')
-                     for cause in decision.get('tied_with', []))
+                     for cause in decision.tied_with)
 
 
-def _scored(facts: Mapping[str, Any]) -> str:
-    data = facts.get('data', {})
-    scored = data.get('validation_scored')
-    if scored is None and 'training_samples' in data:        # a split record
-        scored = {'from_sample': data['training_samples'],
-                  'samples': data['samples'] - data['training_samples'],
-                  'left_out': 'the training part'}
-    if scored is None:
+def _scored(report: DiagnosisReport) -> str:
+    data = report.data
+    scored = data.validation_scored
+    if scored is not None:
+        first, samples, left = scored.from_sample, scored.samples, scored.left_out
+    elif data.training_samples is not None:                   # a split record
+        first, samples = data.training_samples, data.samples - data.training_samples
+        left = 'the training part'
+    else:
         return 'the whole validation record'
-    where = ('validation record' if 'validation_samples' in data
+    where = ('validation record' if data.validation_samples is not None
              else 'record (after the training part)')
-    left = scored.get('left_out', '')
-    return (f'{where} from sample {scored["from_sample"]}, {scored["samples"]} samples'
+    return (f'{where} from sample {first}, {samples} samples'
             + (f' (left out before it: {left})' if left and left != 'nothing' else ''))
 
 
-def _holds(facts: Mapping[str, Any]) -> str:
-    residual = facts.get('residual', {})
-    holds = residual.get('holds')
-    if holds is None:
+def _holds(report: DiagnosisReport) -> str:
+    return _holds_of(report.residual)
+
+
+def _holds_of(residual: Residual | Reversals) -> str:
+    if not isinstance(residual, Residual):
         return 'not counted (no model fitted)'
-    shortest = holds.get('minimum_duration')
-    text = (f'{holds["count"]} input hold(s)'
+    holds = residual.holds
+    shortest = holds.minimum_duration
+    text = (f'{holds.count} input hold(s)'
             + (f' of {significant(shortest)} s or more' if shortest else '')
             + ' in the scored part')
-    used = residual.get('hold_signature')
-    need = holds.get('signature_minimum_duration')
+    used = residual.hold_signature
+    need = holds.signature_minimum_duration
     longer = f' ({significant(need)} s or more)' if need else ''
     if used is None:
         return (f'{text}; none long enough{longer} for the hold signature test (creep,'
                 ' thermal drift): that signature is unavailable')
-    return f'{text}; {used["holds"]} used by the hold signature test{longer}'
+    return f'{text}; {used.holds} used by the hold signature test{longer}'
 
 
-def _parameters(parameters: Mapping[str, Any]) -> str:
-    units = {p.key: p.unit for e in EFFECTS.values() for p in e.parameters}
+def _parameters(candidate: ScoredCandidate) -> str:
+    # The fitted values with their units (a non-finite value, null in the JSON, is left out).
     parts = []
-    for key, value in parameters.items():
-        name = key.rsplit('.', 1)[-1].replace('_', ' ')
-        unit = units.get(key, '')
-        if isinstance(value, (list, tuple)):
-            values = [float(v) for v in value]
-            if not values:
+    for p in candidate.fitted():
+        if isinstance(p.value, tuple):
+            if not p.value:
                 continue
-            show = _seconds if unit == 's' else significant
-            parts.append(f'{name} {show(min(values))} to {show(max(values))}'
-                         f' ({len(values)} values)')
-        elif isinstance(value, (int, float)):
-            parts.append(f'{name} {_seconds(value)}' if unit == 's'
-                         else f'{name} {significant(value)} {unit}' if unit
-                         else f'{name} {significant(value)}')
+            parts.append(f'{p.name} {_with_unit(min(p.value), p.unit)} to'
+                         f' {_with_unit(max(p.value), p.unit)} ({len(p.value)} values)')
+        elif math.isfinite(p.value):
+            parts.append(f'{p.name} {_with_unit(p.value, p.unit)}')
     return '; '.join(parts) or '-'
 
 
-def _candidate_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[str]:
-    b, decision = facts['baseline'], facts.get('decision', {})
-    zc = float(decision.get('z_critical', 1.645))
+def _with_unit(value: float, unit: str) -> str:
+    # A time in ms or s, any other unit after the number, none for a dimensionless value.
+    if unit == 's':
+        return _seconds(value)
+    return f'{significant(value)} {unit}' if unit else significant(value)
+
+
+def _candidate_section(report: DiagnosisReport, b: Baseline, decision: Decision,
+                       units: Mapping[str, str]) -> list[str]:
+    zc = decision.z_critical
     level = float(norm.sf(zc))
     lines = ['## Models on the validation data', '',
              'Errors are RMS over the validation output range; the gain is the relative cut'
@@ -521,45 +490,42 @@ def _candidate_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> li
              '| rank | model | RMS error | (37) nonlinearity error | gain | z | test |'
              ' signature | fitted parameters |',
              '|---|---|---|---|---|---|---|---|---|',
-             f'| - | baseline MPI, order {b["order"][0]}, {b["order"][1]} |'
-             f' {_percent(b["rms_error"])} | {_percent(b["nonlinearity_error"])} | - | - | - |'
+             f'| - | baseline MPI, order {b.order[0]}, {b.order[1]} |'
+             f' {_percent(b.rms_error)} | {_percent(b.nonlinearity_error)} | - | - | - |'
              ' - | - |']
-    for rank, c in enumerate(_ranked(facts), 1):
-        mark = ' (chosen)' if c['cause'] == facts['cause'] else ''
-        lines.append(f'| {rank} | {c["cause"]}{mark} | {_percent(c["rms_error"])} |'
-                     f' {_percent(c["nonlinearity_error"])} | {_signed_percent(c["gain"])} |'
-                     f' {significant(c["z"])} | {z_wording(c["z"], zc)} |'
-                     f' {c.get("signature", "-")} | {_parameters(c.get("parameters", {}))}'
+    for rank, c in enumerate(_ranked(report), 1):
+        mark = ' (chosen)' if c.cause == report.cause else ''
+        lines.append(f'| {rank} | {c.cause}{mark} | {_percent(c.rms_error)} |'
+                     f' {_percent(c.nonlinearity_error)} | {_signed_percent(c.gain)} |'
+                     f' {significant(c.z)} | {z_wording(c.z, zc)} |'
+                     f' {c.signature} | {_parameters(c)}'
                      + ''.join(f'; {k} not identified (at a search bound)'
-                               for k in c.get('not_identified', {})) + ' |')
-    lines += ['', f'Straight line fitted on the training data: {_percent(b["linear_rms_error"])}'
+                               for k in c.not_identified) + ' |')
+    lines += ['', f'Straight line fitted on the training data: {_percent(b.linear_rms_error)}'
               f' RMS error on the validation data.']
-    min_gain = decision.get('min_gain')
-    if min_gain is not None:
-        above = ('exceeds' if decision.get('baseline_above_noise') else 'does not exceed')
-        lines += ['', f'Rule: a candidate counts when its gain is at least'
-                  f' {_percent(min_gain)}, its z test says significantly better and its'
-                  ' physical signature is present (or unavailable in this record); the'
-                  ' largest gain among those wins.  The baseline residual'
-                  f' {above} {significant(decision.get("noise_factor"))} times the noise'
-                  f' floor ({_length(decision.get("noise_floor"), units["output"])}).']
+    above = 'exceeds' if decision.baseline_above_noise else 'does not exceed'
+    lines += ['', f'Rule: a candidate counts when its gain is at least'
+              f' {_percent(decision.min_gain)}, its z test says significantly better and its'
+              ' physical signature is present (or unavailable in this record); the'
+              ' largest gain among those wins.  The baseline residual'
+              f' {above} {significant(decision.noise_factor)} times the noise'
+              f' floor ({length(decision.noise_floor, units["output"])}).']
     return lines + ['']
 
 
-def _tie_section(facts: Mapping[str, Any]) -> list[str]:
-    decision = facts['decision']
-    tied = _tied(facts)
+def _tie_section(report: DiagnosisReport, decision: Decision) -> list[str]:
+    tied = [report.cause, *decision.tied_with]
     lines = ['## Ambiguous: the record cannot tell these causes apart', '',
-             f'{_tie_reasons(facts)}. Ranked by gain:', '']
+             f'{_tie_reasons(report)}. Ranked by gain:', '']
     rank = 0
-    for row in decision.get('ranking', []):
-        if row['cause'] not in tied:
+    for row in decision.ranking:
+        if row.cause not in tied:
             continue
         rank += 1
-        against = ('chosen' if row['cause'] == facts['cause'] else
-                   f'z {significant(row.get("z_against_chosen"))} against {facts["cause"]}')
-        lines.append(f'{rank}. {row["cause"]}: gain {_signed_percent(row["gain"])}'
-                     f' ({against}; signature {row.get("signature", "-")})')
+        against = ('chosen' if row.cause == report.cause else
+                   f'z {significant(row.z_against_chosen)} against {report.cause}')
+        lines.append(f'{rank}. {row.cause}: gain {_signed_percent(row.gain)}'
+                     f' ({against}; signature {row.signature})')
     lines += ['', 'To separate them, run `mpi-ros diagnose --excitation validation_input.csv`,'
               ' play that input on the rig, record the answer and diagnose again with'
               ' `--validate` the new record.  The excitation holds the input after steps up'
@@ -567,66 +533,66 @@ def _tie_section(facts: Mapping[str, Any]) -> list[str]:
     return lines
 
 
-def _evidence_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[str]:
-    residual, out = facts.get('residual', {}), units['output']
+def _evidence_section(residual: Residual, decision: Decision,
+                      units: Mapping[str, str]) -> list[str]:
+    out = units['output']
     lines = ['## Physical evidence (baseline residual, validation data)', '',
-             f'- Baseline residual RMS {_length(residual.get("rms"), out)}; noise floor'
-             f' {_length(residual.get("noise_floor"), out)}'
-             f' ({_percent(residual.get("noise_floor_relative", 0.0))} of the output range).',
-             f'- Holds: {_holds(facts)}.']
-    holds = residual.get('hold_signature')
+             f'- Baseline residual RMS {length(residual.rms, out)}; noise floor'
+             f' {length(residual.noise_floor, out)}'
+             f' ({_percent(residual.noise_floor_relative)} of the output range).',
+             f'- Holds: {_holds_of(residual)}.']
+    holds = residual.hold_signature
     if holds is not None:
-        lines.append(f'- During {holds["holds"]} hold(s) the residual has a log(t) component'
-                     f' of {_length(holds["log_amplitude"], out)} RMS'
-                     f' (p = {significant(holds["log_p"])}) and a smooth drift of'
-                     f' {_length(holds["drift_amplitude"], out)} RMS'
-                     f' (p = {significant(holds["drift_p"])}).')
-    bursts = residual.get('burst_signature')
+        lines.append(f'- During {holds.holds} hold(s) the residual has a log(t) component'
+                     f' of {length(holds.log_amplitude, out)} RMS'
+                     f' (p = {significant(holds.log_p)}) and a smooth drift of'
+                     f' {length(holds.drift_amplitude, out)} RMS'
+                     f' (p = {significant(holds.drift_p)}).')
+    bursts = residual.burst_signature
     if bursts is None:
         lines.append('- Bursts: none the burst signature test can use (no burst signature'
                      ' for rate dependence and dead time).')
     else:
-        f = bursts['frequencies']
+        f = bursts.frequencies
         lines.append(f'- Bursts at {len(f)} frequencies, {significant(f[0])} to'
                      f' {significant(f[-1])} Hz: the phase of measured/simulated follows the'
-                     f' {bursts["law"]} law (delay L = {_seconds(bursts["delay"])}, residual'
-                     f' {significant(bursts["delay_sse"])}; lag tau ='
-                     f' {_seconds(bursts["lag_time_constant"])}, residual'
-                     f' {significant(bursts["lag_sse"])}; p = {significant(bursts["p"])}).')
-    onset = residual.get('step_onset')
-    if onset:
-        check = onset.get('dead_time_check') or 'a dead time up to it is physical'
-        lines.append(f'- Step response: the output moves within {_seconds(onset["bound"])}'
-                     f' of a step ({onset["steps"]} step(s) measured); {check}.')
-    level = facts.get('decision', {}).get('signature_level')
-    if level is not None:
-        lines.append(f'- Each signature test runs at p < {significant(level)}.')
+                     f' {bursts.law} law (delay L = {_seconds(bursts.delay)}, residual'
+                     f' {significant(bursts.delay_sse)}; lag tau ='
+                     f' {_seconds(bursts.lag_time_constant)}, residual'
+                     f' {significant(bursts.lag_sse)}; p = {significant(bursts.p)}).')
+    onset = residual.step_onset
+    if onset is not None:
+        check = onset.dead_time_check or 'a dead time up to it is physical'
+        lines.append(f'- Step response: the output moves within {_seconds(onset.bound)}'
+                     f' of a step ({onset.steps} step(s) measured); {check}.')
+    lines.append(f'- Each signature test runs at p < {significant(decision.signature_level)}.')
     return lines + ['']
 
 
-def _data_section(facts: Mapping[str, Any], units: Mapping[str, str]) -> list[str]:
-    data = facts.get('data', {})
+def _data_section(report: DiagnosisReport, units: Mapping[str, str]) -> list[str]:
+    data = report.data
     lines = ['## Data', '',
-             f'- Training: `{data.get("source", "")}`, {data.get("samples", "?")} samples'
-             + (f', the first {_percent(data["split"])} of the record' if 'split' in data
+             f'- Training: `{data.source}`, {data.samples} samples'
+             + (f', the first {_percent(data.split)} of the record' if data.split is not None
                 else '')
-             + (f' after its leading hold of {data["leading_hold"]} samples'
-                if data.get('leading_hold') else '') + '.']
-    if 'validation_samples' in data:
-        lines.append(f'- Validation: `{data.get("validation", "")}`,'
-                     f' {data["validation_samples"]} samples (a separate record).')
-    lines.append(f'- Scored: {_scored(facts)}.')
-    scored = data.get('validation_scored') or {}
-    if scored.get('start_state'):
-        lines.append(f'- Start state of the scored part: {scored["start_state"]}.')
-    if data.get('output_offset_reestimated'):
-        shift = facts.get('baseline', {}).get('validation_output_offset')
+             + (f' after its leading hold of {data.leading_hold} samples'
+                if data.leading_hold else '') + '.']
+    if data.validation_samples is not None:
+        lines.append(f'- Validation: `{data.validation}`,'
+                     f' {data.validation_samples} samples (a separate record).')
+    lines.append(f'- Scored: {_scored(report)}.')
+    scored = data.validation_scored
+    if scored is not None and scored.start_state:
+        lines.append(f'- Start state of the scored part: {scored.start_state}.')
+    if data.output_offset_reestimated:
+        shift = (report.baseline.validation_output_offset if report.baseline is not None
+                 else None)
         lines.append('- The validation record has its own sensor zero: only its output offset'
                      ' is re-estimated, for every model alike (baseline:'
-                     f' {_length(shift, units["output"])}).')
-    if 'output_sign' in data:
-        lines.append(f'- Output sign: {data["output_sign"]:+d}'
-                     + (' (a falling sensor)' if data['output_sign'] < 0 else '') + '.')
+                     f' {length(shift, units["output"])}).')
+    if data.output_sign is not None:
+        lines.append(f'- Output sign: {data.output_sign:+d}'
+                     + (' (a falling sensor)' if data.output_sign < 0 else '') + '.')
     lines.append(f'- Units: input {units["input"]}, output {units["output"]}, time s'
                  f' ({units["from"]}).')
     return lines + ['']

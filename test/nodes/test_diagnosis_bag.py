@@ -54,7 +54,7 @@ def test_diagnose_names_dead_time_in_bags_recorded_by_the_plant_node(ros_context
     report = diagnose(training_data, validation=validation_data)
     assert report.cause == 'dead_time', report.decision['steps']
     assert report.gain > 0.05
-    chosen = next(c for c in report.candidates if c['cause'] == 'dead_time')
-    assert chosen['signature'] == 'present' and chosen['significant']
-    fitted = report.extended['parameters']['model.dead_time']
+    chosen = next(c for c in report.candidates if c.cause == 'dead_time')
+    assert chosen.signature == 'present' and chosen.significant
+    fitted = report.extended.parameters['model.dead_time']
     assert abs(fitted - dead_time) < 0.3 * dead_time, (fitted, dead_time)
