@@ -193,6 +193,31 @@ def test_readings_that_lag_by_a_known_delay_are_paired_with_their_commands():
     assert errors[5] < 0.01 < errors[0], errors
 
 
+def test_a_push_in_the_middle_keeps_the_delayed_readings_paired():
+    # A model pushed from outside restarts the fit, not the stream: with a sensor 5
+    # samples late and a reset in the middle, the adaptation sees the pairs it sees in
+    # lock step on the same readings on time (the same pairs, the same held-out error).
+    model, lo, hi = _model(SEEDS[0])
+    t, x = identification_excitation(30.0, sample_rate=RATE, seed=4)
+    y = model.simulate(x)
+    streams = {0: y, 5: np.concatenate([np.full(5, y[0]), y])}
+    status = {}
+    for delay, readings in streams.items():
+        adaptation = Adaptation(model, AdaptationSettings(sample_period=1 / RATE,
+                                                          delay=delay))
+        half = x.size // 3
+        adaptation.record_pairs(x[:half], readings[:half + delay])
+        adaptation.step()
+        adaptation.reset(model)
+        adaptation.record_pairs(x[half:], readings[half + delay:])
+        for _ in range(3):
+            adaptation.step()
+        status[delay] = adaptation.status()
+    assert status[5]['adaptation_pairs'] == status[0]['adaptation_pairs'] == x.size
+    assert (status[5]['adaptation_recent_rms_percent']
+            == status[0]['adaptation_recent_rms_percent']), status
+
+
 def test_the_adaptation_in_its_own_process_proposes_what_it_does_in_this_one():
     # The child process steps on its own clock; each simulated second is sent once the
     # child has taken the previous one (its status counts the pairs), so it steps on the

@@ -271,6 +271,9 @@ class Adaptation:
         self._hi: float = -math.inf
         self._last_residual: float = math.nan
         self._reset(model)
+        # The first ``delay`` readings answer commands before the first one recorded; a
+        # reset (a model pushed from outside) restarts the fit, not the stream's pairing.
+        self._skip = settings.delay
         # Compile the play kernel the worker uses now, not in the worker's first step:
         # numba compiles holding the interpreter lock, which would stall the command path.
         play_end_state(np.zeros(2), np.zeros(1))
@@ -426,7 +429,6 @@ class Adaptation:
         self._in_gram = 0
         self._since_solve = 0
         self._frozen_left = 0
-        self._skip = s.delay
         self._determined = False
         self._lo = math.inf
         self._hi = -math.inf
