@@ -476,19 +476,25 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
         # Serialized messages (CDR: 4-byte encapsulation header, then the double; byte 1
         # says little-endian), no Float64 objects, and every queued message taken in this
         # one callback: the measuring process stays far lighter than the node it measures.
+        # Every queued command is stamped as it is taken, before the actuator answers any
+        # of them: publishing a reading to a subscriber costs the receiver tens of us, which
+        # would otherwise delay the stamps of the commands queued behind it (a latency of
+        # the receiver's, not of the node's).
         take = subscription.handle.take_message
+        first = received[0]
         while True:
             k = received[0]
             if k < count:
                 stamps[k] = time.monotonic_ns()
                 values[k] = (little if data[1] == 1 else big)(data, 4)[0]
-                if echo:
-                    publish_raw(pack(0x0100, actuator.step(values[k])))
             received[0] = k + 1
             taken = take(Float64, True)
             if taken is None:
                 break
             data = taken[0]
+        if echo:
+            for k in range(first, min(received[0], count)):
+                publish_raw(pack(0x0100, actuator.step(values[k])))
 
     def on_message(msg: Float64) -> None:
         # An ordinary subscriber: rclpy deserialises every command into a Float64.
