@@ -16,7 +16,9 @@ import time
 
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
-from mpi_ros.compensation.adaptation import Adaptation, AdaptationProcess, AdaptationSettings
+from mpi_ros.compensation.adaptation import (
+    Adaptation, AdaptationProcess, AdaptationSettings, ReadingSource,
+)
 from mpi_ros.errors import ModelError
 from mpi_ros.extensions.thermal_drift import fit_thermal_drift, ThermalDriftModel
 from mpi_ros.identification.recursive import heating, RecursiveFit
@@ -398,4 +400,30 @@ def test_an_adaptation_process_that_ends_says_so_and_keeps_nothing():
     assert process.status()['adaptation_state'] == 'stopped: the adaptation process ended'
     assert errors == ['stopped: the adaptation process ended']
     assert process.take_candidate() is None
+    assert process.pending == (0, 0)
+
+
+def test_a_child_asked_to_take_readings_without_a_subscriber_says_so_and_ends():
+    # The core's child has no subscriber (the ROS side supplies one): given a source, it
+    # reports why and ends; the node's side reports the error and the end, once each.
+    model, _, _ = _model(SEEDS[0])
+    errors = []
+    source = ReadingSource(topic='/displacement', depth=10, reliability='reliable',
+                           sample_period=1 / RATE, node_name='adaptation')
+    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE),
+                                on_error=errors.append, readings=source)
+    process.start()
+    try:
+        assert not process.wait_ready(60.0)
+        deadline = time.monotonic() + 60.0
+        while process.running:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        process.record_command(1.0)
+        process.exchange()
+    finally:
+        process.stop()
+    assert errors == ['readings on /displacement: ModelError: no subscriber for the readings'
+                      ' on /displacement', 'stopped: the adaptation process ended']
+    assert process.status()['adaptation_state'] == 'stopped: the adaptation process ended'
     assert process.pending == (0, 0)
