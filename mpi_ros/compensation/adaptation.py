@@ -934,7 +934,7 @@ class AdaptationProcess:
         self._commands.append(current)
 
     def record_measurement(self, displacement: float) -> None:
-        """Record a displacement reading [m], in the order they arrive."""
+        """Record a displacement reading [m], in order (only without ``readings``)."""
         self._readings.append(displacement)
 
     def exchange(self) -> None:
