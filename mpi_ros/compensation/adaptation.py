@@ -119,7 +119,16 @@ class ReadingSubscription(Protocol):
     """What a subscriber of readings gives back: its faults, and a way to close it."""
 
     def faults(self) -> dict[str, Any]:
-        """Return ``malformed`` (count), ``last_malformed`` (reason) and ``lost`` (count)."""
+        """
+        Return the subscription's state.
+
+        Returns
+        -------
+        dict
+            ``malformed`` (count), ``last_malformed`` (reason), ``lost`` (count) and
+            ``publishers`` (matched publishers of the readings).
+
+        """
 
     def close(self) -> None:
         """Stop taking readings and release the subscription (bounded time)."""
@@ -828,6 +837,9 @@ class AdaptationProcess:
         self._entry = entry
         self.malformed = 0
         self.last_malformed = ''
+        #: Publishers of the readings the child's subscription had matched when it said it
+        #: was ready (None: no ``readings``, or not ready yet).
+        self.publishers: int | None = None
         self.errors = 0
         self._commands: list[float] = []
         self._readings: list[float] = []
@@ -1033,6 +1045,7 @@ class AdaptationProcess:
             self._in_flight -= 1
         elif kind == 'ready':
             self._ready = True
+            self.publishers = message[1]
             if self._source is not None:
                 # Commands published before the child's subscription was open: their
                 # readings went to no one, so they pair with nothing.  The child drops the
@@ -1146,7 +1159,7 @@ def _loop(conn: multiprocessing.connection.Connection, adaptation: Adaptation,
 
     listener = threading.Thread(target=listen, name='pipe', daemon=True)
     listener.start()
-    reply(('ready',))
+    reply(('ready', None if readings is None else readings.faults()['publishers']))
     number = 0
     deadline = time.monotonic() + settings.period
     while not stop.wait(max(0.0, deadline - time.monotonic())):
@@ -1167,7 +1180,8 @@ def _loop(conn: multiprocessing.connection.Connection, adaptation: Adaptation,
                 status.update({
                     'adaptation_malformed_readings': faults['malformed'],
                     'adaptation_last_malformed_reading': faults['last_malformed'],
-                    'adaptation_lost_readings': faults['lost']})
+                    'adaptation_lost_readings': faults['lost'],
+                    'adaptation_reading_publishers': faults['publishers']})
             reply(('status', status, adaptation.events()))
         except (BrokenPipeError, OSError):
             break

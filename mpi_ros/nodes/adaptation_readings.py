@@ -46,8 +46,10 @@ __all__ = ['MATCH_TIMEOUT_S', 'POLL_PERIOD_S', 'ReadingSubscriber', 'serve_socke
 #: Interval [s] between two takes of the queued readings.
 POLL_PERIOD_S = 0.01
 #: Longest wait [s] for a publisher of the readings to match before the child says it is
-#: ready (a stream already running then loses nothing to the discovery of a new reader).
-MATCH_TIMEOUT_S = 1.0
+#: ready: the child's participant is new, and a plant that already runs answers the first
+#: commands only into the readers it has matched (1 s was too short under load: one closed
+#: loop over DDS lost the first readings, and its pairs shifted).
+MATCH_TIMEOUT_S = 5.0
 #: Longest wait [s] for the taking thread at close.
 CLOSE_TIMEOUT_S = 2.0
 
@@ -132,9 +134,9 @@ class ReadingSubscriber:
             time.sleep(0.01)
 
     def faults(self) -> dict[str, Any]:
-        """Return ``malformed`` (count), ``last_malformed`` (reason) and ``lost`` (count)."""
+        """Return ``malformed``, ``last_malformed``, ``lost`` and ``publishers`` (matched)."""
         return {'malformed': self.malformed, 'last_malformed': self.last_malformed,
-                'lost': self.lost}
+                'lost': self.lost, 'publishers': self._subscription.get_publisher_count()}
 
     def close(self) -> None:
         """Stop the taking thread (at most :data:`CLOSE_TIMEOUT_S`), release the context."""

@@ -446,6 +446,10 @@ class CompensatorNode(CompensatorNodeBase):
             f' held out {settings.holdout:g} s, margin {100 * settings.margin:g} %; fitting in'
             + (f' process {self._worker.pid} (which takes the readings)'
                if isinstance(self._worker, AdaptationProcess) else ' a thread'))
+        if isinstance(self._worker, AdaptationProcess) and self._worker.publishers == 0:
+            self.get_logger().warning(
+                f'adaptation: no publisher of {self.resolve_topic_name("displacement")} yet;'
+                ' commands published before the readings reach the adaptation do not pair')
 
     def _stop_adaptation(self) -> None:
         worker, self._worker = self._worker, None

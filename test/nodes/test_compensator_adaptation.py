@@ -173,6 +173,7 @@ def test_the_adaptation_process_takes_the_readings_itself_and_updates_the_node(
         status = adaptation.status()
         assert status['adaptation_updates_accepted'] >= 1, status
         assert status['adaptation_lost_readings'] == 0, status
+        assert status['adaptation_reading_publishers'] == 1, status
         assert node.model_version == 1 + status['adaptation_updates_accepted']
         running = node.compensator.model
         assert adaptation.model.to_params() == running.to_params()
