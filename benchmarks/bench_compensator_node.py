@@ -272,6 +272,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
             pids['sink'] = sink_proc.pid
         cpu_start = {name: _cpu_seconds(pid) for name, pid in pids.items()}
         threads_start = _thread_cpu_seconds(comp.pid)
+        children = [pid for name, pid in pids.items() if name.startswith('compensator child')]
+        child_start = {pid: _thread_cpu_seconds(pid) for pid in children}
         start = time.monotonic_ns()
         next_rss = start
         k = 0
@@ -300,6 +302,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         for tid, (name, seconds) in threads_end.items():
             used = seconds - threads_start.get(tid, (name, 0.0))[1]
             thread_percent[name] = thread_percent.get(name, 0.0) + 100.0 * used / elapsed
+        child_percent: dict[str, float] = {}
+        for pid in children:
+            for tid, (name, seconds) in _thread_cpu_seconds(pid).items():
+                used = seconds - child_start[pid].get(tid, (name, 0.0))[1]
+                child_percent[name] = child_percent.get(name, 0.0) + 100.0 * used / elapsed
         receiver.wait(timeout=duration + 120.0)
         rss.append((elapsed, _rss_kib(comp.pid)))
     finally:
@@ -345,6 +352,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                             (tmp / 'compensator.log').read_text().splitlines()
                             if 'adaptation' in line][-3:] if adaptation else []),
         'cpu_percent': cpu_percent, 'compensator_threads': thread_percent,
+        'child_threads': child_percent,
         'qos_depth': qos_depth, 'reliability': reliability,
         'pinned': pin, 'node': node_kind, 'receiver': receiver_kind,
         'load_average': os.getloadavg(), 'axes': axes, 'chunk': chunk,
@@ -409,6 +417,11 @@ def format_results(results: dict[str, Any]) -> str:
     busy = {k: v for k, v in r['compensator_threads'].items() if v >= 0.5}
     lines.append('compensator CPU per thread [% of one core]: ' + ', '.join(
         f'{name} {value:.0f}' for name, value in sorted(busy.items(), key=lambda i: -i[1])))
+    busy = {k: v for k, v in r.get('child_threads', {}).items() if v >= 0.5}
+    if busy:
+        lines.append("the compensator's child process, CPU per thread [% of one core]: "
+                     + ', '.join(f'{name} {value:.0f}' for name, value
+                                 in sorted(busy.items(), key=lambda i: -i[1])))
     per_message = r['cpu_percent']['compensator'] * 1e4 / r['rate']
     lines.append(f'compensator CPU per message: {per_message:.1f} us (per sample of one axis'
                  f' {per_message / (r["chunk"] * r["axes"]):.2f} us)')
