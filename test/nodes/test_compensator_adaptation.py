@@ -260,3 +260,30 @@ def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
     assert process.status()['adaptation_state'] == state
     assert errors == [state]
     assert process.pending == (0, 0)
+
+
+def test_the_childs_subscription_lives_from_configure_to_cleanup(ros_context):
+    # The readings' subscriber lives in the child, which the node starts at configure and
+    # stops at cleanup (as its own subscription did): after cleanup nothing reads
+    # displacement, after a new configure a new child does, and none outlives the node.
+    t, x = identification_excitation(10.0, sample_rate=RATE, seed=11)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=11).simulate(t, x)
+    node, executor = _adaptive_node(ros_context, identify(x, y, n=6, l=3).model, True)
+    second = None
+    try:
+        first = node.adaptation
+        assert isinstance(first, AdaptationProcess) and first.running
+        node.trigger_deactivate()
+        assert first.running                      # inactive: the memory and the child stay
+        node.trigger_cleanup()
+        assert node.adaptation is None and not first.running
+        node.trigger_configure()
+        second = node.adaptation
+        assert isinstance(second, AdaptationProcess) and second.running
+        assert second.pid != first.pid
+        assert '/displacement' not in [s.topic_name for s in node.subscriptions]
+    finally:
+        executor.remove_node(node)
+        executor.shutdown()
+        node.destroy_node()
+    assert second is not None and not second.running
