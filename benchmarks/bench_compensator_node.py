@@ -20,7 +20,13 @@ Targets: 10,000 messages/s for 10 s, zero drops, p99 <= 1 ms (ROS package issue)
 Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]
 [--reliability reliable|best_effort] [--qos-depth 10000] [--pin] [--axes N [--chunk K]]
 [--node compensator|relay:events|relay:waitset|relay:poll|relay:naive]
-[--receiver ordinary|naive|raw]``
+[--receiver ordinary|naive|raw] [--adaptation [--worker process|thread] [--rounds N]]``
+
+``--adaptation --rounds N`` measures adaptation off (``--echo``: the receiver answers as
+the actuator all the same), off with a process that takes the readings as the adaptation's
+child does (``--sink``: the second 10 kHz stream's cost without the adaptation) and on,
+alternately, N runs each, on the same machine load, and prints one line per run and the
+medians: the comparison of docs/adaptation.md (issue 29).
 
 ``--axes N`` (N > 1) runs the multi-axis compensator on the Float64MultiArray topics, each
 message carrying ``--chunk`` samples of every axis (``--rate`` is messages per second).
@@ -75,7 +81,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                   node_kind: str = 'compensator',
                   receiver_kind: str = 'ordinary', axes: int = 1,
                   chunk: int = 1, adaptation: bool = False,
-                  echo: bool = False, worker: str = 'process') -> dict[str, Any]:
+                  echo: bool = False, worker: str = 'process',
+                  sink: bool = False) -> dict[str, Any]:
     """
     Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
@@ -119,7 +126,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     adaptation : bool
         Single axis: run the compensator with ``adaptation.enabled`` and let the receiver
         act as the actuator: it answers every command with the benchmark model's
-        displacement on ``displacement`` (lock step), so the adaptation pairs, fits and,
+        displacement on ``displacement`` (lock step; with ``worker`` ``process`` the
+        adaptation's child process subscribes to it, the node's own process does not),
+        so the adaptation pairs, fits and,
         from 10 s on (5 s held out, 5 s in the Gram matrix), solves a candidate every
         second while the command path is measured (``adaptation.min_excitation`` 0.1:
         the trajectory spans 27 % of the input range).
@@ -129,6 +138,12 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     worker : str
         Where the adaptation fits: ``process`` (``adaptation.process`` true, the node's
         default) or ``thread``.
+    sink : bool
+        With ``echo`` and without ``adaptation``: a process of its own takes the readings
+        on ``displacement`` as the adaptation's child process does (the same subscriber,
+        :class:`mpi_ros.nodes.adaptation_readings.ReadingSubscriber`), so that the second
+        10 kHz stream costs the machine what it costs with adaptation on, and only the
+        adaptation differs.
 
     Returns
     -------
@@ -200,6 +215,12 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
          '--reliability', reliability, '--receiver', receiver_kind, '--axes', str(axes),
          '--chunk', str(chunk), *(['--echo'] if adaptation or echo else [])],
         env=dict(os.environ))
+    sink_proc = None
+    if sink and echo and not adaptation:
+        sink_proc = subprocess.Popen(
+            [sys.executable, __file__, '--role', 'sink', '--out', out, '--qos-depth',
+             str(qos_depth), '--reliability', reliability, '--rate', str(rate)],
+            env=dict(os.environ), stdin=subprocess.PIPE)
     if pin:
         # Right after the start, before rclpy creates any thread: every later thread
         # (DDS receive and event threads) inherits the affinity.
@@ -220,7 +241,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     try:
         deadline = time.monotonic() + 60.0
         while (pub.get_subscription_count() < 1 or not Path(out + '.ready').exists()
-               or node.count_subscribers(output_topic) < 1):
+               or node.count_subscribers(output_topic) < 1
+               or (sink_proc is not None and not Path(out + '.sink').exists())):
             if time.monotonic() > deadline:
                 msg = 'compensator or receiver did not start in 60 s'
                 raise RuntimeError(msg)
@@ -246,8 +268,12 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         pids = {'compensator': comp.pid, 'sender': os.getpid(), 'receiver': receiver.pid}
         for child in _children(comp.pid):          # the adaptation's process, if any
             pids[f'compensator child {child}'] = child
+        if sink_proc is not None:
+            pids['sink'] = sink_proc.pid
         cpu_start = {name: _cpu_seconds(pid) for name, pid in pids.items()}
         threads_start = _thread_cpu_seconds(comp.pid)
+        children = [pid for name, pid in pids.items() if name.startswith('compensator child')]
+        child_start = {pid: _thread_cpu_seconds(pid) for pid in children}
         start = time.monotonic_ns()
         next_rss = start
         k = 0
@@ -276,6 +302,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         for tid, (name, seconds) in threads_end.items():
             used = seconds - threads_start.get(tid, (name, 0.0))[1]
             thread_percent[name] = thread_percent.get(name, 0.0) + 100.0 * used / elapsed
+        child_percent: dict[str, float] = {}
+        for pid in children:
+            for tid, (name, seconds) in _thread_cpu_seconds(pid).items():
+                used = seconds - child_start[pid].get(tid, (name, 0.0))[1]
+                child_percent[name] = child_percent.get(name, 0.0) + 100.0 * used / elapsed
         receiver.wait(timeout=duration + 120.0)
         rss.append((elapsed, _rss_kib(comp.pid)))
     finally:
@@ -285,7 +316,10 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         if receiver.poll() is None:
             receiver.kill()
             receiver.wait()
-    left = [p.pid for p in (comp.proc, receiver) if p.poll() is None]
+        if sink_proc is not None:
+            sink_proc.communicate(timeout=30.0)          # stdin closed: the sink ends
+    left = [p.pid for p in (comp.proc, receiver, *([sink_proc] if sink_proc else []))
+            if p.poll() is None]
     stamps = np.load(out)
     values = np.load(out.replace('.npy', '_values.npy'))
     n = stamps.size
@@ -318,6 +352,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                             (tmp / 'compensator.log').read_text().splitlines()
                             if 'adaptation' in line][-3:] if adaptation else []),
         'cpu_percent': cpu_percent, 'compensator_threads': thread_percent,
+        'child_threads': child_percent,
         'qos_depth': qos_depth, 'reliability': reliability,
         'pinned': pin, 'node': node_kind, 'receiver': receiver_kind,
         'load_average': os.getloadavg(), 'axes': axes, 'chunk': chunk,
@@ -382,6 +417,11 @@ def format_results(results: dict[str, Any]) -> str:
     busy = {k: v for k, v in r['compensator_threads'].items() if v >= 0.5}
     lines.append('compensator CPU per thread [% of one core]: ' + ', '.join(
         f'{name} {value:.0f}' for name, value in sorted(busy.items(), key=lambda i: -i[1])))
+    busy = {k: v for k, v in r.get('child_threads', {}).items() if v >= 0.5}
+    if busy:
+        lines.append("the compensator's child process, CPU per thread [% of one core]: "
+                     + ', '.join(f'{name} {value:.0f}' for name, value
+                                 in sorted(busy.items(), key=lambda i: -i[1])))
     per_message = r['cpu_percent']['compensator'] * 1e4 / r['rate']
     lines.append(f'compensator CPU per message: {per_message:.1f} us (per sample of one axis'
                  f' {per_message / (r["chunk"] * r["axes"]):.2f} us)')
@@ -421,23 +461,96 @@ def main() -> None:
     parser.add_argument('--echo', action='store_true',
                         help='the receiver answers as the actuator on displacement (implied by '
                              '--adaptation; alone: the same receiver load without adaptation)')
+    parser.add_argument('--sink', action='store_true',
+                        help='with --echo: a process of its own takes the readings')
+    parser.add_argument('--rounds', type=int, default=0,
+                        help='with --adaptation: N runs without and N with it, alternately, '
+                             'and their medians')
     parser.add_argument('--role', default='sender', help=argparse.SUPPRESS)
     parser.add_argument('--out', default='', help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.role == 'sink':
+        _sink(args.out, args.qos_depth, args.reliability, 1.0 / args.rate)
+        return
     if args.role == 'receiver':
         _receiver(args.out, args.count, args.duration, args.qos_depth, args.reliability,
                   args.receiver, args.axes, args.chunk, echo=args.echo)
         return
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.setdefault('ROS_DOMAIN_ID', str(random.randint(101, 199)))
+    if args.rounds and args.adaptation:
+        _compare_adaptation(args)
+        return
     print(format_results(run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
                                        reliability=args.reliability, pin=args.pin,
                                        node_kind=args.node, receiver_kind=args.receiver,
                                        axes=args.axes, chunk=args.chunk,
                                        adaptation=args.adaptation, echo=args.echo,
-                                       worker=args.worker)),
+                                       worker=args.worker, sink=args.sink)),
           flush=True)
+
+
+def _compare_adaptation(args: argparse.Namespace) -> None:
+    """Run adaptation off and on alternately ``args.rounds`` times; print runs and medians."""
+    modes = ('off', 'off+sink', 'on')
+    runs: dict[str, list[dict[str, Any]]] = {mode: [] for mode in modes}
+    print(f'adaptation off (--echo: the receiver answers on displacement, no one reads it),'
+          f' off+sink (a process takes the readings as the adaptation child does) and on'
+          f' (--worker {args.worker}), alternately, {args.rounds} runs each of'
+          f' {args.duration:g} s at {args.rate:g}/s; latency desired -> command [ms]',
+          flush=True)
+    for _ in range(args.rounds):
+        for mode in modes:
+            before = os.getloadavg()[0]
+            r = run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
+                              reliability=args.reliability, pin=args.pin,
+                              receiver_kind=args.receiver, adaptation=mode == 'on',
+                              echo=True, worker=args.worker, sink=mode == 'off+sink')
+            r['load_before'] = before
+            runs[mode].append(r)
+            print(_run_line(r, mode), flush=True)
+    medians = {}
+    for mode, results in runs.items():
+        whole = [r['latency_us']['p99'] / 1e3 for r in results if r['drops'] == 0]
+        late = [r['windows'][1][2] / 1e3 for r in results
+                if r['drops'] == 0 and len(r['windows']) > 1]
+        medians[mode] = (float(np.median(whole)) if whole else float('nan'),
+                         float(np.median(late)) if late else float('nan'))
+        print(f'median p99 {mode} (runs without loss): {medians[mode][0]:.2f} ms whole, '
+              f'{medians[mode][1]:.2f} ms 10-20 s', flush=True)
+    for base in ('off', 'off+sink'):
+        print(f'on / {base}: {medians["on"][0] / medians[base][0]:.2f}x whole, '
+              f'{medians["on"][1] / medians[base][1]:.2f}x 10-20 s (goal: loss 0, <= 1.2x)',
+              flush=True)
+
+
+def _run_line(r: dict[str, Any], mode: str) -> str:
+    """One line of a comparison run: load, loss, p50/p99 [ms], CPU [% of a core]."""
+    lat = r['latency_us']
+    late = f'{r["windows"][1][2] / 1e3:.2f}' if len(r['windows']) > 1 else 'n/a'
+    cpu = ', '.join(f'{name} {value:.0f}' for name, value in r['cpu_percent'].items())
+    return (f'{time.strftime("%H:%M:%S")} {mode}: load '
+            f'{r["load_before"]:.1f}-{r["load_average"][0]:.1f}, lost {r["drops"]} of '
+            f'{r["sent"]}, p50 {lat.get("p50", float("nan")) / 1e3:.2f}, p99 '
+            f'{lat.get("p99", float("nan")) / 1e3:.2f} whole / {late} 10-20 s; CPU {cpu}')
+
+
+def _sink(out: str, qos_depth: int, reliability: str, sample_period: float) -> None:
+    """Take the readings on displacement as the adaptation's child does, until stdin ends."""
+    from mpi_ros.compensation.adaptation import ReadingSource
+    from mpi_ros.nodes.adaptation_readings import ReadingSubscriber
+    taken = [0]
+
+    def record(values: np.ndarray) -> None:
+        taken[0] += values.size
+
+    reader = ReadingSubscriber(ReadingSource('/displacement', qos_depth, reliability,
+                                             sample_period, 'bench_sink'), record)
+    Path(out + '.sink').touch()
+    sys.stdin.read()
+    reader.close()
+    print(f'sink: {taken[0]} readings taken, {reader.lost} lost', flush=True)
 
 
 def _receiver(out: str, count: int, timeout: float, qos_depth: int,
@@ -476,19 +589,25 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
         # Serialized messages (CDR: 4-byte encapsulation header, then the double; byte 1
         # says little-endian), no Float64 objects, and every queued message taken in this
         # one callback: the measuring process stays far lighter than the node it measures.
+        # Every queued command is stamped as it is taken, before the actuator answers any
+        # of them: publishing a reading to a subscriber costs the receiver tens of us, which
+        # would otherwise delay the stamps of the commands queued behind it (a latency of
+        # the receiver's, not of the node's).
         take = subscription.handle.take_message
+        first = received[0]
         while True:
             k = received[0]
             if k < count:
                 stamps[k] = time.monotonic_ns()
                 values[k] = (little if data[1] == 1 else big)(data, 4)[0]
-                if echo:
-                    publish_raw(pack(0x0100, actuator.step(values[k])))
             received[0] = k + 1
             taken = take(Float64, True)
             if taken is None:
                 break
             data = taken[0]
+        if echo:
+            for k in range(first, min(received[0], count)):
+                publish_raw(pack(0x0100, actuator.step(values[k])))
 
     def on_message(msg: Float64) -> None:
         # An ordinary subscriber: rclpy deserialises every command into a Float64.

@@ -16,7 +16,9 @@ import time
 
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
-from mpi_ros.compensation.adaptation import Adaptation, AdaptationProcess, AdaptationSettings
+from mpi_ros.compensation.adaptation import (
+    Adaptation, AdaptationProcess, AdaptationSettings, ReadingSource,
+)
 from mpi_ros.errors import ModelError
 from mpi_ros.extensions.thermal_drift import fit_thermal_drift, ThermalDriftModel
 from mpi_ros.identification.recursive import heating, RecursiveFit
@@ -191,6 +193,31 @@ def test_readings_that_lag_by_a_known_delay_are_paired_with_their_commands():
             adaptation.step()
         errors[delay] = adaptation.status()['adaptation_recent_rms_percent']
     assert errors[5] < 0.01 < errors[0], errors
+
+
+def test_a_push_in_the_middle_keeps_the_delayed_readings_paired():
+    # A model pushed from outside restarts the fit, not the stream: with a sensor 5
+    # samples late and a reset in the middle, the adaptation sees the pairs it sees in
+    # lock step on the same readings on time (the same pairs, the same held-out error).
+    model, lo, hi = _model(SEEDS[0])
+    t, x = identification_excitation(30.0, sample_rate=RATE, seed=4)
+    y = model.simulate(x)
+    streams = {0: y, 5: np.concatenate([np.full(5, y[0]), y])}
+    status = {}
+    for delay, readings in streams.items():
+        adaptation = Adaptation(model, AdaptationSettings(sample_period=1 / RATE,
+                                                          delay=delay))
+        half = x.size // 3
+        adaptation.record_pairs(x[:half], readings[:half + delay])
+        adaptation.step()
+        adaptation.reset(model)
+        adaptation.record_pairs(x[half:], readings[half + delay:])
+        for _ in range(3):
+            adaptation.step()
+        status[delay] = adaptation.status()
+    assert status[5]['adaptation_pairs'] == status[0]['adaptation_pairs'] == x.size
+    assert (status[5]['adaptation_recent_rms_percent']
+            == status[0]['adaptation_recent_rms_percent']), status
 
 
 def test_the_adaptation_in_its_own_process_proposes_what_it_does_in_this_one():
@@ -373,4 +400,30 @@ def test_an_adaptation_process_that_ends_says_so_and_keeps_nothing():
     assert process.status()['adaptation_state'] == 'stopped: the adaptation process ended'
     assert errors == ['stopped: the adaptation process ended']
     assert process.take_candidate() is None
+    assert process.pending == (0, 0)
+
+
+def test_a_child_asked_to_take_readings_without_a_subscriber_says_so_and_ends():
+    # The core's child has no subscriber (the ROS side supplies one): given a source, it
+    # reports why and ends; the node's side reports the error and the end, once each.
+    model, _, _ = _model(SEEDS[0])
+    errors = []
+    source = ReadingSource(topic='/displacement', depth=10, reliability='reliable',
+                           sample_period=1 / RATE, node_name='adaptation')
+    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE),
+                                on_error=errors.append, readings=source)
+    process.start()
+    try:
+        assert not process.wait_ready(60.0)
+        deadline = time.monotonic() + 60.0
+        while process.running:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        process.record_command(1.0)
+        process.exchange()
+    finally:
+        process.stop()
+    assert errors == ['readings on /displacement: ModelError: no subscriber for the readings'
+                      ' on /displacement', 'stopped: the adaptation process ended']
+    assert process.status()['adaptation_state'] == 'stopped: the adaptation process ended'
     assert process.pending == (0, 0)

@@ -15,7 +15,9 @@ the fit has not seen.  The node applies a candidate through its ordinary paramet
 The work runs in a child process (:class:`AdaptationProcess`: its own interpreter, so the
 command path never waits for the interpreter lock while a step runs) or in a thread of the
 node's process (:class:`AdaptationWorker`); either way the command path only appends a float
-to a list.
+to a list.  Given a :class:`ReadingSource`, the child takes the readings itself (a
+subscriber the node's layer supplies, see :func:`serve_socket`): the node's process then
+never handles a reading, and sends the child only its commands.
 
 Rules, in the order they are checked on each batch of paired samples:
 
@@ -42,12 +44,13 @@ import math
 import multiprocessing.connection
 import os
 import pickle
+import signal
 import socket
 import subprocess
 import sys
 import threading
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -61,7 +64,8 @@ from ..operators.model import MPIModel
 from ..operators.play import play_end_state
 
 __all__ = ['Adaptation', 'AdaptationProcess', 'AdaptationSettings', 'AdaptationWorker',
-           'adaptable', 'Candidate', 'serve_socket']
+           'adaptable', 'Candidate', 'ReadingSource', 'ReadingSubscription', 'serve_socket',
+           'Subscribe']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -77,6 +81,61 @@ _CHUNK = 2048
 _IN_FLIGHT = 4
 #: The state a node shows when its adaptation's child process has ended.
 _ENDED = 'stopped: the adaptation process ended'
+#: ... and when it was stopped for not taking the commands.
+_BEHIND = 'stopped: the adaptation process did not take the commands (stalled)'
+
+
+@dataclass(frozen=True)
+class ReadingSource:
+    """
+    Where the adaptation's child process takes the displacement readings itself.
+
+    Attributes
+    ----------
+    topic : str
+        The readings' topic, fully resolved (the node's namespace and remappings applied),
+        e.g. ``/displacement``; each message one reading [m], in order.
+    depth : int
+        Keep-last depth of the subscription (the node's ``qos_depth``).
+    reliability : str
+        ``reliable`` or ``best_effort`` (the node's ``qos_reliability``).
+    sample_period : float
+        Interval between readings [s] (the node's ``sample_period``): the subscriber takes
+        the queued ones well before ``depth`` of them fill its history.
+    node_name, namespace : str
+        Name and namespace of the child's own node (it shows in the ROS graph).
+
+    """
+
+    topic: str
+    depth: int
+    reliability: str
+    sample_period: float
+    node_name: str
+    namespace: str = '/'
+
+
+class ReadingSubscription(Protocol):
+    """What a subscriber of readings gives back: its faults, and a way to close it."""
+
+    def faults(self) -> dict[str, Any]:
+        """
+        Return the subscription's state.
+
+        Returns
+        -------
+        dict
+            ``malformed`` (count), ``last_malformed`` (reason), ``lost`` (count) and
+            ``publishers`` (matched publishers of the readings).
+
+        """
+
+    def close(self) -> None:
+        """Stop taking readings and release the subscription (bounded time)."""
+
+
+#: Opens a subscription: (source, record a batch of readings [m] in order) -> subscription.
+Subscribe = Callable[[ReadingSource, Callable[[FloatArray], None]], ReadingSubscription]
 
 
 @dataclass(frozen=True)
@@ -271,6 +330,9 @@ class Adaptation:
         self._hi: float = -math.inf
         self._last_residual: float = math.nan
         self._reset(model)
+        # The first ``delay`` readings answer commands before the first one recorded; a
+        # reset (a model pushed from outside) restarts the fit, not the stream's pairing.
+        self._skip = settings.delay
         # Compile the play kernel the worker uses now, not in the worker's first step:
         # numba compiles holding the interpreter lock, which would stall the command path.
         play_end_state(np.zeros(2), np.zeros(1))
@@ -294,6 +356,14 @@ class Adaptation:
         """Record published commands [A] and readings [m] in bulk, each in order."""
         self._commands.extend(np.asarray(currents, dtype=np.float64).tolist())
         self._readings.extend(np.asarray(displacements, dtype=np.float64).tolist())
+
+    def record_measurements(self, displacements: npt.ArrayLike) -> None:
+        """Record displacement readings [m] in bulk, in the order they arrived."""
+        self._readings.extend(np.asarray(displacements, dtype=np.float64).tolist())
+
+    def discard_readings(self) -> None:
+        """Drop the readings not yet paired: no command recorded from now on answers them."""
+        self._readings.clear()
 
     def take_candidate(self) -> Candidate | None:
         """Return the candidate ready to apply, once (None when there is none)."""
@@ -426,7 +496,6 @@ class Adaptation:
         self._in_gram = 0
         self._since_solve = 0
         self._frozen_left = 0
-        self._skip = s.delay
         self._determined = False
         self._lo = math.inf
         self._hi = -math.inf
@@ -726,12 +795,19 @@ class AdaptationProcess:
     Run an :class:`Adaptation` in a child process; the node's side of it, in the node.
 
     The node's interpreter runs nothing of a step: the command path appends each command
-    and each reading to a list, and :meth:`exchange` (the node's 10 Hz timer) sends what
-    arrived to the child in one message and takes back the child's candidate, status and
-    events.  The child (started with ``spawn``: a fork of a process with DDS threads is
-    unsafe) drains its end of the pipe in a thread of its own, so a long solve never
-    fills the pipe, and steps every ``period`` seconds.  Its methods mirror
+    (and, without ``readings``, each reading) to a list, and :meth:`exchange` (the node's
+    10 Hz timer) sends what arrived to the child in one message and takes back the child's
+    candidate, status and events.  The child (a fresh interpreter: a fork of a process with
+    DDS threads is unsafe) drains its end of the pipe in a thread of its own, so a long
+    solve never fills the pipe, and steps every ``period`` seconds.  Its methods mirror
     :class:`Adaptation`'s node side, so the node treats both alike.
+
+    With ``readings``, the child subscribes to the readings itself (``entry``'s
+    ``serve_socket`` supplies the subscriber): the node records only its commands, and
+    those recorded before the child says its subscription is open are dropped (their
+    readings went to no one).  A child that stops taking the commands (20 held-out windows of
+    them waiting) is stopped: its own readings have overflowed by then, so their order no
+    longer pairs; the node shows why and compensates on.
 
     Parameters
     ----------
@@ -741,14 +817,29 @@ class AdaptationProcess:
         See :class:`AdaptationSettings`.
     on_error : callable, optional
         Called with the text of an exception a step raised in the child.
+    readings : ReadingSource, optional
+        Where the child takes the readings itself (None: the node records them with
+        :meth:`record_measurement`).
+    entry : str
+        The module whose ``serve_socket(descriptor)`` the child runs (this one by default;
+        with ``readings``, one whose ``serve_socket`` passes a subscriber on to
+        :func:`serve_socket`).
 
     """
 
     def __init__(self, model: AdaptedModel, settings: AdaptationSettings, *,
-                 on_error: Callable[[str], None] | None = None) -> None:
+                 on_error: Callable[[str], None] | None = None,
+                 readings: ReadingSource | None = None, entry: str = __name__) -> None:
         self.settings = settings
         self._model = model
         self._on_error = on_error
+        self._source = readings
+        self._entry = entry
+        self.malformed = 0
+        self.last_malformed = ''
+        #: Publishers of the readings the child's subscription had matched when it said it
+        #: was ready (None: no ``readings``, or not ready yet).
+        self.publishers: int | None = None
         self.errors = 0
         self._commands: list[float] = []
         self._readings: list[float] = []
@@ -792,7 +883,7 @@ class AdaptationProcess:
         """
         ours, theirs = socket.socketpair()
         with ours, theirs:
-            code = ('import sys; from mpi_ros.compensation.adaptation import serve_socket;'
+            code = (f'import sys; from {self._entry} import serve_socket;'
                     ' serve_socket(int(sys.argv[1]))')
             path = os.pathsep.join(p for p in sys.path if p)
             self._process = subprocess.Popen(
@@ -800,7 +891,35 @@ class AdaptationProcess:
                 pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
                 env=dict(os.environ, PYTHONPATH=path))
             self._conn = multiprocessing.connection.Connection(ours.detach())
-        self._conn.send((self._params, self.settings))
+        self._conn.send((self._params, self.settings, self._source))
+
+    def wait_ready(self, timeout: float) -> bool:
+        """
+        Wait until the child is ready (with ``readings``: its subscription is open).
+
+        Parameters
+        ----------
+        timeout : float
+            Longest wait [s].
+
+        Returns
+        -------
+        bool
+            True when the child said it is ready; False after ``timeout`` or when it ended
+            (the next :meth:`exchange` reports that).
+
+        """
+        conn = self._conn
+        deadline = time.monotonic() + timeout
+        try:
+            while conn is not None and not self._ready:
+                left = deadline - time.monotonic()
+                if left <= 0.0 or not conn.poll(left):
+                    break
+                self._receive(conn.recv())
+        except (EOFError, OSError):
+            return False
+        return self._ready
 
     def stop(self, timeout: float = 1.0) -> None:
         """Stop the child (asked first, terminated after ``timeout`` seconds)."""
@@ -827,7 +946,7 @@ class AdaptationProcess:
         self._commands.append(current)
 
     def record_measurement(self, displacement: float) -> None:
-        """Record a displacement reading [m], in the order they arrive."""
+        """Record a displacement reading [m], in order (only without ``readings``)."""
         self._readings.append(displacement)
 
     def exchange(self) -> None:
@@ -840,13 +959,11 @@ class AdaptationProcess:
                 self._receive(conn.recv())
         except (EOFError, OSError):
             # The child ended: say so once; what the node records is dropped from now on.
+            self._ended(_ENDED)
+            return
+        if self._status.get('adaptation_state', '').startswith('stopped'):
             self._commands.clear()
             self._readings.clear()
-            if self._status.get('adaptation_state') != _ENDED:
-                self._status['adaptation_state'] = _ENDED
-                self.errors += 1
-                if self._on_error is not None:
-                    self._on_error(_ENDED)
             return
         # The pipe never fills, so a send never blocks the node: at most _IN_FLIGHT
         # messages of at most _CHUNK pairs each are unacknowledged; the rest waits here.
@@ -858,10 +975,18 @@ class AdaptationProcess:
             conn.send_bytes(_PAIRS + array('q', [len(a)]).tobytes()
                             + array('d', a).tobytes() + array('d', b).tobytes())
             self._in_flight += 1
+        limit = 20 * self.settings.samples(self.settings.holdout)
+        if self._source is not None:
+            # The child takes the readings: one that has not taken the commands of 20
+            # held-out windows has lost its readings too (its subscription's depth is far
+            # smaller), so their order no longer pairs: it is stopped.
+            if len(commands) > limit:
+                self._ended(_BEHIND)
+                self.stop()
+            return
         # A child that does not keep up (or not yet listening): the newest pairs are kept,
         # as many dropped from both lists, so the k-th reading still answers the k-th
         # command.
-        limit = 20 * self.settings.samples(self.settings.holdout)
         drop = max(0, min(len(commands), len(readings)) - limit)
         del commands[:drop]
         del readings[:drop]
@@ -871,13 +996,23 @@ class AdaptationProcess:
         candidate, self._candidate = self._candidate, None
         return candidate
 
+    def _ended(self, state: str) -> None:
+        # Say once why the adaptation stopped; what the node records is dropped from now on.
+        self._commands.clear()
+        self._readings.clear()
+        if not self._status.get('adaptation_state', '').startswith('stopped'):
+            self._status['adaptation_state'] = state
+            self.errors += 1
+            if self._on_error is not None:
+                self._on_error(state)
+
     def applied(self, candidate: Candidate, accepted: bool, reason: str = '') -> None:
         """Tell the child whether the node's validation took the candidate."""
         number = self._sequence.pop(id(candidate), None)
         if accepted:
             self._model = candidate.model
-        if number is not None and self._conn is not None:
-            self._conn.send(('applied', number, accepted, reason))
+        if number is not None:
+            self._send(('applied', number, accepted, reason))
 
     def reset(self, model: AdaptedModel) -> None:
         """Start again from a model pushed from outside."""
@@ -885,8 +1020,7 @@ class AdaptationProcess:
         self._candidate = None
         self._sequence.clear()
         self._params = model.to_params()
-        if self._conn is not None:
-            self._conn.send(('reset', self._params))
+        self._send(('reset', self._params))
 
     def status(self) -> dict[str, Any]:
         """Return the values /diagnostics shows (``adaptation_*``), as the child last sent."""
@@ -897,12 +1031,27 @@ class AdaptationProcess:
         events, self._events = self._events, []
         return events
 
+    def _send(self, message: Any) -> None:
+        # To a child that has ended, nothing is sent (the next exchange reports it).
+        if self._conn is not None:
+            try:
+                self._conn.send(message)
+            except (OSError, ValueError):
+                pass
+
     def _receive(self, message: Any) -> None:
         kind = message[0]
         if kind == 'taken':
             self._in_flight -= 1
         elif kind == 'ready':
             self._ready = True
+            self.publishers = message[1]
+            if self._source is not None:
+                # Commands published before the child's subscription was open: their
+                # readings went to no one, so they pair with nothing.  The child drops the
+                # readings it took before this point in the same way.
+                self._commands.clear()
+                self._send(('start',))
         elif kind == 'candidate':
             _, number, candidate = message
             self._sequence = {id(candidate): number}
@@ -910,36 +1059,70 @@ class AdaptationProcess:
         elif kind == 'status':
             self._status, events = message[1], message[2]
             self._events.extend(events)
+            self.malformed = int(self._status.get('adaptation_malformed_readings', 0))
+            self.last_malformed = str(self._status.get('adaptation_last_malformed_reading',
+                                                       ''))
         elif kind == 'error':
             self.errors += 1
             if self._on_error is not None:
                 self._on_error(message[1])
 
 
-def serve_socket(descriptor: int) -> None:
+def serve_socket(descriptor: int, *, subscribe: Subscribe | None = None) -> None:
     """
     Serve an :class:`AdaptationProcess` on an inherited socket (the child's entry point).
 
     Parameters
     ----------
     descriptor : int
-        The child's end of the socket pair; the first message is the model's parameters
-        and the settings.
+        The child's end of the socket pair; the first message is the model's parameters,
+        the settings and the :class:`ReadingSource` (or None).
+    subscribe : callable, optional
+        Opens the subscription of a :class:`ReadingSource` (the ROS side supplies it:
+        :mod:`mpi_ros.nodes.adaptation_readings`); needed when the node sends a source.
 
     """
+    # The node's process ends the child (a message, then SIGTERM); a Ctrl-C in a terminal,
+    # which reaches the whole process group, is the node's to handle.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     conn = multiprocessing.connection.Connection(descriptor)
     try:
-        params, settings = conn.recv()
+        params, settings, source = conn.recv()
     except (EOFError, OSError):
         return
-    _serve(conn, params, settings)
+    _serve(conn, params, settings, source, subscribe)
 
 
 def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
-           settings: AdaptationSettings) -> None:
+           settings: AdaptationSettings, source: ReadingSource | None,
+           subscribe: Subscribe | None) -> None:
     # The child's loop: a thread moves the pairs from the pipe into the adaptation (so a
-    # long solve never fills the pipe); this thread steps every period and answers.
+    # long solve never fills the pipe); this thread steps every period and answers.  With
+    # a source, the readings come from a subscription of the child's own.
+    # The threads that take commands and readings get the interpreter lock back within
+    # 0.5 ms of a step holding it (Python's default is 5 ms).
+    sys.setswitchinterval(min(sys.getswitchinterval(), 5e-4))
     adaptation = Adaptation(_adapted(params), settings)
+    readings: ReadingSubscription | None = None
+    if source is not None:
+        try:
+            if subscribe is None:
+                msg = f'no subscriber for the readings on {source.topic}'
+                raise ModelError(msg)
+            readings = subscribe(source, adaptation.record_measurements)
+        except Exception as err:  # noqa: B902 - reported to the node, which logs it
+            conn.send(('error', f'readings on {source.topic}: {type(err).__name__}: {err}'))
+            conn.close()
+            return
+    try:
+        _loop(conn, adaptation, settings, readings)
+    finally:
+        if readings is not None:
+            readings.close()
+
+
+def _loop(conn: multiprocessing.connection.Connection, adaptation: Adaptation,
+          settings: AdaptationSettings, readings: ReadingSubscription | None) -> None:
     candidates: dict[int, Candidate] = {}
     stop = threading.Event()
     send = threading.Lock()
@@ -968,13 +1151,15 @@ def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
                 elif message[0] == 'reset':
                     candidates.clear()
                     adaptation.reset(_adapted(message[1]))
+                elif message[0] == 'start':
+                    adaptation.discard_readings()
         except (EOFError, OSError):
             pass
         stop.set()
 
     listener = threading.Thread(target=listen, name='pipe', daemon=True)
     listener.start()
-    reply(('ready',))
+    reply(('ready', None if readings is None else readings.faults()['publishers']))
     number = 0
     deadline = time.monotonic() + settings.period
     while not stop.wait(max(0.0, deadline - time.monotonic())):
@@ -989,7 +1174,15 @@ def _serve(conn: multiprocessing.connection.Connection, params: dict[str, Any],
                 number += 1
                 candidates[number] = candidate
                 reply(('candidate', number, candidate))
-            reply(('status', adaptation.status(), adaptation.events()))
+            status = adaptation.status()
+            if readings is not None:
+                faults = readings.faults()
+                status.update({
+                    'adaptation_malformed_readings': faults['malformed'],
+                    'adaptation_last_malformed_reading': faults['last_malformed'],
+                    'adaptation_lost_readings': faults['lost'],
+                    'adaptation_reading_publishers': faults['publishers']})
+            reply(('status', status, adaptation.events()))
         except (BrokenPipeError, OSError):
             break
     conn.close()

@@ -107,6 +107,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_msgs.msg import Float64
 
+from . import adaptation_readings
 from .compensator_base import CompensatorNodeBase, DRAIN_LIMIT
 from .multi_axis import MultiAxisCompensatorNode
 from .parameters import declare_parameters, parameter_values
@@ -116,6 +117,7 @@ from ..array_layout import FLOAT64_SIZE, malformed_float64
 from ..compensation import Compensator
 from ..compensation.adaptation import (
     adaptable, Adaptation, AdaptationProcess, AdaptationSettings, AdaptationWorker,
+    ReadingSource,
 )
 from ..compensation.message_time import MessageClock
 from ..compensation.multi_axis import InputCounts
@@ -131,6 +133,10 @@ __all__ = ['CompensatorNode', 'main', 'make_node']
 
 #: Longest time [s] the adaptation's worker holds the interpreter lock at a time.
 _SWITCH_INTERVAL = 5e-4
+
+#: Longest wait [s] for the adaptation's process to open its readings subscription (the
+#: node waits at configure, or at the first model, so that the first commands pair).
+_READY_TIMEOUT_S = 30.0
 
 #: Most messages served in one subscription callback (patched by tests).
 _DRAIN_LIMIT = DRAIN_LIMIT
@@ -187,6 +193,7 @@ class CompensatorNode(CompensatorNodeBase):
         self._record: Optional[Any] = None    # Adaptation.record_command while adapting
         self._own_update = False
         self._inputs = InputCounts()
+        self._malformed_readings = 0      # of the adaptation's child, counted in _inputs
         declare_parameters(self, specs)
         self._declared()
         self._adapt = bool(self.get_parameter('adaptation.enabled').value)
@@ -355,7 +362,9 @@ class CompensatorNode(CompensatorNodeBase):
     # -- online adaptation ----------------------------------------------------------------
     def _open_loop(self) -> None:
         super()._open_loop()
-        if self._adapt:
+        # With the adaptation in its child process the child subscribes to the readings
+        # itself (mpi_ros.nodes.adaptation_readings): this process never takes one.
+        if self._adapt and not self.get_parameter('adaptation.process').value:
             qos = loop_qos(self.get_parameter('qos_depth').value,
                            self.get_parameter('qos_reliability').value)
             self._readings = self.create_subscription(
@@ -404,8 +413,17 @@ class CompensatorNode(CompensatorNodeBase):
             self.get_logger().error(f'adaptation step failed: {text}')
 
         if self.get_parameter('adaptation.process').value:
-            # Its own process: the command path never waits for a step's interpreter lock.
-            process = AdaptationProcess(model, settings, on_error=on_error)
+            # Its own process: the command path never waits for a step's interpreter lock,
+            # and never serves a reading: the child subscribes to them itself, with this
+            # node's QoS on this node's resolved topic; the node sends it the commands.
+            source = ReadingSource(
+                topic=self.resolve_topic_name('displacement'),
+                depth=self.get_parameter('qos_depth').value,
+                reliability=self.get_parameter('qos_reliability').value,
+                sample_period=settings.sample_period,
+                node_name=f'{self.get_name()}_adaptation', namespace=self.get_namespace())
+            process = AdaptationProcess(model, settings, on_error=on_error, readings=source,
+                                        entry=adaptation_readings.__name__)
             self._adaptation = self._worker = process
         else:
             # A thread shares the interpreter lock with the command path: let it hold the
@@ -415,13 +433,23 @@ class CompensatorNode(CompensatorNodeBase):
             self._worker = AdaptationWorker(self._adaptation, on_error=on_error)
         self._record = self._adaptation.record_command
         self._worker.start()
+        if isinstance(self._worker, AdaptationProcess) and not self._worker.wait_ready(
+                _READY_TIMEOUT_S):
+            # Commands before the child's subscription is open are not paired (dropped).
+            self.get_logger().warning(
+                f'adaptation: its process did not open the readings subscription within'
+                f' {_READY_TIMEOUT_S:g} s; the commands before it does are not paired')
         self.get_logger().info(
             f'adaptation on: readings on {self.resolve_topic_name("displacement")}, paired'
             f' in lock step (delay {settings.delay} samples), memory'
             f' {settings.forgetting_time:g} s, candidates every {settings.period:g} s,'
             f' held out {settings.holdout:g} s, margin {100 * settings.margin:g} %; fitting in'
-            + (f' process {self._worker.pid}' if isinstance(self._worker, AdaptationProcess)
-               else ' a thread'))
+            + (f' process {self._worker.pid} (which takes the readings)'
+               if isinstance(self._worker, AdaptationProcess) else ' a thread'))
+        if isinstance(self._worker, AdaptationProcess) and self._worker.publishers == 0:
+            self.get_logger().warning(
+                f'adaptation: no publisher of {self.resolve_topic_name("displacement")} yet;'
+                ' commands published before the readings reach the adaptation do not pair')
 
     def _stop_adaptation(self) -> None:
         worker, self._worker = self._worker, None
@@ -429,6 +457,7 @@ class CompensatorNode(CompensatorNodeBase):
             worker.stop()
         self._adaptation = None
         self._record = None
+        self._malformed_readings = 0
 
     def _adaptation_tick(self) -> None:
         adaptation = self._adaptation
@@ -436,6 +465,12 @@ class CompensatorNode(CompensatorNodeBase):
             return
         if isinstance(adaptation, AdaptationProcess):
             adaptation.exchange()
+            # Malformed readings the child dropped count as this node's malformed inputs.
+            inputs, seen = self._inputs, self._malformed_readings
+            if adaptation.malformed > seen:
+                inputs.malformed += adaptation.malformed - seen
+                inputs.last_malformed = adaptation.last_malformed
+                self._malformed_readings = adaptation.malformed
         candidate = adaptation.take_candidate()
         if candidate is not None:
             values = candidate.params()

@@ -7,24 +7,34 @@ message path does); the test plays the drifting actuator and hands each reading 
 node's adaptation, steps it once per simulated second (the worker thread is not started,
 so the steps are the test's) and spins the node, whose timer applies a candidate through
 its own ``set_parameters``: the validation every push goes through.  The node's default,
-the adaptation in a child process, is run the same way, each second sent once the child has
-taken the one before.
+the adaptation in a child process, is run with the readings published on ``displacement``,
+which the child takes itself (the node's process has no subscription there), each second
+sent once the child has paired the one before.
 """
 
+import os
+import signal
+import struct
 import time
 
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
-from mpi_ros.compensation.adaptation import AdaptationProcess, AdaptationWorker
+from mpi_ros.compensation.adaptation import (
+    AdaptationProcess, AdaptationSettings, AdaptationWorker, ReadingSource,
+)
 from mpi_ros.extensions.thermal_drift import ThermalDriftModel
+from mpi_ros.nodes import adaptation_readings
 from mpi_ros.nodes.compensator import CompensatorNode
+from mpi_ros.nodes.qos import loop_qos
 from mpi_ros.nodes.spinning import events_executor
 from mpi_ros.operators.model import MPIModel
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation, tracking_trajectory
 import numpy as np
 import pytest
+import rclpy
 from rclpy.parameter import Parameter
+from std_msgs.msg import Float64
 
 RATE = 500.0
 
@@ -101,6 +111,11 @@ def test_adapted_model_is_the_nodes_parameters_and_a_dump_loads_back(
         fresh.destroy_node()
 
 
+def test_in_thread_mode_the_node_itself_subscribes_to_the_readings(node_and_plant):
+    node, _, _, _ = node_and_plant
+    assert '/displacement' in [s.topic_name for s in node.subscriptions]
+
+
 def test_a_push_from_outside_restarts_the_adaptation(node_and_plant):
     node, executor, plant, _ = node_and_plant
     adaptation = node.adaptation
@@ -114,32 +129,66 @@ def test_a_push_from_outside_restarts_the_adaptation(node_and_plant):
 
 
 @pytest.mark.parametrize('node_and_plant', [True], indirect=True)
-def test_the_adaptation_process_updates_the_nodes_model_and_stops_with_it(node_and_plant):
+def test_the_adaptation_process_takes_the_readings_itself_and_updates_the_node(
+        node_and_plant, ros_context):
+    # The readings go out on displacement as an actuator publishes them: the child process
+    # subscribes, the node's process does not (its executor never serves a reading), and
+    # the adaptation still improves the model on the drifting plant, through the node's
+    # set_parameters.  A malformed reading is dropped and counted by the node.
     node, executor, plant, (lo, hi) = node_and_plant
     adaptation = node.adaptation
     assert isinstance(adaptation, AdaptationProcess)
-    span = hi - lo
-    t, desired = tracking_trajectory(40.0, sample_rate=RATE, low=lo + 0.15 * span,
-                                     high=hi - 0.15 * span, final_envelope=1.0)
-    block = int(RATE)
-    for start in range(0, t.size - block + 1, block):
-        for k in range(start, start + block):
-            current = node.command(float(desired[k]))
-            assert np.isfinite(current)
-            adaptation.record_measurement(plant.step(float(t[k]), current))
-        deadline = time.monotonic() + 120.0
-        while adaptation.status().get('adaptation_pairs') != start + block:
+    assert '/displacement' not in [s.topic_name for s in node.subscriptions]
+    sensor = rclpy.create_node('sensor', context=ros_context)
+    publisher = sensor.create_publisher(Float64, 'displacement', loop_qos(10000, 'reliable'))
+    try:
+        # The one reader of displacement is the child's node (the graph learns its name
+        # a moment after the reader itself).
+        deadline = time.monotonic() + 60.0
+        readers = []
+        while (publisher.get_subscription_count() < 1 or not readers
+               or '_NODE_NAME_UNKNOWN_' in [r.node_name for r in readers]):
+            assert time.monotonic() < deadline, readers
+            executor.spin_once(timeout_sec=0.05)
+            readers = node.get_subscriptions_info_by_topic('displacement')
+        assert [(r.node_name, r.node_namespace) for r in readers] == [
+            (f'{node.get_name()}_adaptation', '/')]
+        span = hi - lo
+        t, desired = tracking_trajectory(40.0, sample_rate=RATE, low=lo + 0.15 * span,
+                                         high=hi - 0.15 * span, final_envelope=1.0)
+        block = int(RATE)
+        message = Float64()
+        for start in range(0, t.size - block + 1, block):
+            for k in range(start, start + block):
+                current = node.command(float(desired[k]))
+                assert np.isfinite(current)
+                message.data = plant.step(float(t[k]), current)
+                publisher.publish(message)
+            deadline = time.monotonic() + 120.0
+            while adaptation.status().get('adaptation_pairs') != start + block:
+                assert time.monotonic() < deadline, adaptation.status()
+                executor.spin_once(timeout_sec=0.05)
+        for _ in range(5):                          # the last candidate, if any, is applied
+            executor.spin_once(timeout_sec=0.05)
+        status = adaptation.status()
+        assert status['adaptation_updates_accepted'] >= 1, status
+        assert status['adaptation_lost_readings'] == 0, status
+        assert status['adaptation_reading_publishers'] == 1, status
+        assert node.model_version == 1 + status['adaptation_updates_accepted']
+        running = node.compensator.model
+        assert adaptation.model.to_params() == running.to_params()
+        dumped = {key: node.get_parameter(key).value for key in running.to_params()}
+        assert MPIModel.from_params(dumped).to_params() == running.to_params()
+        # Three bytes are no CDR Float64: dropped in the child, counted by the node.
+        publisher.handle.publish_raw(struct.pack('<3B', 0, 1, 0))
+        deadline = time.monotonic() + 60.0
+        while node.counters['malformed'] != 1:
             assert time.monotonic() < deadline, adaptation.status()
             executor.spin_once(timeout_sec=0.05)
-    for _ in range(5):                          # the last candidate, if any, is applied
-        executor.spin_once(timeout_sec=0.05)
-    status = adaptation.status()
-    assert status['adaptation_updates_accepted'] >= 1, status
-    assert node.model_version == 1 + status['adaptation_updates_accepted']
-    running = node.compensator.model
-    assert adaptation.model.to_params() == running.to_params()
-    dumped = {key: node.get_parameter(key).value for key in running.to_params()}
-    assert MPIModel.from_params(dumped).to_params() == running.to_params()
+        assert adaptation.status()['adaptation_malformed_readings'] == 1
+        assert adaptation.status()['adaptation_pairs'] == t.size // block * block
+    finally:
+        sensor.destroy_node()
     node.destroy_node()
     assert not adaptation.running
 
@@ -181,3 +230,60 @@ def test_a_thermal_drift_model_is_adapted_with_its_weight(ros_context, monkeypat
         executor.remove_node(node)
         executor.shutdown()
         node.destroy_node()
+
+
+def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
+    # The child takes the readings itself: one that has not taken 20 held-out windows of
+    # commands has lost its readings too, so the node stops it and says so once, rather
+    # than pair what no longer pairs (holdout 0.1 s: 1000 commands at 500 Hz).
+    t, x = identification_excitation(10.0, sample_rate=RATE, seed=11)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=11).simulate(t, x)
+    settings = AdaptationSettings(sample_period=1 / RATE, holdout=0.1)
+    source = ReadingSource(topic='/displacement', depth=10000, reliability='reliable',
+                           sample_period=1 / RATE, node_name='stalled_adaptation')
+    errors = []
+    process = AdaptationProcess(identify(x, y, n=6, l=3).model, settings,
+                                on_error=errors.append, readings=source,
+                                entry=adaptation_readings.__name__)
+    process.start()
+    try:
+        assert process.wait_ready(60.0)
+        os.kill(process.pid, signal.SIGSTOP)
+        for _ in range(10):
+            for _ in range(1000):
+                process.record_command(1.0)
+            process.exchange()
+        assert not process.running
+    finally:
+        process.stop()
+    state = 'stopped: the adaptation process did not take the commands (stalled)'
+    assert process.status()['adaptation_state'] == state
+    assert errors == [state]
+    assert process.pending == (0, 0)
+
+
+def test_the_childs_subscription_lives_from_configure_to_cleanup(ros_context):
+    # The readings' subscriber lives in the child, which the node starts at configure and
+    # stops at cleanup (as its own subscription did): after cleanup nothing reads
+    # displacement, after a new configure a new child does, and none outlives the node.
+    t, x = identification_excitation(10.0, sample_rate=RATE, seed=11)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=11).simulate(t, x)
+    node, executor = _adaptive_node(ros_context, identify(x, y, n=6, l=3).model, True)
+    second = None
+    try:
+        first = node.adaptation
+        assert isinstance(first, AdaptationProcess) and first.running
+        node.trigger_deactivate()
+        assert first.running                      # inactive: the memory and the child stay
+        node.trigger_cleanup()
+        assert node.adaptation is None and not first.running
+        node.trigger_configure()
+        second = node.adaptation
+        assert isinstance(second, AdaptationProcess) and second.running
+        assert second.pid != first.pid
+        assert '/displacement' not in [s.topic_name for s in node.subscriptions]
+    finally:
+        executor.remove_node(node)
+        executor.shutdown()
+        node.destroy_node()
+    assert second is not None and not second.running
