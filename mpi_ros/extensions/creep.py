@@ -52,8 +52,7 @@ from scipy.optimize import nnls
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
 from .fitting import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
-    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter, \
-    with_record_start
+    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
 from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
@@ -369,10 +368,7 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
             model = _creep_fit(t, x, y, final, model.time_constants, model.weights, epsilon)
     keep = scored
     if not (_mse(model, t, x, y, keep) < _mse(off, t, x, y, keep)):
-        started: CreepModel = with_record_start(off, t, x, y)
-        return started
-    fitted: CreepModel = with_record_start(model, t, x, y)
-    model = fitted
+        return off
     used = model.time_constants[model.weights > _USED * float(np.max(model.weights))]
     edges = [f'{v:.3g} s' for v, side in ((grid[0], 'shortest'), (grid[-1], 'longest'))
              if used.size and v in used]
