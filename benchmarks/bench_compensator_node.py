@@ -187,7 +187,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     write_params_yaml(params, dict(model_params, **{
         'qos_depth': qos_depth, 'qos_reliability': reliability,
         'output.min': output_min, 'output.max': output_max}))
-    cores = sorted(os.sched_getaffinity(0))
+    cores = sorted(_CPUS)
     if pin and len(cores) < 2:
         msg = f'--pin needs at least 2 CPUs; this process may use {cores}'
         raise RuntimeError(msg)
@@ -673,6 +673,11 @@ class _ScriptProcess:
                 self.proc.wait()
         self._log.close()
         return self.proc.returncode
+
+
+#: The CPUs this process may use when it starts (``--pin`` then narrows its own to the
+#: load's: a second run of ``--rounds`` must split the same set again).
+_CPUS = frozenset(os.sched_getaffinity(0))
 
 
 def _pin(pid: int, cpus: set) -> None:
