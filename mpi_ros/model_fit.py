@@ -619,6 +619,13 @@ _FAR_FACTOR = 2.0
 _FAR_ABSOLUTE = 0.005
 
 
+def _warn(note: str, notes: list[str]) -> None:
+    # A warning of the held-out check, in the caller's caller's name (identify's caller),
+    # and kept with the result's notes.
+    warnings.warn(note, MPIWarning, stacklevel=4)
+    notes.append(note)
+
+
 def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: tuple[int, int],
                     auto: bool, table: list[dict[str, Any]], x: FloatArray,
                     window: int) -> list[str]:
@@ -672,8 +679,7 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
                         f' a straight line: RMS {100 * model_error:.3g} % vs'
                         f' {100 * line_error:.3g} % of the output range, within'
                         f' {100 * _FAR_ABSOLUTE:.3g} %: a line would do as well')
-                warnings.warn(note, MPIWarning, stacklevel=3)
-                notes.append(note)
+                _warn(note, notes)
         else:
             note = (f"warning: the record's held-out blocks cannot judge the model: {used} of"
                     f' {count} folds hold scored rows inside the range their model was fitted'
@@ -682,8 +688,7 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
                     ' cycles of its widest excursions; the in-sample check alone passed it:'
                     ' validate it on another record of the actuator (mpi-ros diagnose'
                     ' --validate)')
-            warnings.warn(note, MPIWarning, stacklevel=3)
-            notes.append(note)
+            _warn(note, notes)
     # The median judged fold: the fold of the record's start (its transient) alone is no
     # reason to expect worse on new inputs; several folds are.
     scored = [m for m, j in zip(held_out.per_fold, judged) if j]
@@ -693,8 +698,7 @@ def _judge_held_out(held_out: FoldErrors, line: FoldErrors, rms: float, order: t
                 f' {100 * typical:.3g} % RMS of the output range (the median of the judged'
                 f' folds; per fold {folds} % vs {lines} % for a straight line), against'
                 f' {100 * rms:.3g} % in sample: expect the larger figure on new inputs')
-        warnings.warn(note, MPIWarning, stacklevel=3)
-        notes.append(note)
+        _warn(note, notes)
     row = next((r for r in table if (r['n'], r['l']) == order), None)
     if row is not None and not (0.5 * row['rms_error'] <= held_out.error
                                 <= _FAR_FACTOR * row['rms_error'] + _FAR_ABSOLUTE):
