@@ -427,3 +427,19 @@ def test_a_child_asked_to_take_readings_without_a_subscriber_says_so_and_ends():
                       ' on /displacement', 'stopped: the adaptation process ended']
     assert process.status()['adaptation_state'] == 'stopped: the adaptation process ended'
     assert process.pending == (0, 0)
+
+
+@pytest.mark.skipif(not hasattr(os, 'sched_getaffinity') or len(os.sched_getaffinity(0)) < 2,
+                    reason='needs CPU affinity and two CPUs')
+def test_a_pinned_node_keeps_its_cpu_and_its_child_runs_on_the_others():
+    """A node pinned to one CPU (taskset) starts the adaptation's child on the others."""
+    from mpi_ros.compensation.adaptation import child_cpus
+    mine = os.sched_getaffinity(0)
+    assert child_cpus() is None or not child_cpus() & mine      # unpinned: nothing to split
+    first = min(mine)
+    try:
+        os.sched_setaffinity(0, {first})
+        cpus = child_cpus()
+    finally:
+        os.sched_setaffinity(0, mine)
+    assert cpus is not None and first not in cpus and cpus & mine

@@ -64,8 +64,8 @@ from ..operators.model import MPIModel
 from ..operators.play import play_end_state
 
 __all__ = ['Adaptation', 'AdaptationProcess', 'AdaptationSettings', 'AdaptationWorker',
-           'adaptable', 'Candidate', 'ReadingSource', 'ReadingSubscription', 'serve_socket',
-           'Subscribe']
+           'adaptable', 'Candidate', 'child_cpus', 'ReadingSource', 'ReadingSubscription',
+           'serve_socket', 'Subscribe']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -790,6 +790,29 @@ class AdaptationWorker:
                     self._on_error(f'{type(err).__name__}: {err}')
 
 
+def child_cpus() -> set[int] | None:
+    """
+    Return the CPUs for the adaptation's child: those the calling node is not pinned to.
+
+    At 10 kHz the child (about 10-14 % of a core) shares the node's core when the node is
+    pinned to one and the child inherits it: the command path's p99 rose to 2.06x the runs
+    without adaptation (2026-11-26, ``bench_compensator_node.py --pin``).  None when the
+    node may use every CPU (nothing to keep apart) or no other CPU is allowed.
+
+    Returns
+    -------
+    set of int or None
+        The CPUs, or None to leave the child's affinity as inherited.
+
+    """
+    if not hasattr(os, 'sched_getaffinity'):
+        return None
+    mine = os.sched_getaffinity(0)
+    allowed = set(range(os.cpu_count() or 0))
+    others = allowed - mine
+    return others if mine and others and mine < allowed else None
+
+
 class AdaptationProcess:
     """
     Run an :class:`Adaptation` in a child process; the node's side of it, in the node.
@@ -879,11 +902,16 @@ class AdaptationProcess:
 
         Not ``multiprocessing``'s spawn, which imports the parent's main module again in
         the child: a script that builds the node without a ``__main__`` guard would start
-        it twice.
+        it twice.  A node pinned to some of the machine's CPUs (``taskset``) keeps them to
+        itself: the child runs on the others (:func:`child_cpus`), set before it starts a
+        thread.
         """
         ours, theirs = socket.socketpair()
         with ours, theirs:
-            code = (f'import sys; from {self._entry} import serve_socket;'
+            cpus = child_cpus()
+            pin = ('import os\ntry:\n    os.sched_setaffinity(0, '
+                   f'{sorted(cpus)!r})\nexcept OSError:\n    pass\n' if cpus is not None else '')
+            code = (f'{pin}import sys; from {self._entry} import serve_socket;'
                     ' serve_socket(int(sys.argv[1]))')
             path = os.pathsep.join(p for p in sys.path if p)
             self._process = subprocess.Popen(
