@@ -679,40 +679,9 @@ class Candidate:
     """
     One candidate extension, scored on the validation data against the baseline.
 
-    Attributes
-    ----------
-    cause : str
-        The effect's name (two joined by ``' + '`` for a pair).
-    model : object
-        The fitted extended model.
-    rms_error, nonlinearity_error : float
-        Its validation errors, fractions of the output range.
-    gain : float
-        Relative reduction of the baseline's validation RMS error.
-    z : float
-        Diebold-Mariano statistic against the baseline (one-sided).
-    bandwidth : int
-        Its HAC lags.
-    training_rms_error : float
-        Its RMS error on the training record's determined samples.
-    validation_output_offset : float
-        The validation record's re-estimated sensor zero for it [m].
-    parameter_count : int
-        Free parameters of the effect(s).
-    parameters : dict
-        The effect's identified parameters (Gamma's left out, and those in
-        ``not_identified``: a value at a bound of its search range is no physical value).
-    not_identified : dict
-        Parameter key -> why the fit could not identify it (at a bound of its search range).
-    signature : str
-        ``present``, ``absent`` or ``unavailable`` (the physical signature).
-    significant : bool
-        Gain and z above the bars, and the baseline above the noise.
-    parts : list of str
-        A pair's effects (empty for one effect).
-    part_gains, part_z : dict
-        For a pair: each effect's gain beyond the other alone, and its z.
-
+    The fields of :class:`~mpi_ros.diagnosis.facts.ScoredCandidate` (the report's form,
+    which documents them), with the fitted extended model in ``model``; ``parts`` is empty
+    (not None) for one effect.
     """
 
     cause: str
