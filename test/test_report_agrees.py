@@ -20,6 +20,7 @@ records: synthetic plants of every effect (mpi_ros.plant) and the measured recor
 """
 
 from dataclasses import replace
+import importlib
 import json
 import math
 from pathlib import Path
@@ -309,7 +310,8 @@ def _check_candidates(report, summary, err):
             assert says == chosen.signature, evidence
         assert ('decided on the gain alone' in evidence) <= (chosen.signature == 'unavailable')
         _count('evidence: chosen gain, z, who decided', 3)
-    weak = re.search(r'(\S+) is present, weak: its extension cuts the validation error by only'
+    weak = re.search(r'Weak: (\S+(?: \+ \S+)?) is present, weak: its extension cuts the'
+                     r' validation error by only'
                      r' (\d+) %.*physical signature is (\w+);', evidence)
     assert (weak is not None) == (decision.strength == 'present, weak')
     if weak is not None:
@@ -525,6 +527,25 @@ def test_creep_record_with_holds(tmp_path, capsys, monkeypatch):
     facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
                                             tmp_path / 'data.csv')
     assert facts['residual']['holds']['count'] > 0          # the record holds the input
+    _check_agreement(report, facts, summary, err)
+
+
+def test_a_weak_verdict_is_stated_with_its_cause_as_written(tmp_path, capsys, monkeypatch):
+    """
+    A weak verdict's evidence names the cause as the identifier, never capitalised.
+
+    The creep record above with the strength bar raised to 0.999, so that its clear creep is
+    reported as present but weak through the real decision: the evidence sentence opened
+    with ``Creep is present, weak`` and the cause read from it was not the chosen one.
+    """
+    # The package exports the function diagnose under the module's name.
+    module = importlib.import_module('mpi_ros.diagnosis.diagnose')
+    monkeypatch.setattr(module, 'STRONG_GAIN', 0.999)
+    _record(tmp_path / 'data.csv', {'creep_gain': 0.06}, seconds=30.0, hold_duration=2.0)
+    facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
+                                            tmp_path / 'data.csv')
+    assert report.decision.strength == 'present, weak', report.decision
+    assert f'Weak: {report.cause} is present, weak' in report.evidence
     _check_agreement(report, facts, summary, err)
 
 

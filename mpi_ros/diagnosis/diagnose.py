@@ -907,7 +907,9 @@ def _strength(decision: Decision, chosen: Candidate | None, baseline: Baseline,
         ' or an excitation that shows it more, e.g. longer holds for slow effects, measures'
         ' it better)')
     decision.weak_reason = reason
-    return ' ' + reason[0].upper() + reason[1:] + '.'
+    # The cause is an identifier (``rate_dependence``): never capitalised, so the sentence
+    # opens with a label, as the summary's ``Weak:`` line does.
+    return ' Weak: ' + reason + '.'
 
 
 def _records(recording: Any, validation: Any, split: float,
