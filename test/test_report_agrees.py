@@ -33,6 +33,7 @@ from mpi_ros.diagnosis.facts import Baseline, Extended, OperatingPoint, RecordFa
     Refusal, Reversals, ScoredCandidate, Series
 from mpi_ros.diagnosis.report import data_units, markdown, report_facts, summary_lines, \
     z_wording
+from mpi_ros.errors import IdentificationError
 from mpi_ros.extensions import EFFECTS
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
@@ -546,6 +547,30 @@ def test_a_weak_verdict_is_stated_with_its_cause_as_written(tmp_path, capsys, mo
                                             tmp_path / 'data.csv')
     assert report.decision.strength == 'present, weak', report.decision
     assert f'Weak: {report.cause} is present, weak' in report.evidence
+    _check_agreement(report, facts, summary, err)
+
+
+def test_an_effect_whose_fit_fails_is_left_out_and_the_others_judged(
+        tmp_path, capsys, monkeypatch):
+    """
+    One candidate's fit refused does not end the diagnosis: the others are still judged.
+
+    The creep record above with the thermal-drift fit raising IdentificationError: creep is
+    still named, thermal drift is not ranked, and a warning and a decision step say why.
+    """
+    def refused(*args, **kwargs):
+        raise IdentificationError('the drift fit refuses this record (test)')
+
+    monkeypatch.setitem(EFFECTS, 'thermal_drift', replace(EFFECTS['thermal_drift'], fit=refused))
+    _record(tmp_path / 'data.csv', {'creep_gain': 0.06}, seconds=30.0, hold_duration=2.0)
+    facts, summary, err, report = _diagnose(tmp_path, capsys, monkeypatch,
+                                            tmp_path / 'data.csv')
+    assert report.cause == 'creep'
+    assert 'thermal_drift' not in [c.cause for c in report.candidates]
+    said = [w for w in report.warnings if 'thermal_drift candidate could not be fitted' in w]
+    assert len(said) == 1 and 'the drift fit refuses this record (test)' in said[0]
+    assert said[0] in report.decision.steps
+    assert 'thermal_drift candidate could not be fitted' in err
     _check_agreement(report, facts, summary, err)
 
 

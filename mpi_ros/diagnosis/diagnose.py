@@ -298,8 +298,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     scorer = _Scorer(on_validation, training, base.burn_in, checked[2], slice(start, None),
                      r0, baseline, bandwidth, separate, say)
     scorer.baseline_model = base.model
-    candidates, decision, excess = _judged_candidates(run, scorer, base, residual, r0, sigma,
-                                                      onset, whole[0])
+    candidates, decision, excess, unfitted = _judged_candidates(
+        run, scorer, base, residual, r0, sigma, onset, whole[0])
     # The choice: the rule, a pair, the ties, the agreement with the dynamics finding.
     chosen = _choose(decision, candidates, scorer, finding, baseline.order, excess=excess,
                      separate=separate)
@@ -308,7 +308,8 @@ def diagnose(recording: Any, *, validation: Any = None, split: float = 0.6,
     records = ([('record', t)] if not separate
                else [('training record', t), ('validation record', checked[0])])
     return _report(chosen, base.model, baseline, candidates, residual, decision, data,
-                   (checked[2][start:], sigma), records, (drift, outside), series, say)
+                   (checked[2][start:], sigma), records, (drift, outside, unfitted), series,
+                   say)
 
 
 @dataclass(frozen=True)
@@ -543,13 +544,13 @@ def _residual_evidence(checked: tuple[FloatArray, FloatArray, FloatArray], sim0:
 
 def _judged_candidates(run: _Options, scorer: '_Scorer', base: Any, residual: Residual,
                        r0: FloatArray, sigma: float, onset: StepOnset,
-                       time: FloatArray) -> tuple[list['Candidate'], Decision, Any]:
+                       time: FloatArray) -> tuple[list['Candidate'], Decision, Any, list[str]]:
     # Step 4: each effect fitted on the training record at the baseline's order and scored;
     # its signature (at alpha over the catalogue, Bonferroni) and whether it is significant;
-    # a dead time longer than the steps' onset.  Returns them, the decision's thresholds
-    # and whether the baseline residual exceeds the noise floor.
+    # a dead time longer than the steps' onset.  Returns them, the decision's thresholds,
+    # whether the baseline residual exceeds the noise floor and the effects not fitted.
     n, l = base.order  # noqa: E741
-    candidates = _fit_candidates(scorer, run.causes, (n, l), base.model)
+    candidates, unfitted = _fit_candidates(scorer, run.causes, (n, l), base.model)
     excess = math.sqrt(float(np.mean(r0 ** 2))) > run.noise_factor * sigma
     level = run.alpha / len(tuple(EFFECTS))     # Bonferroni over the catalogue
     for c in candidates:
@@ -562,18 +563,20 @@ def _judged_candidates(run: _Options, scorer: '_Scorer', base: Any, residual: Re
                         run.noise_factor, sigma, bool(excess))
     if unphysical:
         decision.steps.append(unphysical)
-    return candidates, decision, excess
+    decision.steps.extend(unfitted)
+    return candidates, decision, excess, unfitted
 
 
 def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
             candidates: list['Candidate'], residual: Residual, decision: Decision,
             data: RecordFacts, scored: tuple[FloatArray, float],
-            records: list[tuple[str, FloatArray]], notes: tuple[ReturnPointDrift, str],
+            records: list[tuple[str, FloatArray]],
+            notes: tuple[ReturnPointDrift, str, list[str]],
             series: Series,
             say: Callable[[str], None]) -> DiagnosisReport:
     # The verdict, the extended model's errors, the evidence sentences, the
     # warnings (time constants the time base makes implausible, the drift, the range).
-    (measured, sigma), (drift, outside) = scored, notes
+    (measured, sigma), (drift, outside, unfitted) = scored, notes
     public = [c.public() for c in candidates]
     if chosen is None:
         cause, model, gain = 'none', base_model, 0.0
@@ -593,7 +596,7 @@ def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
                      f' To separate them: {decision.separate_by}.')
     warning = time_base_warning(implausible_time_constants(public, residual), records)
     warnings = [] if warning is None else [warning]
-    warnings += [text for text in (drift.describe(), outside) if text]
+    warnings += [text for text in (drift.describe(), outside, *unfitted) if text]
     for text in warnings:
         say(f'warning: {text}')
     unidentified = (f'; not identified: {", ".join(extended.not_identified)}'
@@ -764,16 +767,25 @@ class _Scorer:
 
 
 def _fit_candidates(scorer: _Scorer, causes: tuple[str, ...], order: tuple[int, int],
-                    baseline: Any) -> list[Candidate]:
-    # Each effect fitted on the training record at the baseline's order, then scored.
-    out = []
+                    baseline: Any) -> tuple[list[Candidate], list[str]]:
+    # Each effect fitted on the training record at the baseline's order, then scored.  An
+    # effect whose fit fails (the record refused for that fit, a model it cannot build) is
+    # left out of the ranking with the reason, not the whole diagnosis: the other causes
+    # are still judged.  Returns the candidates and those reasons.
+    out, unfitted = [], []
     tt, xt, yt = scorer.training
     for cause in causes:
         scorer.say(f'fitting candidate {cause}')
-        model = _nested(EFFECTS[cause].fit(tt, xt, yt, order=order), baseline, tt, xt)
+        try:
+            model = _nested(EFFECTS[cause].fit(tt, xt, yt, order=order), baseline, tt, xt)
+        except (IdentificationError, ModelError) as err:
+            unfitted.append(f'the {cause} candidate could not be fitted ({err}); it is left'
+                            ' out of the ranking, so this diagnosis cannot name it')
+            scorer.say(f'  {cause}: not fitted: {err}')
+            continue
         out.append(scorer.score(cause, model,
                                 EFFECTS[cause].parameter_count(model.to_params())))
-    return out
+    return out, unfitted
 
 
 def _nested(model: Any, baseline: Any, time: FloatArray, current: FloatArray) -> Any:
