@@ -308,9 +308,11 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
     ``tau_T`` trades against Gamma's weights and wins on a drift it does not predict (on
     unseen plants it chose 9.3 s for a drift over 20-50 s and lost 6 % against the baseline
     on validation).  The chosen ``tau_T`` is fitted on the whole record and kept only when
-    it fits the record better than no drift.  A best ``tau_T`` at either end of the range
-    is reported as not identified (``not_identified``), as is the time constant of a zero
-    drift.  The drift before S (``w_T``) is left at 0.
+    it fits the record better than no drift.  A best ``tau_T`` at the upper end of the
+    range is reported as not identified (``not_identified``), as is the time constant of a
+    zero drift; one at the lower end is no drift at all (``k_T = 0``, not identified): a
+    thermal state that follows ``x^2`` that closely is a static term of the current on the
+    displacement, which is Gamma's to model.  The drift before S (``w_T``) is left at 0.
 
     Parameters
     ----------
@@ -348,7 +350,13 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
         np.geomspace(duration / 20.0, 5.0 * duration, 7), refine=2,
         off_error=fixed_held_out_error(baseline, y, folds, scored))
     unknown = {THERMAL_TIME_CONSTANT: 'not identified: no drift (weight 0), no time constant'}
-    if choice.value is not None:
+    if choice.bound == 'lower':
+        # Faster than a twentieth of the record, T is x^2 a moment late: a static term
+        # on the displacement (Gamma's misfit), not a drift.  On a 20 s record of a plant
+        # without any effect it took 0.6 s, gained 10 % and was named.
+        unknown = {THERMAL_TIME_CONSTANT: f'{bound_note(choice)}; faster than that the drift'
+                                          ' is a static term of the current, fitted off'}
+    elif choice.value is not None:
         model, error, _ = _fit_at(t, x, y, n, l, choice.value, epsilon, None, base)
         if error < off_error:
             started: ThermalDriftModel = with_record_start(model, t, x, y)
