@@ -9,10 +9,11 @@ places: ``k_T`` [m/A^2] adds it to Gamma's displacement (the rod's thermal expan
 same at every operating point; in the direction of S's output, so that a falling sensor
 keeps its sign), ``w_T`` [1/A] enters before the superposition operator S, in H's
 output unit (its output drift ``w_T dS/dv T`` follows S's slope).  :func:`fit_thermal_drift`
-fits the displacement's drift ``k_T`` (``w_T = 0``): on the wide sweep's Preisach plants,
-whose output maps bend more than the built-in one's, the drift before S gained 0.02-0.14 on
-validation where the drift on the displacement gains 0.14-0.72 (docs/diagnosis.md, issue
-24).  ``w_T`` stays for models written before, and the online adaptation re-fits it.
+fits the displacement's drift ``k_T`` (``w_T = 0``): on the wide sweep's Preisach plants
+101, 103 and 105, whose output maps bend more than the built-in one's, the drift before S
+gained 0.04-0.14 on validation with the plant's own ``tau_T``, the drift on the displacement
+0.14-0.72 (docs/diagnosis.md, issue 24).  ``w_T`` stays for models written before, and the
+online adaptation re-fits it.
 
 The fit, for a trial ``tau_T``: the displacement's drift is linearised through the
 inverse superposition, ``S'[y - k_T T] ~ S'[y] - k_T T dS'/dy``, so that ``k_T`` is one
