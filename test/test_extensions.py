@@ -13,7 +13,7 @@ from mpi_ros.metrics import control_error, rms_range_error
 from mpi_ros.model_fit import identify
 from mpi_ros.operators.filters import delay, first_order_lag, lag_bank, \
     lag_feedback_inverse
-from mpi_ros.operators.model import OPERATING_POINT_KEYS
+from mpi_ros.operators.model import MPIModel, OPERATING_POINT_KEYS
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation, \
     tracking_trajectory
@@ -394,3 +394,39 @@ def test_fit_order_must_be_auto_or_a_pair():
         fit_rate_dependence(t, x, x, order='best')
     with pytest.raises(DataError, match='model orders must be >= 0; found n=-1, l=2'):
         fit_dead_time(t, x, x, order=(-1, 2))
+
+
+@pytest.mark.parametrize('seed', range(3))
+@pytest.mark.parametrize('sign', [1, -1])
+def test_thermal_drift_on_the_displacement_is_simulated_and_inverted(seed, sign):
+    # s = y0 + sign (S[H[x - x0] + w_T T] + k_T T): the drift on the displacement (the
+    # fit's k_T) beside the drift before S (w_T), for a rising and a falling sensor; the
+    # parameter form round-trips, a form without the gain key (written before it) reads
+    # k_T = 0, and the compensator inverts the model (up to the dropped h / tau_T term).
+    rng = np.random.default_rng(seed)
+    t, x = _signal(rng)
+    params = random_model(rng).to_params()
+    params['model.output_sign'] = sign
+    gamma = MPIModel.from_params(params)
+    k = 0.05 * float(np.ptp(gamma.simulate(x)))        # [m/A^2]
+    both = ThermalDriftModel(gamma, 2.0, 0.05, k)
+    h, _ = gamma.hysteresis_output(x)
+    state = first_order_lag(t, x * x, 2.0)
+    np.testing.assert_allclose(
+        both.simulate(t, x), gamma.output(h + 0.05 * state) + sign * k * state, atol=1e-15)
+    outside = ThermalDriftModel(gamma, 2.0, 0.0, k)
+    np.testing.assert_allclose(outside.simulate(t, x), gamma.simulate(x) + sign * k * state,
+                               atol=1e-15)
+    for model in (both, outside):
+        again = extended_model_from_params(model.to_params())
+        assert isinstance(again, ThermalDriftModel) and again.gain == k
+        np.testing.assert_array_equal(again.simulate(t, x), model.simulate(t, x))
+        comp = Compensator(model, output_min=-10.0, output_max=10.0, start='record')
+        commands = [comp.command(s, time=tk) for s, tk in zip(model.simulate(t, x), t)]
+        np.testing.assert_allclose(commands, x, atol=THERMAL, rtol=0.0)
+        assert comp.counters['clamped'] == 0
+    old = {key: value for key, value in both.to_params().items()
+           if key != 'model.thermal_drift.gain'}
+    assert extended_model_from_params(old).gain == 0.0
+    with pytest.raises(ModelError, match=r'model\.thermal_drift\.gain must be finite'):
+        ThermalDriftModel(gamma, 2.0, 0.0, math.nan)

@@ -490,6 +490,9 @@ class Adaptation:
         # at the first pair of the recent window (NaN: settles at the first sample).
         self._heat_now = np.full(2, math.nan)
         self._heat_window = np.full(2, math.nan)
+        # The thermal state of the pairs the fit has taken (the drift on the displacement,
+        # k_T T, is held and taken off the readings the fit sees).
+        self._heat_fed = np.full(2, math.nan)
         self._bx = np.empty(0)
         self._by = np.empty(0)
         self._bok = np.empty(0, dtype=bool)
@@ -604,6 +607,11 @@ class Adaptation:
             x, y = self._bx[part], self._by[part]
             good = self._bok[part] & ok
             use = good & self._determined_mask(x) & self._excitation_mask()
+            gain = getattr(self._model, 'gain', 0.0)
+            if gain != 0.0 and self._fit.heating_coefficient is not None:
+                thermal, self._heat_fed = heating(x, coefficient=self._fit.heating_coefficient,
+                                                  state=self._heat_fed)
+                y = y - self._model.gamma.output_sign * gain * thermal
             self._fit.advance(x, np.where(good, y, 0.0), use=use)
             self._in_gram = end
         window = s.samples(s.holdout) + s.samples(min(s.forgetting_time, 2 * s.holdout))
@@ -722,7 +730,9 @@ class Adaptation:
             return y, end + gamma.input_offset, heat
         h, end = gamma.hysteresis_output(x, plays - gamma.input_offset)
         thermal, heat = heating(x, coefficient=a, state=heat)
-        return gamma.output(h + model.weight * thermal), end + gamma.input_offset, heat
+        return (gamma.output(h + model.weight * thermal)
+                + gamma.output_sign * model.gain * thermal,
+                end + gamma.input_offset, heat)
 
     def _build(self, point: WeightPoint) -> AdaptedModel:
         # The model of a point of the fit's design, of the running model's kind.
