@@ -137,6 +137,24 @@ def test_creep_fit_at_a_high_order_minimises_the_output_error_and_generalises():
     assert _mse(model.simulate(tv, xv), yv, later) < _mse(base.simulate(xv), yv, later)
 
 
+def test_creep_is_not_named_for_a_lag_on_a_record_without_holds():
+    # Issue 24: a 20 s record of a plant with a 5 ms eddy-current lag and no creep, no
+    # holds long enough for the creep signature (the decision on the gain alone;
+    # test_report_agrees' synthetic plant, seed 3).  A creep bank reaching down to 10 ms,
+    # fitted on the output error, took the lag on its 30-90 ms lags and was named creep
+    # (+15 %, z 6.5).  Creep faster than the lag search's range is the input stages'.
+    t, x = identification_excitation(20.0, sample_rate=1000.0, seed=3)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8, eddy_time_constant_s=0.005),
+                                 seed=3).simulate(t, x)
+    _, longest = lag_search_limits(t)
+    assert creep_time_constants(t)[0] >= longest
+    report = diagnose(Recording(t, x, y, source='lag'), order=(8, 4),
+                      causes=('creep', 'rate_dependence'))
+    assert report.cause != 'creep', report.decision.steps
+    creep = next(c for c in report.candidates if c.cause == 'creep')
+    assert not creep.significant
+
+
 # -- a parameter at a bound of its search range is not identified ---------------------------
 
 def test_a_lag_far_beyond_the_search_range_is_not_identified():

@@ -52,7 +52,8 @@ from scipy.optimize import nnls
 from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, PlantEffect, \
     PlantParameter, SLOW_TIME_LIMIT
 from .fitting import AxisUnits, check_series, fixed_held_out_error, fold_simulations, \
-    held_out_error, hold_evidence, Order, residual_axes, resolve_order, vector_parameter
+    held_out_error, hold_evidence, lag_search_limits, Order, residual_axes, resolve_order, \
+    vector_parameter
 from .plant_steps import lag_bank_add, lag_state
 from ..errors import ModelError
 from ..identification import identify_weights, select_order
@@ -271,9 +272,13 @@ def creep_time_constants(time: npt.ArrayLike, *, per_decade: float = 2.0,
     """
     Log-spaced creep time constants over a record's time scales.
 
-    From ten sample intervals (at least 0.01 s) to twice the record length (slower creep
-    looks like drift within the record), about ``per_decade`` per decade, between 2 and
-    ``maximum_count`` of them.
+    From the longest lag the input-stage searches try (the smaller of 200 sample intervals
+    and 5 % of the record, :func:`~mpi_ros.extensions.fitting.lag_search_limits`; at least
+    ten intervals and 0.01 s) to twice the record length (slower creep looks like drift
+    within the record), about ``per_decade`` per decade, between 2 and ``maximum_count`` of
+    them.  Creep faster than the lag search's range is left to the input stages: fitted on
+    the output error, a bank reaching down to 10 ms took a 5 ms eddy-current lag of a
+    hold-less record on its 30-90 ms lags and was named creep (docs/diagnosis.md, issue 24).
 
     Parameters
     ----------
@@ -291,8 +296,8 @@ def creep_time_constants(time: npt.ArrayLike, *, per_decade: float = 2.0,
 
     """
     t = np.asarray(time, dtype=np.float64)
-    dt = float(np.median(np.diff(t)))
-    lo = max(10.0 * dt, 0.01)
+    dt, longest = lag_search_limits(t)
+    lo = max(10.0 * dt, 0.01, longest)
     hi = max(2.0 * float(t[-1] - t[0]), 2.0 * lo)
     count = int(min(max(round(per_decade * math.log10(hi / lo)) + 1, 2), maximum_count))
     return np.geomspace(lo, hi, count)
