@@ -328,7 +328,8 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
     On unseen plants the whole bank fitted in sample lost 610 % against the baseline on
     validation.  The chosen fit is kept only when it fits the record better than no creep.
     Weight on the bank's shortest or longest lag (the search range's bounds: creep faster
-    or slower than the record resolves) is reported as not identified (``not_identified``).
+    than the input stages' lag search leaves to them, or slower than the record resolves) is
+    reported as not identified (``not_identified``).
 
     Parameters
     ----------
