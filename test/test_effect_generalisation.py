@@ -14,7 +14,7 @@ from mpi_ros.extensions.thermal_drift import THERMAL_TIME_CONSTANT
 from mpi_ros.identification import identify_weights
 from mpi_ros.identification.folds import blocked_folds
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
-from mpi_ros.plant.excitation import identification_excitation
+from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation
 from mpi_ros.plant.preisach import random_preisach_core
 from mpi_ros.recordings import Recording
 import numpy as np
@@ -108,6 +108,51 @@ def test_material_fits_are_never_worse_than_gamma_on_the_training_record(hard_re
     model = fit(t, x, y, order=ORDER)
     keep = np.arange(t.size) >= design.burn_in
     assert _mse(model.simulate(t, x), y, keep) <= _mse(base.simulate(x), y, keep)
+
+
+def test_creep_fit_at_a_high_order_minimises_the_output_error_and_generalises():
+    # Issue 24: the wide sweep's creep plant 102 (built-in core, creep 8.5 % over
+    # 0.04-15 s), fitted at (12, 6) as the diagnosis does.  The QP rounds alone minimise
+    # the generalised error and landed at 2x the baseline's output error; the held-out
+    # blocks then fitted creep off.  The fit must keep creep, fit the training record
+    # better than Gamma alone, and predict another trajectory (the diagnostic
+    # excitation, a new noise draw) better than Gamma alone.  Seeds chosen before the run.
+    cfg = ActuatorConfig(noise_std_m=1e-8, coercive_current_a=0.345, coercive_spread_a=0.067,
+                         interaction_spread_a=0.517, reversible_fraction=0.098,
+                         map_knee=0.510, creep_gain=0.085, creep_time_constant_min_s=0.041,
+                         creep_time_constant_max_s=14.8, creep_lag_count=3)
+    t, x = identification_excitation(60.0, sample_rate=1000.0, burst_frequency=40.0,
+                                     hold_duration=5.0, seed=11)
+    y = MagnetostrictiveActuator(cfg, seed=1).simulate(t, x)
+    tv, xv = diagnostic_excitation(sample_rate=1000.0, seed=12)
+    yv = MagnetostrictiveActuator(cfg, seed=2).simulate(tv, xv)
+    order = (12, 6)
+    design, w_h, w_s_inv, _, constant, _ = identify_weights(x, y, *order)
+    base = design.model(w_h, w_s_inv, constant)
+    model = fit_creep(t, x, y, order=order)
+    assert np.any(model.weights > 0.0)
+    keep = np.arange(t.size) >= design.burn_in
+    assert _mse(model.simulate(t, x), y, keep) < 0.5 * _mse(base.simulate(x), y, keep)
+    later = tv > 2.0
+    assert _mse(model.simulate(tv, xv), yv, later) < _mse(base.simulate(xv), yv, later)
+
+
+def test_creep_is_not_named_for_a_lag_on_a_record_without_holds():
+    # Issue 24: a 20 s record of a plant with a 5 ms eddy-current lag and no creep, no
+    # holds long enough for the creep signature (the decision on the gain alone;
+    # test_report_agrees' synthetic plant, seed 3).  A creep bank reaching down to 10 ms,
+    # fitted on the output error, took the lag on its 30-90 ms lags and was named creep
+    # (+15 %, z 6.5).  Creep faster than the lag search's range is the input stages'.
+    t, x = identification_excitation(20.0, sample_rate=1000.0, seed=3)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8, eddy_time_constant_s=0.005),
+                                 seed=3).simulate(t, x)
+    _, longest = lag_search_limits(t)
+    assert creep_time_constants(t)[0] >= longest
+    report = diagnose(Recording(t, x, y, source='lag'), order=(8, 4),
+                      causes=('creep', 'rate_dependence'))
+    assert report.cause != 'creep', report.decision.steps
+    creep = next(c for c in report.candidates if c.cause == 'creep')
+    assert not creep.significant
 
 
 # -- a parameter at a bound of its search range is not identified ---------------------------
