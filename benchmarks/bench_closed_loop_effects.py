@@ -44,8 +44,9 @@ each node in its own process:
    the 1-minute load average after each row; ``achieved``: the rate the lock-step loop
    kept (samples over the time they took, the slower of the two runs).
 
-A dead time cannot be inverted causally: its "extended" compensator is Gamma of the
-dead-time fit alone (the compensator warns); the row shows what that does, no win.
+A dead time cannot be inverted causally: its extended compensator predicts the desired
+displacement the fitted dead time ahead (the node's default ``dead_time_prediction``,
+:mod:`mpi_ros.compensation.prediction`) and inverts Gamma of the dead-time fit.
 
 DDS stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) on ``--domain-id``
 or on a free one of the benchmarks' domains 231-232 (claimed with a file lock); every
@@ -192,8 +193,8 @@ def offline_records(effect, seed):
 
 def offline_track(effect, seed, params, times, desired, rate):
     """Track ``desired`` with a compensator of ``params`` in front of a fresh plant."""
-    # A dead time is compensated as Gamma alone (Compensator.kind says so).  A fresh plant
-    # is where the identification record started: the record's start.
+    # A dead time is predicted (the node's default; Compensator.kind says so).  A fresh
+    # plant is where the identification record started: the record's start.
     comp = Compensator(extended_model_from_params(params), output_min=OUTPUT_MIN,
                        output_max=OUTPUT_MAX, sample_period=1.0 / rate, start='record')
     plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=NOISE, **STRENGTHS[effect]),

@@ -173,7 +173,8 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._flat = self.get_parameter('output_layout').value == 'flat'
         joint_state = joint_input(self.joints, self.get_parameter('input_message').value)
 
-        self._axis_models = AxisModels(self.axes)
+        self._axis_models = AxisModels(
+            self.axes, dead_time_prediction=self.get_parameter('dead_time_prediction').value)
         self._compensator: Optional[MultiAxisCompensator] = None
         # message_time: arrival reads the steady clock (CLOCK_MONOTONIC) per message while
         # some axis has an effect with lags (_timed) and counts only the stream's pauses
@@ -349,7 +350,8 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value,
                 inverses=self._axis_models.inverses,
-                start=self.get_parameter('start_state').value)
+                start=self.get_parameter('start_state').value,
+                dead_time_prediction=self._axis_models.dead_time_prediction)
         self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
@@ -387,4 +389,5 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return multi_axis_values(
             models.models, model_versions=models.versions, joints=self.joints or (),
             flat=self._flat, limits=self._effective_limits(),
-            slow_states=[] if compensator is None else compensator.slow_states)
+            slow_states=[] if compensator is None else compensator.slow_states,
+            dead_time_prediction=self._axis_models.dead_time_prediction)
