@@ -163,3 +163,19 @@ def test_kind_and_warning_follow_the_option():
     assert kind_of(both) == 'dead_time+rate_dependence (dead_time predicted)'
     assert kind_of(both, dead_time_prediction=False) == (
         'dead_time+rate_dependence (dead_time not compensated)')
+
+
+def test_a_ramp_is_tracked_exactly_through_the_dead_time_model():
+    # Exactness: on a ramp (the dead time a whole number of samples), once the ramp fills
+    # the window the model's output through the dead time is the desired displacement.
+    model = DeadTimeModel(GAMMA, 0.012)
+    t = np.arange(1000) * PERIOD
+    desired = 1.5e-5 + 3.5e-5 * t / t[-1]
+    comp = Compensator(model, **LIMITS, sample_period=PERIOD, start='record')
+    output = model.simulate(t, comp.command_batch(desired))
+    settled = DeadTimePredictor(0.012, PERIOD).window + 12
+    np.testing.assert_allclose(output[settled:], desired[settled:], rtol=0, atol=1e-17)
+    off = Compensator(model, **LIMITS, sample_period=PERIOD, start='record',
+                      dead_time_prediction=False)
+    lag = model.simulate(t, off.command_batch(desired)) - desired
+    assert np.min(np.abs(lag[settled:])) > 0.4e-6          # 12 samples behind the ramp
