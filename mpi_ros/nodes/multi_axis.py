@@ -42,14 +42,16 @@ Node parameters
     axis, ``axis<k>.output.min`` / ``axis<k>.output.max`` (unset: the node-wide value; once
     set, a key can be changed but not unset again while the node runs); ``enabled``,
     ``sample_period``, ``start_state`` (where every axis starts, as for the single-axis
-    node; explicit states apply to every axis), ``message_time``, ``diagnostics_period``,
+    node; explicit states apply to every axis), ``message_time``, ``dead_time_prediction``,
+    ``diagnostics_period``,
     ``qos_depth``,
     ``qos_reliability``.  Every axis's range (its own keys, or the node-wide ones it falls
     back to) must be finite with min < max; ``/diagnostics`` reports ``output_min`` /
     ``output_max`` as one value, or as space-separated per-axis lists when the axes'
     ranges differ, and ``extension``, each axis's model kind as a space-separated list
-    (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``, ``dead_time``; a dead
-    time is not compensated, see ``not_compensated``), with ``axis<k>.slow_state`` for each
+    (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``, ``dead_time``; with
+    ``dead_time_prediction`` false a dead time is not compensated, see
+    ``not_compensated``), with ``axis<k>.slow_state`` for each
     axis whose effect has lags.
 
 Extended models per axis
@@ -62,9 +64,12 @@ Extended models per axis
     a YAML ``null`` switches an extension key off, resets an operating-point key, leaves an
     unset key unset and is refused for a key of Gamma; a swap within the same kind keeps
     the slow states, a change of kind starts them settled at the axis's last command.  A
-    dead time cannot be inverted: that axis compensates its Gamma alone (a warning is
-    logged).  The plain axes keep the compiled loop; an axis with an effect is stepped by
-    its own compensator, sample by sample, next to it.
+    dead time cannot be inverted: by default (``dead_time_prediction``) that axis drives
+    Gamma^-1 of its desired displacement predicted the dead time ahead
+    (:mod:`mpi_ros.compensation.prediction`); with it false it compensates its Gamma alone
+    (a warning is logged).  The plain axes keep the compiled loop; an axis with an effect
+    or a predicted dead time is stepped by its own compensator, sample by sample, next to
+    it.
 
 Time stamps of a chunk (``message_time``, :mod:`mpi_ros.compensation.message_time`)
     An array message of K samples arrives at one time; its samples are the stream's own
