@@ -179,3 +179,19 @@ def test_a_ramp_is_tracked_exactly_through_the_dead_time_model():
                       dead_time_prediction=False)
     lag = model.simulate(t, off.command_batch(desired)) - desired
     assert np.min(np.abs(lag[settled:])) > 0.4e-6          # 12 samples behind the ramp
+
+
+def test_the_running_median_is_the_window_median():
+    # The predictor keeps the window's steps sorted as it slides (and after a seed): its
+    # output equals the definition, line and median recomputed over every window.
+    rng = np.random.default_rng(2)
+    x = np.cumsum(rng.standard_normal(3000)) * 1e-7 + np.repeat(rng.uniform(0, 1e-5, 30), 100)
+    p = DeadTimePredictor(0.0123, PERIOD)
+    p.seed(x[:7])                                        # fewer values than the window
+    n, h = p.window, p.horizon
+    c = prediction_weights(n, h)
+    window = np.concatenate([np.full(n - 7, x[0]), x[:7]])
+    for v in x[7:]:
+        window = np.append(window[1:], v)
+        reach = h * np.median(np.abs(np.diff(window)))
+        assert p.predict(float(v)) == min(max(float(c @ window), v - reach), v + reach)

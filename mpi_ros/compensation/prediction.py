@@ -25,6 +25,8 @@ has median step 0 and is not predicted: send it at its own rate (``sample_period
 smooth it.  Measured numbers: docs/diagnosis.md (issue 24, the loop).
 """
 
+import bisect
+from collections import deque
 import math
 
 import numpy as np
@@ -128,6 +130,16 @@ class DeadTimePredictor:
         self._weights = prediction_weights(self.window, self.horizon)
         self._values = np.zeros(self.window)
         self._count = 0
+        # The window's steps |s_j - s_(j-1)|, in order and sorted (the median in O(N)).
+        self._steps: deque[float] = deque()
+        self._sorted: list[float] = []
+
+    def _fill(self, values: FloatArray) -> None:
+        self._values[:] = values
+        steps = np.abs(np.diff(values)).tolist()
+        self._steps = deque(steps)
+        self._sorted = sorted(steps)
+        self._count = self.window
 
     @property
     def values(self) -> FloatArray:
@@ -145,9 +157,9 @@ class DeadTimePredictor:
         if given.size == 0:
             self._count = 0
             return
-        self._values[:] = given[0]
-        self._values[self.window - given.size:] = given
-        self._count = self.window
+        window = np.full(self.window, given[0])
+        window[self.window - given.size:] = given
+        self._fill(window)
 
     def predict(self, desired: float) -> float:
         """
@@ -158,11 +170,18 @@ class DeadTimePredictor:
         """
         s = self._values
         if self._count == 0:
-            s[:] = desired
-            self._count = self.window
+            self._fill(np.full(self.window, desired))
         else:
+            step = abs(desired - float(s[-1]))
             s[:-1] = s[1:]
             s[-1] = desired
+            ordered = self._sorted
+            del ordered[bisect.bisect_left(ordered, self._steps.popleft())]
+            bisect.insort(ordered, step)
+            self._steps.append(step)
         p = float(self._weights @ s)
-        reach = self.horizon * float(np.median(np.abs(np.diff(s))))
+        ordered = self._sorted
+        half = len(ordered) // 2
+        median = ordered[half] if len(ordered) % 2 else 0.5 * (ordered[half - 1] + ordered[half])
+        reach = self.horizon * median
         return min(max(p, desired - reach), desired + reach)
