@@ -83,11 +83,15 @@ def _two_sines(n, frequencies=(0.7, 2.3)):
                + 3e-6 * np.sin(2 * np.pi * frequencies[1] * t))
 
 
-def test_prediction_tracks_a_dead_time_model_on_a_smooth_trajectory():
+@pytest.mark.parametrize('model', [
+    DeadTimeModel(GAMMA, 0.02),
+    CompositeModel(GAMMA, (RateDependentModel(GAMMA, 0.003), DeadTimeModel(GAMMA, 0.02)))],
+    ids=['dead time', 'lag + dead time'])
+def test_prediction_tracks_a_dead_time_model_on_a_smooth_trajectory(model):
     # The exact plant (the model itself, started where the compensator starts): Gamma^-1
     # alone leaves the dead time's error; the prediction removes most of it (measured: 0.27
-    # of it at 0.5 + 1.5 Hz and 20 ms; what is left is the straight line's curvature error).
-    model = DeadTimeModel(GAMMA, 0.02)
+    # of it at 0.5 + 1.5 Hz and 20 ms, with a lag before it too; what is left is the
+    # straight line's curvature error).
     t, desired = _two_sines(6000, (0.5, 1.5))
     errors = {}
     for predict in (True, False):
