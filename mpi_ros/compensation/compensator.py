@@ -158,7 +158,7 @@ class Compensator:
     the stream's nominal time base (``sample_period`` spacing) and Gamma^-1 (with the other
     stages' inverses) drives that
     (:class:`~mpi_ros.compensation.prediction.DeadTimePredictor`: a least-squares straight
-    line over the last ``3 L`` at least, exact on ramps, its reach bounded by how far the
+    line over the last ``2 L`` at least, exact on ramps, its reach bounded by how far the
     desired value moved per sample in the window, so a step is not extrapolated; clamped to
     the model's displacement range).
 
@@ -172,7 +172,8 @@ class Compensator:
         False: output the best linear map of Gamma instead (for comparison).
     sample_period : float
         Interval [s] assumed between two commands when :meth:`command` gets no ``time``
-        (effects with lags only).
+        (effects with lags), and the spacing of the desired values a dead time's
+        prediction assumes (always: never their times).
     memory : TurningPointMemory, optional
         Where the applied current's turning points are kept (a row of a multi-axis
         block); a new memory by default.

@@ -147,7 +147,8 @@ DIAGNOSTICS_PERIOD = ParameterSpec(
 SAMPLE_PERIOD = ParameterSpec(
     'sample_period', 'double', 1.0e-3,
     'Nominal interval between desired displacements; extended models (creep, rate '
-    'dependence, thermal drift) use it when a message has no usable time',
+    'dependence, thermal drift) use it when a message has no usable time, and a dead '
+    "time's prediction always (dead_time_prediction)",
     's', value_range=(1.0e-6, 10.0))
 
 START_STATE = ParameterSpec(
