@@ -44,8 +44,9 @@ each node in its own process:
    the 1-minute load average after each row; ``achieved``: the rate the lock-step loop
    kept (samples over the time they took, the slower of the two runs).
 
-A dead time cannot be inverted causally: its "extended" compensator is Gamma of the
-dead-time fit alone (the compensator warns); the row shows what that does, no win.
+A dead time cannot be inverted causally: its extended compensator predicts the desired
+displacement the fitted dead time ahead (the node's default ``dead_time_prediction``,
+:mod:`mpi_ros.compensation.prediction`) and inverts Gamma of the dead-time fit.
 
 DDS stays on this machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) on ``--domain-id``
 or on a free one of the benchmarks' domains 231-232 (claimed with a file lock); every
@@ -190,12 +191,15 @@ def offline_records(effect, seed):
     return Recording(t, x, y, source='train'), Recording(tv, xv, yv, source='validation')
 
 
-def offline_track(effect, seed, params, times, desired, rate):
+def offline_track(effect, seed, params, times, desired, rate, dead_time_prediction=None):
     """Track ``desired`` with a compensator of ``params`` in front of a fresh plant."""
-    # A dead time is compensated as Gamma alone (Compensator.kind says so).  A fresh plant
-    # is where the identification record started: the record's start.
+    # A dead time is predicted (the node's default; Compensator.kind says so).  A fresh
+    # plant is where the identification record started: the record's start.
+    options = ({} if dead_time_prediction is None
+               else {'dead_time_prediction': dead_time_prediction})
     comp = Compensator(extended_model_from_params(params), output_min=OUTPUT_MIN,
-                       output_max=OUTPUT_MAX, sample_period=1.0 / rate, start='record')
+                       output_max=OUTPUT_MAX, sample_period=1.0 / rate, start='record',
+                       **options)
     plant = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=NOISE, **STRENGTHS[effect]),
                                      seed=seed + 2)
     measured = np.empty(desired.size)
@@ -270,9 +274,10 @@ class Hogs:
 class DDSLoop:
     """The node processes of one benchmark run, each stopped by its PID."""
 
-    def __init__(self, out, message_time=None):
+    def __init__(self, out, message_time=None, dead_time_prediction=None):
         from mpi_ros.harness.driver import LoopDriver
         self.out, self.message_time = out, message_time
+        self.dead_time_prediction = dead_time_prediction
         self.processes = []
         self.driver = LoopDriver('mpi_ros_bench_closed_loop_effects')
 
@@ -316,6 +321,8 @@ class DDSLoop:
         # the rate the desired displacement is sent at); message_time only when asked.
         extra = ([] if self.message_time is None
                  else ['-p', f'message_time:={self.message_time}'])
+        if self.dead_time_prediction is not None:
+            extra += ['-p', f'dead_time_prediction:={str(self.dead_time_prediction).lower()}']
         comp = self.start('compensator', [
             '--params-file', str(params_file), '-p', f'output.min:={OUTPUT_MIN!r}',
             '-p', f'output.max:={OUTPUT_MAX!r}', '-p', f'sample_period:={1.0 / rate!r}',
@@ -350,7 +357,7 @@ def run(args):
         if not args.offline:
             import rclpy
             rclpy.init(args=['bench_closed_loop_effects'])
-            loop = DDSLoop(out, args.message_time)
+            loop = DDSLoop(out, args.message_time, _prediction(args))
         for effect in args.effects:
             for seed in args.seeds:
                 started = time.monotonic()
@@ -380,7 +387,7 @@ def run(args):
                     for name, model in (('plain', plain), ('extended', extended)):
                         if loop is None:
                             measured = offline_track(effect, seed, model.to_params(), times,
-                                                     desired, rate)
+                                                     desired, rate, _prediction(args))
                         else:
                             measured, p99, worst, achieved = loop.track(
                                 effect, seed, files[name], times, desired, rate)
@@ -429,6 +436,11 @@ def format_table(rows):
     return '\n'.join(lines + [format_row(row) for row in rows])
 
 
+def _prediction(args):
+    # --dead-time-prediction on/off, or None: the node's default.
+    return None if args.dead_time_prediction is None else args.dead_time_prediction == 'on'
+
+
 def _progress(text):
     print(text, file=sys.stderr, flush=True)
 
@@ -469,6 +481,8 @@ def main(argv=None):
                    'by PID (issue 24: 2)')
     p.add_argument('--message-time', choices=('nominal', 'arrival'), default=None,
                    help="the compensator's message_time (default: the node's default)")
+    p.add_argument('--dead-time-prediction', choices=('on', 'off'), default=None,
+                   help="the compensator's dead_time_prediction (default: the node's default)")
     p.add_argument('--domain-id', type=int, default=None)
     p.add_argument('--output', default=None, help='folder for bags, logs, traces')
     args = p.parse_args(argv)
@@ -492,7 +506,8 @@ def main(argv=None):
     print(f'{time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}, {platform.node()}, '
           f'{os.cpu_count()} cores, {args.hogs} CPU hogs beside the loop, load '
           f'{min(loads, default=0.0):.1f}-{max(loads, default=0.0):.1f}; '
-          f'message_time {args.message_time or "default"}; '
+          f'message_time {args.message_time or "default"}, dead_time_prediction '
+          f'{args.dead_time_prediction or "default"}; '
           f'record {RECORD_DURATION:g} s at {RECORD_RATE:g} Hz'
           f'{" (in process)" if args.records_in_process else ""}, loop '
           f'{", ".join(f"{r:g}" for r in args.rate)} Hz, '

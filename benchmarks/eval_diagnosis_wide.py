@@ -227,9 +227,14 @@ def loop(folder, results, out):
     Track a new trajectory with the plain and the extended compensator, offline.
 
     For every plant of ``results`` whose verdict names an effect: the plain model is
-    ``identify(order='auto')`` of the training record (the diagnosis' baseline), the
-    extended one the named effect's own fit (two effects: ``fit_composite``), both at
-    order auto, as the closed-loop benchmark fits them.  Each drives a fresh plant through
+    Gamma of ``identify(order='auto', time=t)`` of the training record (with the time base
+    identify measures a lag or dead time and fits Gamma to the lagged or delayed current;
+    Gamma alone is used), the extended one the named effect's own fit (two effects:
+    ``fit_composite``), both at order auto.  The row also has the static plain model,
+    ``identify(order='auto')`` without the time base (the closed-loop benchmark's plain
+    model and the diagnosis' baseline: Gamma of the raw current), as ``loop_static`` and
+    ``loop_ratio_static`` (extended / static).  A dead time is compensated as the node
+    does by default (predicted, ``dead_time_prediction``).  Each drives a fresh plant through
     its compensator (feed-forward) along
     :func:`~mpi_ros.plant.excitation.tracking_trajectory` in the middle 80 % of the
     training output, 20 s at 1 kHz after a 1 s lead; the row gets the RMS tracking errors
@@ -259,6 +264,7 @@ def loop(folder, results, out):
         with warnings.catch_warnings():
             warnings.simplefilter('ignore')
             plain = identify(x, y, order='auto', time=t).model
+            static = identify(x, y, order='auto').model
             parts = verdict.split(' + ')
             extended = (fit_composite(t, x, y, parts, order='auto') if len(parts) > 1
                         else EFFECTS[verdict].fit(t, x, y, order='auto'))
@@ -276,7 +282,7 @@ def loop(folder, results, out):
         values = {k: v for k, v in meta['values'].items() if k != 'relays'}
         run = plant(values, meta['seed'], meta['values'].get('relays'))
         errors = {}
-        for label, model in (('plain', plain), ('extended', extended)):
+        for label, model in (('plain', plain), ('static', static), ('extended', extended)):
             with warnings.catch_warnings():
                 warnings.simplefilter('ignore')
                 comp = Compensator(extended_model_from_params(model.to_params()),
@@ -292,27 +298,38 @@ def loop(folder, results, out):
                 'core': meta['values']['core'], 'loop_plain': errors['plain'],
                 'loop_extended': errors['extended'],
                 'loop_ratio': errors['extended'] / errors['plain'],
+                'loop_static': errors['static'],
+                'loop_ratio_static': errors['extended'] / errors['static'],
                 'seconds': time.perf_counter() - started}
         with out.open('a') as f:
             f.write(json.dumps(line) + '\n')
         print(row['name'], verdict, f'plain {100 * errors["plain"]:.2f} %',
               f'extended {100 * errors["extended"]:.2f} %',
-              f'ratio {line["loop_ratio"]:.2f}', flush=True)
+              f'ratio {line["loop_ratio"]:.2f}',
+              f'(static plain {100 * errors["static"]:.2f} %,'
+              f' ratio {line["loop_ratio_static"]:.2f})', flush=True)
 
 
 def loop_summary(path):
     """Print the loop table of a ``--loop`` results file."""
     rows = _rows(path)
-    print('| plant | core | verdict | plain RMS % | extended RMS % | ratio |')
-    print('|---|---|---|---|---|---|')
+    print('| plant | core | verdict | plain RMS % | extended RMS % | ratio |'
+          ' static plain RMS % | ratio to static |')
+    print('|---|---|---|---|---|---|---|---|')
     for r in rows:
+        static = (f' {100 * r["loop_static"]:.2f} | {r["loop_ratio_static"]:.2f} |'
+                  if 'loop_static' in r else ' - | - |')
         print(f'| {r["name"]} | {r["core"]} | {r["verdict"]} | {100 * r["loop_plain"]:.2f} |'
-              f' {100 * r["loop_extended"]:.2f} | {r["loop_ratio"]:.2f} |')
+              f' {100 * r["loop_extended"]:.2f} | {r["loop_ratio"]:.2f} |' + static)
     right = [r for r in rows if r['verdict'] == r['cause']]
     ok = [r for r in right if r['loop_ratio'] <= 0.85]
     ratios = ', '.join(f'{r["loop_ratio"]:.2f}' for r in right)
     print(f'\nnamed right: {len(right)}; extended <= 0.85 x plain on {len(ok)} of them'
           f' (ratios {ratios})')
+    static = [r for r in right if 'loop_static' in r]
+    if static:
+        ok = [r for r in static if r['loop_ratio_static'] <= 0.85]
+        print(f'extended <= 0.85 x the static plain model on {len(ok)} of {len(static)}')
 
 
 def summary(path):

@@ -175,7 +175,8 @@ def test_extended_compensator_is_safe():
 def test_compensator_of_params_picks_the_step():
     # The one Compensator of the model extended_model_from_params builds (the removed
     # compensator_from_params picked a class): a plain model runs the compiled step, an
-    # invertible effect its per-step inverse, a dead time Gamma alone.
+    # invertible effect its per-step inverse, a dead time Gamma^-1 of the predicted desired
+    # displacement (or Gamma alone without prediction).
     creep, rate, thermal, dead = _models(np.random.default_rng(3))
     limits = {'output_min': 0.0, 'output_max': 2.0}
     plain = Compensator(extended_model_from_params(creep.model.to_params()), **limits)
@@ -184,7 +185,10 @@ def test_compensator_of_params_picks_the_step():
         comp = Compensator(extended_model_from_params(model.to_params()), **limits)
         assert comp.has_effect and comp.kind == model.cause
     comp = Compensator(extended_model_from_params(dead.to_params()), **limits)
-    assert not comp.has_effect and comp.kind == 'dead_time (not compensated)'
+    assert not comp.has_effect and comp.kind == 'dead_time (predicted)' and not comp.compiled
+    comp = Compensator(extended_model_from_params(dead.to_params()), **limits,
+                       dead_time_prediction=False)
+    assert not comp.has_effect and comp.kind == 'dead_time (not compensated)' and comp.compiled
     with warnings.catch_warnings():
         warnings.simplefilter('error')
         Compensator(extended_model_from_params(rate.to_params()), **limits)

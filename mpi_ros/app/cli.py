@@ -395,8 +395,8 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                 unit: str = 'A') -> Any:
     # As the compensator node: the inverse of the model, its commands clamped to the safe
     # current range (the forward state follows the clamped command), unless --no-clamp.
-    # With an effect (time column needed) the compensator's streaming inverse (with a dead
-    # time or an output mode: Gamma only, as the node does, and a note).
+    # With an effect (time column needed) the compensator's streaming inverse, as the node
+    # with its defaults (a dead time predicted; an output mode: Gamma only, and a note).
     import numpy as np
     from ..compensation import operating_range
     from ..compensation.limits import limits_shortfall

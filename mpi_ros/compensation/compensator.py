@@ -3,7 +3,8 @@
 The one streaming compensator for every model.
 
 A plain MPI model runs one compiled step; an extended model plugs in its effect's exact
-per-step inverse (:class:`InverseStep`).
+per-step inverse (:class:`InverseStep`); a dead time is compensated by prediction
+(:mod:`mpi_ros.compensation.prediction`).
 """
 
 from collections.abc import Callable
@@ -16,6 +17,7 @@ import numpy.typing as npt
 
 from .kernels import compensate_axes, compensate_step, COMPILED, INDEX_COLUMNS, inverse_value, \
     LAST_COMMAND, warm_up
+from .prediction import DeadTimePredictor, prediction_horizon
 from .screening import best_linear_map, operating_range, screen_desired
 from ..errors import ModelError
 from ..operators.memory import TurningPointMemory
@@ -112,15 +114,36 @@ def inverse_step_of(model: Any, inverse: MPIModel | None = None, *,
     return step
 
 
-def kind_of(model: Any) -> str:
-    """Name a model's effect: ``none``, its cause, or ``dead_time (not compensated)``."""
+def kind_of(model: Any, *, dead_time_prediction: bool = True) -> str:
+    """
+    Name a model's effect: ``none``, its cause, ``(predicted)`` or ``(not compensated)``.
+
+    Parameters
+    ----------
+    model : MPIModel or extended model
+        A model.
+    dead_time_prediction : bool
+        Whether a dead time is compensated by prediction (:class:`Compensator`'s option):
+        then it reads ``dead_time (predicted)``, else ``dead_time (not compensated)``.
+
+    Returns
+    -------
+    str
+        One token, then the parts left out or predicted in parentheses.
+
+    """
     if model.cause == 'none':
         return 'none'
     cause = str(model.cause).replace(' + ', '+')       # one token (diagnostics join by spaces)
+    predicted = dead_time_prediction and prediction_horizon(model) > 0.0
     if inverse_step_of(model) is None:
-        return f'{cause} (not compensated)'
+        return f'{cause} (predicted)' if predicted else f'{cause} (not compensated)'
     left_out = getattr(model, 'not_inverted', ())
-    return f'{cause} ({"+".join(left_out)} not compensated)' if left_out else cause
+    if predicted:
+        left_out = tuple(part for part in left_out if part != 'dead_time')
+    notes = ([f'{"+".join(left_out)} not compensated'] if left_out else []) + (
+        ['dead_time predicted'] if predicted else [])
+    return f'{cause} ({"; ".join(notes)})' if notes else cause
 
 
 class Compensator:
@@ -130,8 +153,14 @@ class Compensator:
     One class owns the safe current range, the screening of the desired values, the
     counters, the turning-point memory and the bumpless handover between models of any
     kind: a plain MPI model (no effect: one compiled step), or an extended model whose
-    effect plugs in its exact per-step inverse (:class:`InverseStep`).  A model whose effect
-    cannot be inverted causally (dead time) is compensated through its Gamma alone.
+    effect plugs in its exact per-step inverse (:class:`InverseStep`).  A dead time ``L``
+    has no causal inverse: by default the desired displacement is predicted ``L`` ahead on
+    the stream's nominal time base (``sample_period`` spacing) and Gamma^-1 (with the other
+    stages' inverses) drives that
+    (:class:`~mpi_ros.compensation.prediction.DeadTimePredictor`: a least-squares straight
+    line over the last ``2 L`` at least, exact on ramps, its reach bounded by how far the
+    desired value moved per sample in the window, so a step is not extrapolated; clamped to
+    the model's displacement range).
 
     Parameters
     ----------
@@ -143,7 +172,8 @@ class Compensator:
         False: output the best linear map of Gamma instead (for comparison).
     sample_period : float
         Interval [s] assumed between two commands when :meth:`command` gets no ``time``
-        (effects with lags only).
+        (effects with lags), and the spacing of the desired values a dead time's
+        prediction assumes (always: never their times).
     memory : TurningPointMemory, optional
         Where the applied current's turning points are kept (a row of a multi-axis
         block); a new memory by default.
@@ -164,6 +194,10 @@ class Compensator:
         None, the default, bounds it
         (:class:`~mpi_ros.extensions.rate_dependence.RateDependenceInverse`);
         ``inf`` gives the exact, unbounded inverse of the lag (for comparison).
+    dead_time_prediction : bool
+        True (the default): compensate a model's dead time by prediction (see above);
+        False: Gamma^-1 of the desired displacement itself, the dead time left in the
+        tracking error (``kind`` says ``not compensated``).
 
     Attributes
     ----------
@@ -184,8 +218,10 @@ class Compensator:
                  memory: TurningPointMemory | None = None,
                  inverse: MPIModel | None = None, start: StartState | str = 'rest_low',
                  current_range: tuple[float, float] | None = None,
-                 lead_gain: float | None = None) -> None:
+                 lead_gain: float | None = None, dead_time_prediction: bool = True) -> None:
         self._check_limits(output_min, output_max)
+        self.dead_time_prediction = bool(dead_time_prediction)
+        self._predictor: DeadTimePredictor | None = None
         self.start = StartState.parse(start)
         self.lead_gain = lead_gain
         check_sample_period(sample_period)
@@ -269,6 +305,12 @@ class Compensator:
             np.ascontiguousarray(s_inv.weights),
             np.array([gamma.input_offset, gamma.output_offset, float(gamma.output_sign)]))
         warm_up(self._kernel, lo, self.output_min, self.output_max)
+        horizon = prediction_horizon(model) if self.dead_time_prediction else 0.0
+        predictor = (DeadTimePredictor(horizon, self.sample_period) if horizon > 0.0
+                     else None)
+        if predictor is not None and self._predictor is not None:
+            predictor.seed(self._predictor.values)    # the desired values seen: bumpless
+        self._predictor = predictor
         self._observe: Callable[[float], None] | None = getattr(step, 'observe', None)
         if self._observe is not None:
             self._observe(float(np.dot(h.weights, z_h)))    # H's output in the (replayed) state
@@ -319,8 +361,8 @@ class Compensator:
 
     @property
     def kind(self) -> str:
-        """Name the installed model's effect: ``none``, a cause, or ``... (not compensated)``."""
-        return kind_of(self.model)
+        """Name the installed model's effect: ``none``, a cause, or with a note in parentheses."""
+        return kind_of(self.model, dead_time_prediction=self.dead_time_prediction)
 
     def set_limits(self, output_min: float, output_max: float) -> None:
         """Change the safe current range [A] (validated; the model is kept)."""
@@ -364,6 +406,11 @@ class Compensator:
         s_c = screen_desired(desired, c, self.displacement_range)
         if s_c is None:
             return self.last_command
+        if self._predictor is not None:
+            predicted = self._predictor.predict(s_c)
+            if self.enabled:                    # the linear map stays the plain baseline
+                lo, hi = self.displacement_range     # nowhere beyond the range or s_c
+                s_c = min(max(predicted, min(lo, s_c)), max(hi, s_c))
         r_h, w_h, z_h, r_hi, w_hi, z_i, r_si, w_si, point = self._kernel
         step = self._step
         if step is None:
@@ -429,7 +476,7 @@ class Compensator:
 
         """
         values = loop_block(np.asarray(desired, dtype=np.float64).reshape(-1))
-        if self._step is not None or not self.enabled:
+        if self._step is not None or not self.enabled or self._predictor is not None:
             stamps = (None,) * values.size if times is None else np.asarray(times, float)
             return np.array([self.command(float(v), time=None if t is None else float(t))
                              for v, t in zip(values, stamps)], dtype=np.float64)
@@ -471,8 +518,8 @@ class Compensator:
 
     @property
     def compiled(self) -> bool:
-        """Tell whether commands run the plain compiled step (no effect, enabled)."""
-        return self._step is None and self._enabled
+        """Tell whether commands run the plain compiled step (no effect or prediction, enabled)."""
+        return self._step is None and self._enabled and self._predictor is None
 
     def _interval(self, time: float | None) -> float:
         if time is None:

@@ -50,7 +50,8 @@ class MultiAxisCompensator:
     Every plain, enabled axis runs in one compiled loop over the block: its thresholds,
     weights, play states, operating point, limits and turning points are packed into a
     few shared arrays (the axis's :class:`Compensator` keeps views of them, so its state
-    is the packed one).  Axes with an effect or disabled are served by their own
+    is the packed one).  Axes with an effect, a predicted dead time or disabled
+    are served by their own
     :class:`Compensator` (:meth:`Compensator.command_batch`, sample by sample, with the
     block's ``times`` for an effect's lags).  The pack is rebuilt on the next block after
     any axis changes (:meth:`install`, :meth:`set_limits`, :attr:`enabled`, or anything
@@ -72,6 +73,9 @@ class MultiAxisCompensator:
         Gamma^-1 of each axis's model where already built (None: built here).
     start : StartState or str
         Where every axis starts (see :class:`Compensator`; default ``rest_low``).
+    dead_time_prediction : bool
+        Compensate an axis's dead time by prediction (see :class:`Compensator`; such an
+        axis is served sample by sample).
 
     """
 
@@ -79,7 +83,7 @@ class MultiAxisCompensator:
                  output_max: float | Sequence[float], enabled: bool = True,
                  sample_period: float = 1e-3, memory_capacity: int = 4096,
                  inverses: Sequence[MPIModel | None] | None = None,
-                 start: Any = 'rest_low') -> None:
+                 start: Any = 'rest_low', dead_time_prediction: bool = True) -> None:
         if len(models) == 0:
             msg = 'a multi-axis compensator needs at least one axis model'
             raise ModelError(msg)
@@ -92,6 +96,7 @@ class MultiAxisCompensator:
         self._axes = [
             Compensator(model, output_min=lo, output_max=hi, enabled=enabled,
                         sample_period=sample_period, inverse=built[k], start=start,
+                        dead_time_prediction=dead_time_prediction,
                         memory=TurningPointMemory(memory_capacity, points=self._memory[k],
                                                   state=self._memory_state[k]))
             for k, (model, lo, hi) in enumerate(zip(models, lows, highs))]
@@ -440,10 +445,13 @@ class AxisModels:
         Gamma^-1 of each axis's model where the parameter rule built it (None: not built).
     versions : list of int
         How many models each axis was given (kept across :meth:`reset`).
+    dead_time_prediction : bool
+        Whether the compensator predicts over a dead time (how a dead time is named).
 
     """
 
-    def __init__(self, axes: int) -> None:
+    def __init__(self, axes: int, *, dead_time_prediction: bool = True) -> None:
+        self.dead_time_prediction = dead_time_prediction
         self.versions = [0] * axes
         self.models: list[Any] = [None] * axes
         self.inverses: list[MPIModel | None] = [None] * axes
@@ -480,7 +488,9 @@ class AxisModels:
             e.g. ``model applied to axis 0 (none), 2 (creep) (compensating)``.
 
         """
-        axes = ', '.join(f'{axis} ({kind_of(models[axis])})' for axis in sorted(models))
+        axes = ', '.join(
+            f'{axis} ({kind_of(models[axis], dead_time_prediction=self.dead_time_prediction)})'
+            for axis in sorted(models))
         state = 'compensating' if running else f'{len(self.missing)} axes still without a model'
         return f'model applied to axis {axes} ({state})'
 

@@ -319,7 +319,8 @@ def single_axis_values(kind: str, slow_state: Iterable[float] | None) -> dict[st
 def multi_axis_values(models: Sequence[Any], *, model_versions: Sequence[int],
                       joints: Sequence[str], flat: bool,
                       limits: tuple[Sequence[float], Sequence[float]],
-                      slow_states: Sequence[Iterable[float] | None]) -> dict[str, Any]:
+                      slow_states: Sequence[Iterable[float] | None],
+                      dead_time_prediction: bool = True) -> dict[str, Any]:
     """
     Return a multi-axis compensator's own diagnostics values.
 
@@ -337,6 +338,8 @@ def multi_axis_values(models: Sequence[Any], *, model_versions: Sequence[int],
         Each axis's effective ``output.min`` and ``output.max``.
     slow_states : sequence
         Each axis's slow states (None without an effect); empty while no core runs.
+    dead_time_prediction : bool
+        Whether a dead time is compensated by prediction (else it is not compensated).
 
     Returns
     -------
@@ -357,7 +360,9 @@ def multi_axis_values(models: Sequence[Any], *, model_versions: Sequence[int],
               for model in models]
     values['extension'] = ' '.join(causes)
     uncompensated = [str(axis) for axis, model in enumerate(models)
-                     if model is not None and kind_of(model).endswith('(not compensated)')]
+                     if model is not None and kind_of(
+                         model, dead_time_prediction=dead_time_prediction).endswith(
+                             '(not compensated)')]
     if uncompensated:
         values['not_compensated'] = ' '.join(uncompensated)
     for axis, slow_state in enumerate(slow_states):

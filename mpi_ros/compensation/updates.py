@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from .compensator import Compensator, gamma_of, inverse_step_of
+from .prediction import prediction_horizon
 from ..errors import ModelError, MPIError, ParameterRejected
 from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
@@ -610,7 +611,7 @@ def touches(request: Mapping[str, Any], prefix: str) -> bool:
                for name in request)
 
 
-def uncompensated(model: Any) -> str | None:
+def uncompensated(model: Any, *, dead_time_prediction: bool = True) -> str | None:
     """
     Say why a model's effect is not compensated (a dead time, a mode: no causal inverse).
 
@@ -618,11 +619,14 @@ def uncompensated(model: Any) -> str | None:
     ----------
     model : MPIModel or extended model
         A model.
+    dead_time_prediction : bool
+        Whether the compensator predicts over a dead time (its default): then a dead time
+        is compensated (by prediction) and not named here.
 
     Returns
     -------
     str or None
-        The warning; None when the whole model is inverted.
+        The warning; None when the whole model is compensated.
 
     """
     if isinstance(model, MPIModel):
@@ -632,6 +636,8 @@ def uncompensated(model: Any) -> str | None:
     else:                                  # a composite: the parts without a causal inverse
         left = [part for part in getattr(model, 'parts', ()) if part.inverse_step() is None]
         kept = 'the other stages'
+    if dead_time_prediction:
+        left = [part for part in left if prediction_horizon(part) <= 0.0]
     if not left:
         return None
     what = '; '.join(getattr(part, 'uncompensated_effect',

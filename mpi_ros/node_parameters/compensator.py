@@ -22,7 +22,8 @@ from ..operators.start import START_CHOICES, StartState
 from ..units import INPUT_QUANTITIES, INPUT_QUANTITY_KEY
 
 __all__ = [
-    'ADAPTATION_PARAMETERS', 'AUTOSTART', 'AXES', 'DIAGNOSTICS_PERIOD', 'ENABLED',
+    'ADAPTATION_PARAMETERS', 'AUTOSTART', 'AXES', 'DEAD_TIME_PREDICTION', 'DIAGNOSTICS_PERIOD',
+    'ENABLED',
     'INPUT_MESSAGE', 'INPUT_QUANTITY', 'JOINTS', 'LIMIT_PARAMETERS', 'MESSAGE_TIME',
     'MODEL_PARAMETERS', 'OUTPUT_LAYOUT', 'SAMPLE_PERIOD', 'START_STATE', 'WIRING',
     'AxisKeys', 'axis_limit_parameters', 'axis_parameters', 'compensator_parameters',
@@ -146,7 +147,8 @@ DIAGNOSTICS_PERIOD = ParameterSpec(
 SAMPLE_PERIOD = ParameterSpec(
     'sample_period', 'double', 1.0e-3,
     'Nominal interval between desired displacements; extended models (creep, rate '
-    'dependence, thermal drift) use it when a message has no usable time',
+    'dependence, thermal drift) use it when a message has no usable time, and a dead '
+    "time's prediction always (dead_time_prediction)",
     's', value_range=(1.0e-6, 10.0))
 
 START_STATE = ParameterSpec(
@@ -167,6 +169,16 @@ MESSAGE_TIME = ParameterSpec(
     'of more than 100 sample periods and 0.1 s between two messages is a pause of the '
     'stream, counted in whole sample periods, for slow lags such as creep)',
     choices=('arrival', 'nominal'), read_only=True)
+
+DEAD_TIME_PREDICTION = ParameterSpec(
+    'dead_time_prediction', 'bool', True,
+    "true: compensate a model's dead time (model.dead_time) by prediction: Gamma^-1 of the "
+    "desired displacement extrapolated the dead time ahead on the stream's own time base "
+    '(sample_period spacing; a least-squares line over at least twice the dead time, its '
+    'reach bounded by the median step of the window, so a step is not extrapolated; kept in '
+    "the model's range); false: Gamma^-1 of the desired displacement itself (the dead time "
+    'stays in the tracking error); taken when the core is built (configure)',
+    read_only=True)
 
 #: The joint name of each axis (ros2_control); read-only.
 JOINTS = ParameterSpec(
@@ -266,6 +278,7 @@ def compensator_parameters() -> Tuple[ParameterSpec, ...]:
         SAMPLE_PERIOD,
         START_STATE,
         MESSAGE_TIME,
+        DEAD_TIME_PREDICTION,
         DIAGNOSTICS_PERIOD,
         *loop_qos_parameters('desired_displacement and current_command'),
         AXES,
@@ -284,7 +297,7 @@ def multi_axis_parameters() -> Tuple[ParameterSpec, ...]:
 
     """
     return LIMIT_PARAMETERS + (ENABLED, SAMPLE_PERIOD, START_STATE, MESSAGE_TIME,
-                               DIAGNOSTICS_PERIOD) + (
+                               DEAD_TIME_PREDICTION, DIAGNOSTICS_PERIOD) + (
         loop_qos_parameters('desired_displacements and current_commands')) + (AUTOSTART,)
 
 

@@ -80,7 +80,10 @@ Extended models (:mod:`mpi_ros.extensions`)
     the stream's own time base (``message_time``, :mod:`mpi_ros.compensation.message_time`:
     ``nominal``, the default, ``sample_period`` apart; ``arrival``, the same but a pause of the
     stream counted in whole periods; never the jittered arrival times, which a lead filter
-    would differentiate); a dead time cannot be inverted, so Gamma alone is compensated and a
+    would differentiate); a dead time has no causal inverse: by default
+    (``dead_time_prediction``) the desired displacement is predicted the dead time ahead on
+    the same nominal time base (:mod:`mpi_ros.compensation.prediction`, bounded: a step is
+    not extrapolated), with ``dead_time_prediction: false`` Gamma alone is compensated and a
     warning is logged. An extension is off while its keys are unset or
     0 / empty. Pushing a plain model (all four core keys, no extension key) switches an
     extension off. Extension keys alone (no core key) change the extension of the running
@@ -341,7 +344,8 @@ class CompensatorNode(CompensatorNodeBase):
                 output_max=self.get_parameter('output.max').value,
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value, inverse=inverse,
-                start=self.get_parameter('start_state').value)
+                start=self.get_parameter('start_state').value,
+                dead_time_prediction=self.get_parameter('dead_time_prediction').value)
         self._warn_if_not_compensated(compensator.model)
         self._check_limits_fit('', compensator)
         self._set_live()

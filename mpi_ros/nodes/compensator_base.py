@@ -512,8 +512,9 @@ class CompensatorNodeBase(LifecycleNode):
             self._timer = self.create_timer(period, self._publish_diagnostics)
 
     def _warn_if_not_compensated(self, model: Any, where: str = '') -> None:
-        """Warn when a model's effect (a dead time) cannot be inverted: Gamma alone is used."""
-        warning = uncompensated(model)
+        """Warn when a model's effect cannot be compensated (a dead time not predicted, a mode)."""
+        warning = uncompensated(
+            model, dead_time_prediction=self.get_parameter('dead_time_prediction').value)
         if warning is not None:
             self.get_logger().warning(where + warning)
 

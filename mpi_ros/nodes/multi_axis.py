@@ -42,14 +42,16 @@ Node parameters
     axis, ``axis<k>.output.min`` / ``axis<k>.output.max`` (unset: the node-wide value; once
     set, a key can be changed but not unset again while the node runs); ``enabled``,
     ``sample_period``, ``start_state`` (where every axis starts, as for the single-axis
-    node; explicit states apply to every axis), ``message_time``, ``diagnostics_period``,
+    node; explicit states apply to every axis), ``message_time``, ``dead_time_prediction``,
+    ``diagnostics_period``,
     ``qos_depth``,
     ``qos_reliability``.  Every axis's range (its own keys, or the node-wide ones it falls
     back to) must be finite with min < max; ``/diagnostics`` reports ``output_min`` /
     ``output_max`` as one value, or as space-separated per-axis lists when the axes'
     ranges differ, and ``extension``, each axis's model kind as a space-separated list
-    (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``, ``dead_time``; a dead
-    time is not compensated, see ``not_compensated``), with ``axis<k>.slow_state`` for each
+    (``none``, ``creep``, ``rate_dependence``, ``thermal_drift``, ``dead_time``; with
+    ``dead_time_prediction`` false a dead time is not compensated, see
+    ``not_compensated``), with ``axis<k>.slow_state`` for each
     axis whose effect has lags.
 
 Extended models per axis
@@ -62,9 +64,12 @@ Extended models per axis
     a YAML ``null`` switches an extension key off, resets an operating-point key, leaves an
     unset key unset and is refused for a key of Gamma; a swap within the same kind keeps
     the slow states, a change of kind starts them settled at the axis's last command.  A
-    dead time cannot be inverted: that axis compensates its Gamma alone (a warning is
-    logged).  The plain axes keep the compiled loop; an axis with an effect is stepped by
-    its own compensator, sample by sample, next to it.
+    dead time cannot be inverted: by default (``dead_time_prediction``) that axis drives
+    Gamma^-1 of its desired displacement predicted the dead time ahead
+    (:mod:`mpi_ros.compensation.prediction`); with it false it compensates its Gamma alone
+    (a warning is logged).  The plain axes keep the compiled loop; an axis with an effect
+    or a predicted dead time is stepped by its own compensator, sample by sample, next to
+    it.
 
 Time stamps of a chunk (``message_time``, :mod:`mpi_ros.compensation.message_time`)
     An array message of K samples arrives at one time; its samples are the stream's own
@@ -173,7 +178,8 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         self._flat = self.get_parameter('output_layout').value == 'flat'
         joint_state = joint_input(self.joints, self.get_parameter('input_message').value)
 
-        self._axis_models = AxisModels(self.axes)
+        self._axis_models = AxisModels(
+            self.axes, dead_time_prediction=self.get_parameter('dead_time_prediction').value)
         self._compensator: Optional[MultiAxisCompensator] = None
         # message_time: arrival reads the steady clock (CLOCK_MONOTONIC) per message while
         # some axis has an effect with lags (_timed) and counts only the stream's pauses
@@ -349,7 +355,8 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                 enabled=self.get_parameter('enabled').value,
                 sample_period=self.get_parameter('sample_period').value,
                 inverses=self._axis_models.inverses,
-                start=self.get_parameter('start_state').value)
+                start=self.get_parameter('start_state').value,
+                dead_time_prediction=self._axis_models.dead_time_prediction)
         self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
@@ -387,4 +394,5 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
         return multi_axis_values(
             models.models, model_versions=models.versions, joints=self.joints or (),
             flat=self._flat, limits=self._effective_limits(),
-            slow_states=[] if compensator is None else compensator.slow_states)
+            slow_states=[] if compensator is None else compensator.slow_states,
+            dead_time_prediction=self._axis_models.dead_time_prediction)

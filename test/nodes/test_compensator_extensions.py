@@ -234,7 +234,9 @@ def test_plain_creep_plain_switching(make_node):
 
 
 def test_dead_time_compensates_gamma_and_warns(make_node):
-    node = make_node(limits() + typed(MODEL_A))
+    # dead_time_prediction false: Gamma's inverse alone, said so.
+    node = make_node(limits() + typed(MODEL_A)
+                     + [Parameter('dead_time_prediction', value=False)])
     result = node.set_parameters_atomically(typed(dict(MODEL_A, **DEAD)))
     assert result.successful, result.reason
     assert not node.compensator.has_effect  # Gamma's inverse alone
@@ -243,6 +245,20 @@ def test_dead_time_compensates_gamma_and_warns(make_node):
     np.testing.assert_allclose(run(node), core(MODEL_A), rtol=0, atol=1e-12)
     assert node.set_parameters_atomically(typed(MODEL_A)).successful
     assert node.get_parameter('model.dead_time').value == 0.0
+
+
+def test_dead_time_is_predicted_by_default(make_node):
+    # The default: the desired displacement predicted the dead time ahead, as the core.
+    node = make_node(limits() + typed(MODEL_A))
+    assert node.get_parameter('dead_time_prediction').value is True
+    assert node.describe_parameter('dead_time_prediction').read_only
+    result = node.set_parameters_atomically(typed(dict(MODEL_A, **DEAD)))
+    assert result.successful, result.reason
+    values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+    assert values['extension'] == 'dead_time (predicted)'
+    commands = run(node)
+    np.testing.assert_allclose(commands, core(dict(MODEL_A, **DEAD)), rtol=0, atol=1e-12)
+    assert np.max(np.abs(commands - core(MODEL_A))) > 1e-6       # not Gamma^-1 alone
 
 
 def _exchange(ros_context, node, values, *, pause, wait):

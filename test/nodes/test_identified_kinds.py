@@ -22,7 +22,7 @@ import pytest
 from .test_output_limits import typed
 
 KINDS = {'virgin': 'none', 'lag 3 ms at 1 kHz': 'rate_dependence',
-         'dead time 10 samples at 10 kHz': 'dead_time (not compensated)',
+         'dead time 10 samples at 10 kHz': 'dead_time (predicted)',
          'ringing 1000 Hz': 'resonance (not compensated)'}
 
 

@@ -443,12 +443,33 @@ def test_ros2_param_load_of_axis_extension_keys(rig, tmp_path):
 
 
 def test_dead_time_on_one_axis_compensates_its_gamma(rig):
+    # dead_time_prediction false: the dead-time axis is Gamma^-1 alone, and said so.
     models = gammas()
     extensions = (CREEP, {'model.dead_time': 0.01}, {})
-    started = rig(overrides_for(models, extensions))
+    started = rig(overrides_for(models, extensions)
+                  + [Parameter('dead_time_prediction', value=False)])
     cores = [core(models[0], CREEP), core(models[1], {}), core(models[2], {})]
     desired = desired_block(models, 40, seed=14)
     assert_same(started.send(chunks_of(desired, [4])), reference(cores, desired))
     _, values = started.diagnostics()
     assert values['extension'] == 'creep dead_time none'
     assert values['not_compensated'] == '1'
+
+
+def test_dead_time_on_one_axis_is_predicted_by_default(rig):
+    # The default: the dead-time axis predicts (as its single-axis core does), the block
+    # path serves it sample by sample, and no axis is reported not compensated.
+    models = gammas()
+    extensions = (CREEP, {'model.dead_time': 0.01}, {})
+    started = rig(overrides_for(models, extensions))
+    cores = [core(models[0], CREEP), core(models[1], {'model.dead_time': 0.01}),
+             core(models[2], {})]
+    assert cores[1].kind == 'dead_time (predicted)'
+    desired = desired_block(models, 40, seed=14)
+    commands = started.send(chunks_of(desired, [4]))
+    assert_same(commands, reference(cores, desired))
+    gamma_alone = reference([core(models[1], {})], desired[:, 1:2])
+    assert np.max(np.abs(commands[:, 1] - gamma_alone[:, 0])) > 1e-9    # it does predict
+    _, values = started.diagnostics()
+    assert values['extension'] == 'creep dead_time none'
+    assert 'not_compensated' not in values
