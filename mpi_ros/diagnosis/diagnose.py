@@ -1313,8 +1313,9 @@ def _agree_with_finding(decision: Decision, chosen: Candidate | None,
     # other kind, or the finding is a tie, the verdict is a stated tie, unless the
     # validation's bursts at several rates separate them (one signature present, the other
     # absent) or a separate validation record does (`beyond`); when the finding is none,
-    # the validation gain of a split alone does not name an input stage.  Returns the
-    # chosen candidate (another one only for a finding of none).
+    # the validation gain of a split alone does not name an input stage; in a tie nothing
+    # separates, the one that can be inverted causally (the lag) is named.  Returns the
+    # chosen candidate (another one only for a finding of none or an unseparated tie).
     decision.dynamics_finding = finding.kind
     if (chosen is None or chosen.cause not in _INPUT_STAGES
             or finding.kind in ('unavailable', _INPUT_STAGES[chosen.cause])):
@@ -1351,9 +1352,25 @@ def _agree_with_finding(decision: Decision, chosen: Candidate | None,
         steps.append(f'{other.cause} is tied with {chosen.cause}: the analysis of the record'
                      f' (identify\'s held-out blocks) finds {finding.kind.replace("_", " ")}'
                      f' ({finding.reason}): ambiguous')
+    if (other is not None and other.significant and other.signature != 'absent'
+            and not _causally_invertible(chosen) and _causally_invertible(other)):
+        # Nothing separates the two: the one a compensator can invert is named (a dead
+        # time needs the future), the tie stated.  Its validation gain alone would name a
+        # dead time on a lag plant as often as a lag on a dead-time plant.
+        steps.append(f'{other.cause} is named, not {chosen.cause}: the analysis of the record'
+                     f' finds {finding.kind.replace("_", " ")}, and neither a burst signature'
+                     f' nor a separate validation record shows {chosen.cause}; of the two,'
+                     f' {other.cause} can be inverted causally (the tie stated)')
+        return other
     decision.ambiguous = bool(decision.tied_with)
     decision.separate_by = _separation([chosen.cause, *decision.tied_with])
     return chosen
+
+
+def _causally_invertible(c: Candidate) -> bool:
+    # The candidate's model has a causal per-step inverse (a lag has; a dead time has not).
+    inverse_step = getattr(c.model, 'inverse_step', None)
+    return inverse_step is not None and inverse_step() is not None
 
 
 def _ranking(best: Candidate | None, candidates: list[Candidate],
