@@ -438,6 +438,22 @@ def test_a_child_asked_to_take_readings_without_a_subscriber_says_so_and_ends():
     assert process.pending == (0, 0)
 
 
+@pytest.mark.skipif(not hasattr(os, 'getpriority'), reason='needs process priorities')
+def test_the_child_runs_below_the_node_so_the_command_path_keeps_the_cpu():
+    """The adaptation's child is niced by CHILD_NICE against the node (capped at 19)."""
+    from mpi_ros.compensation.adaptation import CHILD_NICE
+    model, _, _ = _model(SEEDS[0])
+    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE))
+    process.start()
+    try:
+        assert process.wait_ready(60.0)
+        mine = os.getpriority(os.PRIO_PROCESS, 0)
+        assert os.getpriority(os.PRIO_PROCESS, process.pid) == min(mine + CHILD_NICE, 19)
+        assert os.getpriority(os.PRIO_PROCESS, 0) == mine          # the node's own is kept
+    finally:
+        process.stop()
+
+
 @pytest.mark.skipif(not hasattr(os, 'sched_getaffinity') or len(os.sched_getaffinity(0)) < 2,
                     reason='needs CPU affinity and two CPUs')
 def test_a_pinned_node_keeps_its_cpu_and_its_child_runs_on_the_others():

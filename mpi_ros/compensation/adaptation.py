@@ -800,6 +800,15 @@ class AdaptationWorker:
                     self._on_error(f'{type(err).__name__}: {err}')
 
 
+#: The adaptation child's niceness (``os.nice``, 0-19; the node's own is 0): the adaptation
+#: is background work that must yield the CPU to the command path.  At 10 kHz on 2 cores
+#: (2026-11-26, load 1-3, ``bench_compensator_node.py --adaptation --rounds 2``) the command
+#: path's p99 with adaptation on was 1.55-1.61x the runs without it at niceness 0, 1.26-1.35x
+#: at 10 and 1.19x at 19; 10 is kept so that the child, 9-13 % of a core there, still gets
+#: its share on a loaded machine (at 19 it would lose readings first, and then freeze).
+CHILD_NICE = 10
+
+
 def child_cpus() -> set[int] | None:
     """
     Return the CPUs for the adaptation's child: those the calling node is not pinned to.
@@ -921,6 +930,7 @@ class AdaptationProcess:
             cpus = child_cpus()
             pin = ('import os\ntry:\n    os.sched_setaffinity(0, '
                    f'{sorted(cpus)!r})\nexcept OSError:\n    pass\n' if cpus is not None else '')
+            pin += f'import os\ntry:\n    os.nice({CHILD_NICE})\nexcept OSError:\n    pass\n'
             code = (f'{pin}import sys; from {self._entry} import serve_socket;'
                     ' serve_socket(int(sys.argv[1]))')
             path = os.pathsep.join(p for p in sys.path if p)
