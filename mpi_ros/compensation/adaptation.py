@@ -927,11 +927,14 @@ class AdaptationProcess:
         """
         ours, theirs = socket.socketpair()
         with ours, theirs:
+            # Set in the child before its first thread: its CPUs (when the node is pinned),
+            # then its niceness below the node's (each best effort).
             cpus = child_cpus()
-            pin = ('import os\ntry:\n    os.sched_setaffinity(0, '
-                   f'{sorted(cpus)!r})\nexcept OSError:\n    pass\n' if cpus is not None else '')
-            pin += f'import os\ntry:\n    os.nice({CHILD_NICE})\nexcept OSError:\n    pass\n'
-            code = (f'{pin}import sys; from {self._entry} import serve_socket;'
+            settings = ([f'os.sched_setaffinity(0, {sorted(cpus)!r})'] if cpus is not None
+                        else []) + [f'os.nice({CHILD_NICE})']
+            prelude = 'import os\n' + ''.join(
+                f'try:\n    {call}\nexcept OSError:\n    pass\n' for call in settings)
+            code = (f'{prelude}import sys; from {self._entry} import serve_socket;'
                     ' serve_socket(int(sys.argv[1]))')
             path = os.pathsep.join(p for p in sys.path if p)
             self._process = subprocess.Popen(
