@@ -814,6 +814,13 @@ def test_json_keys_of_the_candidates_and_the_extended_model():
     assert list(pair.to_json()) == [*keys, 'parts', 'part_gains', 'part_z']
     assert pair.effects == ['creep', 'dead_time'] and single.effects == ['dead_time']
     assert [(p.name, p.value, p.unit) for p in single.fitted()] == [('dead time', 0.002, 's')]
+    thermal = replace(single, cause='thermal_drift', parameters={
+        'model.thermal_drift.time_constant': 12.0, 'model.thermal_drift.weight': 0.0,
+        'model.thermal_drift.gain': 1.5e-6})
+    # k_T is not called "gain" beside the table's validation gain column.
+    assert [(p.name, p.unit) for p in thermal.fitted()] == [
+        ('time constant', 's'), ('input weight w_T', '1/A'),
+        ('displacement coefficient k_T', 'm/A^2')]
     chosen = Extended.of_candidate(single)
     assert chosen.to_json() == {'cause': 'dead_time', 'rms_error': 0.01,
                                 'nonlinearity_error': 0.02,

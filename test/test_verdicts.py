@@ -533,3 +533,27 @@ def test_fold_excursion_and_the_pooled_error_of_the_judged_folds():
     assert errors.pooled(errors.judged) == pytest.approx(np.sqrt((100 * 0.01 + 300 * 0.04)
                                                                  / 400))
     assert np.isnan(errors.pooled([False, False, False]))
+
+
+def test_a_candidate_whose_signature_is_absent_is_tied_only_where_it_fits_better():
+    """Within the noise of the chosen one, the absent signature separates: no tie."""
+    import importlib
+    diagnose = importlib.import_module('mpi_ros.diagnosis.diagnose')
+    rng = np.random.default_rng(7)
+    residual = rng.normal(0.0, 1e-7, 5000)
+
+    def candidate(cause, signature):
+        return diagnose.Candidate(cause, None, 0.01, 0.02, 0.4, 5.0, 8, 0.01, 0.0, 1, {},
+                                  signature=signature, significant=True)
+
+    best = candidate('thermal_drift', 'present')
+    # The same squared errors (z 0), and errors 20 % smaller everywhere (z far below -1.645).
+    for fit, signature, tied in (('equal', 'absent', False), ('equal', 'present', True),
+                                 ('equal', 'unavailable', True), ('better', 'absent', True)):
+        other = candidate('creep', signature)
+        steps = []
+        mine = residual[::-1] if fit == 'equal' else 0.8 * residual
+        got = diagnose._ties(best, [best, other], {'thermal_drift': residual, 'creep': mine},
+                             1.645, None, steps)
+        assert (got == [other]) == tied, (fit, signature, steps)
+        assert bool(steps) == tied

@@ -1235,7 +1235,9 @@ def _ties(best: Candidate | None, candidates: list[Candidate],
           residuals: dict[str, FloatArray], z_critical: float, bandwidth: int | None,
           steps: list[str]) -> list[Candidate]:
     # The significant candidates the chosen one does not beat significantly (a one-sided
-    # Diebold-Mariano test between the two): within the noise of each other.
+    # Diebold-Mariano test between the two): within the noise of each other.  One whose
+    # physical signature is absent is tied only where it fits significantly better (the
+    # data and the signature disagree); within the noise, its signature separates it.
     if best is None:
         return []
     tied = []
@@ -1243,7 +1245,7 @@ def _ties(best: Candidate | None, candidates: list[Candidate],
         if c is best or not c.significant:
             continue
         z, _ = _dm_statistic(residuals[c.cause], residuals[best.cause], bandwidth)
-        if z < z_critical:
+        if z < (-z_critical if c.signature == 'absent' else z_critical):
             tied.append(c)
             steps.append(f'{c.cause} is {_tie_reason(c, best, z, z_critical)}: ambiguous')
     return tied

@@ -32,7 +32,7 @@ from ..identification.finding import DynamicsFinding
 __all__ = ['ReportPart', 'Baseline', 'OperatingPoint', 'Residual', 'HoldCount', 'StepOnsetCheck',
            'Reversals', 'Decision', 'Ranked', 'Refusal', 'RecordFacts', 'ScoredPart',
            'ReturnPoints', 'Series', 'FittedParameter', 'ScoredCandidate', 'Extended',
-           'jsonable', 'parameter_units']
+           'jsonable']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -154,17 +154,16 @@ class FittedParameter:
     unit : str
         Its SI unit (:attr:`mpi_ros.extensions.effect.EffectParameter.unit`; '' when
         dimensionless or not registered).
+    name : str
+        Its name in the report's words (:attr:`mpi_ros.extensions.effect.EffectParameter.words`;
+        the key's last part when not registered: ``model.resonance.frequency``: frequency).
 
     """
 
     key: str
     value: float | tuple[float, ...]
     unit: str
-
-    @property
-    def name(self) -> str:
-        """Return the key's last part in words (``model.resonance.frequency``: frequency)."""
-        return self.key.rsplit('.', 1)[-1].replace('_', ' ')
+    name: str
 
 
 @dataclass(frozen=True, eq=False)
@@ -235,18 +234,20 @@ class ScoredCandidate(ReportPart):
         """
         Return the identified parameters, in the order of :attr:`parameters`, with units.
 
-        A number becomes a float, a list of numbers a tuple of floats; the unit is the
-        registry's (:func:`parameter_units`).
+        A number becomes a float, a list of numbers a tuple of floats; the unit and the
+        name are the registry's (:class:`mpi_ros.extensions.effect.EffectParameter`).
 
         """
-        units = parameter_units()
+        registered = {p.key: p for e in EFFECTS.values() for p in e.parameters}
         out = []
         for key, value in self.parameters.items():
+            known = registered.get(key)
+            unit = known.unit if known else ''
+            name = known.words if known else key.rsplit('.', 1)[-1].replace('_', ' ')
             if isinstance(value, (list, tuple, np.ndarray)):
-                out.append(FittedParameter(key, tuple(float(v) for v in value),
-                                           units.get(key, '')))
+                out.append(FittedParameter(key, tuple(float(v) for v in value), unit, name))
             elif isinstance(value, (int, float, np.number)) and not isinstance(value, bool):
-                out.append(FittedParameter(key, float(value), units.get(key, '')))
+                out.append(FittedParameter(key, float(value), unit, name))
         return out
 
 
@@ -663,11 +664,6 @@ class Series(ReportPart):
     start: int
     baseline: FloatArray | None = None
     candidates: dict[str, FloatArray] = field(default_factory=dict)
-
-
-def parameter_units() -> dict[str, str]:
-    """Return every registered effect parameter's unit by its key (the registry's)."""
-    return {p.key: p.unit for e in EFFECTS.values() for p in e.parameters}
 
 
 def jsonable(value: Any) -> Any:

@@ -157,6 +157,9 @@ class EffectParameter:
         Largest value (of any element) plausible for a smart-material actuator, in
         `unit`; the diagnosis warns about a fitted value above it (for a time constant,
         a time base in ms or us read as s).  None: no such bound.
+    name : str
+        Its name in a report's words, e.g. ``displacement coefficient k_T``; empty: the
+        key's last part (:attr:`words`).
 
     """
 
@@ -167,6 +170,12 @@ class EffectParameter:
     unit: str = ''
     value_range: tuple[float, float] | None = None
     plausible_max: float | None = None
+    name: str = ''
+
+    @property
+    def words(self) -> str:
+        """Return :attr:`name`, or else the key's last part with spaces: ``time constant``."""
+        return self.name or self.key.rsplit('.', 1)[-1].replace('_', ' ')
 
 
 @dataclass(frozen=True)

@@ -435,11 +435,11 @@ EFFECT = Effect(
         EffectParameter(THERMAL_WEIGHT, 'double', 0.0,
                         'Thermal-drift extension: weight w_T of the thermal state (H output'
                         ' per A^2, before S, any sign); 0 with a 0 gain: no drift', '1/A',
-                        (-1.0e6, 1.0e6)),
+                        (-1.0e6, 1.0e6), name='input weight w_T'),
         EffectParameter(THERMAL_GAIN, 'double', 0.0,
                         'Thermal-drift extension: gain k_T of the thermal state on the'
                         ' displacement (any sign); 0 with a 0 weight: no drift', 'm/A^2',
-                        (-1.0, 1.0))),
+                        (-1.0, 1.0), name='displacement coefficient k_T')),
     model_class=ThermalDriftModel, fit=fit_thermal_drift,
     parameter_count=lambda p: 2, signature=_signature, evidence=_evidence, plot=_plot,
     plant=PLANT, signature_test='hold',
