@@ -356,13 +356,20 @@ def summary(path):
     print(f'named effects with validation gain < 0.2: {len(weak)}/{len(named)}'
           + (' (' + ', '.join(f'{r["name"]} {r["verdict"]} {r["gain"]:.2f}' for r in weak) + ')'
              if weak else ''))
-    worse = []
+    worse = {'the true effect': [], 'a part of the true pair, fitted alone': [],
+             'an effect the plant does not have': []}
     for r in rows:
+        truth = set(r['cause'].split(' + '))
         for c in r.get('candidates', []):
             if c['signature'] == 'present' and c['gain'] < 0.0:
-                worse.append(f'{r["name"]} {c["cause"]} {c["gain"]:+.2f}')
+                kind = ('the true effect' if c['cause'] == r['cause'] else
+                        'a part of the true pair, fitted alone'
+                        if c['cause'] in truth else 'an effect the plant does not have')
+                worse[kind].append(f'{r["name"]} {c["cause"]} {c["gain"]:+.2f}')
     print(f'candidates with their signature present but worse than the baseline on'
-          f' validation: {len(worse)}' + (f' ({", ".join(worse)})' if worse else ''))
+          f' validation: {sum(len(v) for v in worse.values())}; of them '
+          + '; '.join(f'{kind}: {len(v)}' + (f' ({", ".join(v)})' if v else '')
+                      for kind, v in worse.items()))
     bounds = [f'{r["name"]} {c["cause"]}' for r in rows for c in r.get('candidates', [])
               if c.get('not_identified') and c['cause'] == r['verdict']]
     print(f'named effects with a parameter reported not identified: {len(bounds)}'
