@@ -468,8 +468,8 @@ def fit_input_stage(time: npt.ArrayLike, current: npt.ArrayLike, displacement: n
     beats it and the next trial lies between 0 and the next trial (on TUM's 20 + 40 Hz
     records a lag of half a sample, 0.05 ms, beat both, and the 100 Hz record confirms it:
     gain 0.24), and it is refined between the two as an interior winner is (a dead time
-    of 1.83 ms on a 1 kHz record won at one sample, 1 ms).  With ``order='auto'`` the order is selected again
-    on the transformed current (:func:`resolve_order`).
+    of 1.83 ms on a 1 kHz record won at one sample, 1 ms).  With ``order='auto'`` the
+    order is selected again on the transformed current (:func:`resolve_order`).
 
     Parameters
     ----------
