@@ -285,6 +285,25 @@ def test_a_thermal_fit_carries_the_record_start_it_was_fitted_on():
     assert rms(model) < 0.5 * rms(default)
 
 
+@pytest.mark.parametrize('preisach_seed', [None, 2, 3, 4])
+def test_a_drift_the_holds_do_not_show_is_fitted_off(preisach_seed):
+    """
+    A plant without thermal drift: the drift fitted beside Gamma must explain the holds.
+
+    Beside Gamma's misfit a drift column wins on held-out blocks (the misfit follows the
+    excitation, and so does the lagged power): without the hold check the fit kept a drift
+    on all four of these records (built-in core: tau_T 2.7 s, k_T -0.01 um/A^2; Preisach
+    cores 2, 3, 4: 32 s, 0.17; 18 s, 0.18; 27 s, -0.56 um/A^2), whose changes during the
+    record's holds, where Gamma stands still, are further from the measured ones than no
+    drift (Preisach 4: 36 nm RMS against 20 nm).
+    """
+    core = None if preisach_seed is None else random_preisach_core(preisach_seed, relays=2000)
+    t, x, y = _record(core)
+    model = fit_thermal_drift(t, x, y, order=ORDER)
+    assert model.gain == 0.0 and model.weight == 0.0
+    assert 'holds of the record' in model.not_identified[THERMAL_TIME_CONSTANT]
+
+
 @pytest.mark.parametrize('preisach', [False, True])
 def test_the_thermal_fit_finds_the_drift_on_the_displacement(preisach):
     # The plant adds k_T T to the displacement (1.5 um/A^2, tau 10 s); the fit puts it

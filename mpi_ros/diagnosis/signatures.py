@@ -43,6 +43,7 @@ import numpy.typing as npt
 from scipy import stats
 
 from .invertibility import monotone_branches
+from ..extensions.fitting import hold_segments
 
 __all__ = ['HoldSignature', 'BurstSignature', 'hold_signature', 'burst_signature',
            'hold_segments', 'burst_segments']
@@ -113,32 +114,6 @@ class BurstSignature:
     def law(self) -> str:
         """Return ``'lag'`` or ``'delay'``: the law with the smaller residual."""
         return 'lag' if self.lag_sse < self.delay_sse else 'delay'
-
-
-def hold_segments(time: FloatArray, current: FloatArray,
-                  minimum: float) -> list[tuple[int, int]]:
-    """
-    Index ranges ``(start, end)`` where the input is constant for ``minimum`` seconds.
-
-    Parameters
-    ----------
-    time : ndarray of float, shape (N,)
-        Sample times [s].
-    current : ndarray of float, shape (N,)
-        Input [A].
-    minimum : float
-        Shortest hold [s].
-
-    Returns
-    -------
-    list of (int, int)
-        ``current[start:end + 1]`` is constant (to 1e-6 of the input range).
-
-    """
-    still = np.abs(np.diff(current)) <= 1e-6 * max(float(np.ptp(current)), 1e-300)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
-    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])
-            if time[b] - time[a] >= minimum]
 
 
 def hold_signature(time: FloatArray, current: FloatArray, residual: FloatArray, *,

@@ -28,7 +28,7 @@ from ..operators.model import MPIModel
 
 __all__ = ['AxisUnits', 'bound_note', 'check_series', 'choose_out_of_sample', 'determined_start',
            'fit_gamma', 'fit_input_stage', 'fixed_held_out_error', 'fold_simulations',
-           'held_out_error', 'InputStageFit', 'lag_search_limits', 'Order',
+           'held_out_error', 'hold_segments', 'InputStageFit', 'lag_search_limits', 'Order',
            'OutOfSampleChoice', 'rate_cross_correlation', 'resolve_order', 'scalar_parameter',
            'search_fit', 'TRIAL_RULE', 'vector_parameter', 'with_record_start']
 
@@ -654,6 +654,32 @@ def rate_cross_correlation(time: FloatArray, measured: FloatArray, simulated: Fl
         _correlation(dy[max(0, k):dy.size + min(0, k)], ds[max(0, -k):ds.size - max(0, k)])
         for k in range(-m, m + 1)])
     return np.arange(-m, m + 1) * dt, correlations
+
+
+def hold_segments(time: FloatArray, current: FloatArray,
+                  minimum: float) -> list[tuple[int, int]]:
+    """
+    Index ranges ``(start, end)`` where the input is constant for ``minimum`` seconds.
+
+    Parameters
+    ----------
+    time : ndarray of float, shape (N,)
+        Sample times [s].
+    current : ndarray of float, shape (N,)
+        Input [A].
+    minimum : float
+        Shortest hold [s].
+
+    Returns
+    -------
+    list of (int, int)
+        ``current[start:end + 1]`` is constant (to 1e-6 of the input range).
+
+    """
+    still = np.abs(np.diff(current)) <= 1e-6 * max(float(np.ptp(current)), 1e-300)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])
+            if time[b] - time[a] >= minimum]
 
 
 def hold_evidence(residual: Mapping[str, Any]) -> str | None:
