@@ -83,14 +83,14 @@ from .facts import Baseline, Decision, Extended, HoldCount, jsonable, OperatingP
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
 from .notation import length, significant
-from .signatures import burst_signature, hold_segments, hold_signature
+from .signatures import burst_signature, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError, MPIWarning
 from ..extensions import EFFECTS, fit_composite
 from ..extensions.composite import check_combination, composite_cause
 from ..extensions.dead_time import DEAD_TIME
 from ..extensions.effect import separating_measurement, unidentified_parameters
-from ..extensions.fitting import rate_cross_correlation
+from ..extensions.fitting import hold_segments, rate_cross_correlation
 from ..identification import burn_in, output_sign
 from ..identification.dynamics import noise_std, return_point_drift, ReturnPointDrift, \
     step_onset, StepOnset

@@ -46,7 +46,7 @@ from .invertibility import monotone_branches
 from ..extensions.fitting import hold_segments
 
 __all__ = ['HoldSignature', 'BurstSignature', 'hold_signature', 'burst_signature',
-           'hold_segments', 'burst_segments']
+           'burst_segments']
 
 FloatArray = npt.NDArray[np.float64]
 
