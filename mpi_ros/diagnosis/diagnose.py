@@ -82,7 +82,7 @@ from .facts import Baseline, Decision, Extended, HoldCount, jsonable, OperatingP
     ScoredPart, Series, StepOnsetCheck
 from .invertibility import check_invertible_class, InvertibilityCheck, \
     OUTSIDE_INVERTIBLE_CLASS
-from .notation import length, significant
+from .notation import length, percent, signed_percent, significant
 from .signatures import burst_signature, hold_signature
 from .time_base import implausible_time_constants, time_base_warning
 from ..errors import DataError, IdentificationError, ModelError, MPIWarning
@@ -480,9 +480,8 @@ def _baseline_errors(base: Any, on_validation: Callable[[Any], FloatArray],
         OperatingPoint(base.model.input_offset, base.model.output_offset,
                        base.model.output_sign))
     say(f'baseline order n={n}, l={l}: validation RMS error'
-        f' {significant(100 * baseline.rms_error)} % of the output range (straight line'
-        f' {significant(100 * baseline.linear_rms_error)} %), (37)'
-        f' {significant(100 * baseline.nonlinearity_error)} %'
+        f' {percent(baseline.rms_error)} of the output range (straight line'
+        f' {percent(baseline.linear_rms_error)}), (37) {percent(baseline.nonlinearity_error)}'
         + (f'; validation output offset re-estimated: {"+" if shift0 >= 0.0 else ""}'
            f'{length(shift0)}' if reestimate else ''))
     return baseline, sim0, r0, sigma
@@ -601,7 +600,7 @@ def _report(chosen: 'Candidate | None', base_model: Any, baseline: Baseline,
         say(f'warning: {text}')
     unidentified = (f'; not identified: {", ".join(extended.not_identified)}'
                     if extended.not_identified else '')
-    say(f'verdict: {cause} (validation gain {significant(100 * gain)} %{unidentified})')
+    say(f'verdict: {cause} (validation gain {percent(gain)}{unidentified})')
     return DiagnosisReport(cause=cause, baseline=baseline, extended=extended, gain=gain,
                            candidates=public, evidence=evidence, residual=residual,
                            decision=decision, data=data, warnings=warnings, model=model,
@@ -760,9 +759,8 @@ class _Scorer:
         tt, xt, yt = self.training
         keep = self.determined
         train = rms_range_error(model.response(tt, xt)[keep], yt[keep])
-        self.say(f'  {cause}: validation RMS error {significant(100 * errs["rms_error"])} %'
-                 f' of the output range, gain {"+" if gain >= 0.0 else ""}'
-                 f'{significant(100 * gain)} %, z {significant(z)}')
+        self.say(f'  {cause}: validation RMS error {percent(errs["rms_error"])} of the output'
+                 f' range, gain {signed_percent(gain)}, z {significant(z)}')
         return Candidate(cause, model, errs['rms_error'], errs['nonlinearity_error'], gain, z,
                          lags, train, shift, parameter_count, params, unknown)
 

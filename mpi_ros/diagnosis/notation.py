@@ -11,7 +11,7 @@ the value.
 import math
 from typing import Any
 
-__all__ = ['LENGTH_PREFIXES', 'length', 'significant']
+__all__ = ['LENGTH_PREFIXES', 'length', 'percent', 'signed_percent', 'significant']
 
 #: Factors and names of the prefixes a length in metres is written with, largest first.
 LENGTH_PREFIXES = ((1.0, 'm'), (1e-3, 'mm'), (1e-6, 'µm'), (1e-9, 'nm'), (1e-12, 'pm'))
@@ -39,6 +39,33 @@ def significant(value: Any, digits: int = 3) -> str:
     if -3 <= exponent < digits:
         return f'{rounded:.{max(digits - 1 - exponent, 0)}f}'
     return f'{rounded:.{digits - 1}e}'
+
+
+def percent(fraction: Any) -> str:
+    """
+    Write a fraction as a percentage with :func:`significant` digits.
+
+    Examples
+    --------
+    >>> percent(0.012), percent(-0.5328)
+    ('1.20 %', '-53.3 %')
+
+    """
+    return f'{significant(100.0 * float(fraction))} %'
+
+
+def signed_percent(fraction: Any) -> str:
+    """
+    Write a fraction as a percentage with its sign, ``+`` included (a gain).
+
+    Examples
+    --------
+    >>> signed_percent(0.532), signed_percent(-0.0173), signed_percent(0.0)
+    ('+53.2 %', '-1.73 %', '+0 %')
+
+    """
+    text = percent(fraction)
+    return text if text.startswith('-') else '+' + text
 
 
 def length(value: Any, unit: str = 'm') -> str:

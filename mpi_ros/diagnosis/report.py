@@ -31,7 +31,7 @@ from scipy.stats import norm
 
 from .diagnose import DiagnosisReport, z_wording
 from .facts import Baseline, Decision, Residual, Reversals, ScoredCandidate
-from .notation import length, LENGTH_PREFIXES, significant
+from .notation import length, LENGTH_PREFIXES, percent, signed_percent, significant
 from ..extensions import EFFECTS
 from ..extensions.effect import effect_caption, separating_measurement
 from ..extensions.fitting import AxisUnits
@@ -155,14 +155,14 @@ def summary_lines(report: DiagnosisReport) -> list[str]:
     decision = _decision(report)
     label = _verdict_label(report)
     lines = [f'verdict: {report.cause} ({label})'
-             + (f', validation gain {_percent(report.gain)}' if report.gain else '')]
+             + (f', validation gain {percent(report.gain)}' if report.gain else '')]
     reason = decision.weak_reason if decision is not None else None
     if reason and 'weak' in label:
         lines.append(f'weak: {reason}')
     zc = decision.z_critical if decision is not None else 1.645
     if report.baseline is not None:
         lines.append('gains on the validation data (Diebold-Mariano z against the baseline): '
-                     + ', '.join(f'{c.cause} {_signed_percent(c.gain)} (z'
+                     + ', '.join(f'{c.cause} {signed_percent(c.gain)} (z'
                                  f' {significant(c.z)}, {z_wording(c.z, zc)})'
                                  for c in _ranked(report)))
     chosen = _chosen(report)
@@ -170,7 +170,7 @@ def summary_lines(report: DiagnosisReport) -> list[str]:
         gains, z = chosen.part_gains, chosen.part_z
         lines.append('each effect beyond the other alone (the pair against the other effect'
                      ' alone): ' + ', '.join(
-                         f'{name} {_signed_percent(gains[name])} (z {significant(z[name])},'
+                         f'{name} {signed_percent(gains[name])} (z {significant(z[name])},'
                          f' {z_wording(z[name], zc)})' for name in chosen.parts))
     if decision is not None and decision.ambiguous:
         lines.append(f'ambiguous: {_tie_reasons(report)}; separate them with'
@@ -375,15 +375,6 @@ def _axis_units(units: Mapping[str, str], y: Any) -> AxisUnits:
     return AxisUnits(current=units['input'], displacement=prefix, scale=1.0 / factor)
 
 
-def _percent(fraction: Any) -> str:
-    return f'{significant(100.0 * float(fraction))} %'
-
-
-def _signed_percent(fraction: Any) -> str:
-    text = _percent(fraction)
-    return text if text.startswith('-') else '+' + text
-
-
 def _seconds(value: Any) -> str:
     v = float(value)
     return f'{significant(1e3 * v)} ms' if abs(v) < 1.0 else f'{significant(v)} s'
@@ -484,28 +475,28 @@ def _candidate_section(report: DiagnosisReport, b: Baseline, decision: Decision,
     lines = ['## Models on the validation data', '',
              'Errors are RMS over the validation output range; the gain is the relative cut'
              ' of the baseline RMS error; z is the Diebold-Mariano statistic of the squared'
-             f' errors against the baseline, tested one-sided at {_percent(level)}: z >='
+             f' errors against the baseline, tested one-sided at {percent(level)}: z >='
              f' {significant(zc, 4)} is significantly better, z <= -{significant(zc, 4)}'
              ' significantly worse.', '',
              '| rank | model | RMS error | (37) nonlinearity error | gain | z | test |'
              ' signature | fitted parameters |',
              '|---|---|---|---|---|---|---|---|---|',
              f'| - | baseline MPI, order {b.order[0]}, {b.order[1]} |'
-             f' {_percent(b.rms_error)} | {_percent(b.nonlinearity_error)} | - | - | - |'
+             f' {percent(b.rms_error)} | {percent(b.nonlinearity_error)} | - | - | - |'
              ' - | - |']
     for rank, c in enumerate(_ranked(report), 1):
         mark = ' (chosen)' if c.cause == report.cause else ''
-        lines.append(f'| {rank} | {c.cause}{mark} | {_percent(c.rms_error)} |'
-                     f' {_percent(c.nonlinearity_error)} | {_signed_percent(c.gain)} |'
+        lines.append(f'| {rank} | {c.cause}{mark} | {percent(c.rms_error)} |'
+                     f' {percent(c.nonlinearity_error)} | {signed_percent(c.gain)} |'
                      f' {significant(c.z)} | {z_wording(c.z, zc)} |'
                      f' {c.signature} | {_parameters(c)}'
                      + ''.join(f'; {k} not identified (at a search bound)'
                                for k in c.not_identified) + ' |')
-    lines += ['', f'Straight line fitted on the training data: {_percent(b.linear_rms_error)}'
+    lines += ['', f'Straight line fitted on the training data: {percent(b.linear_rms_error)}'
               f' RMS error on the validation data.']
     above = 'exceeds' if decision.baseline_above_noise else 'does not exceed'
     lines += ['', f'Rule: a candidate counts when its gain is at least'
-              f' {_percent(decision.min_gain)}, its z test says significantly better and its'
+              f' {percent(decision.min_gain)}, its z test says significantly better and its'
               ' physical signature is present (or unavailable in this record); the'
               ' largest gain among those wins.  The baseline residual'
               f' {above} {significant(decision.noise_factor)} times the noise'
@@ -524,7 +515,7 @@ def _tie_section(report: DiagnosisReport, decision: Decision) -> list[str]:
         rank += 1
         against = ('chosen' if row.cause == report.cause else
                    f'z {significant(row.z_against_chosen)} against {report.cause}')
-        lines.append(f'{rank}. {row.cause}: gain {_signed_percent(row.gain)}'
+        lines.append(f'{rank}. {row.cause}: gain {signed_percent(row.gain)}'
                      f' ({against}; signature {row.signature})')
     lines += ['', 'To separate them, run `mpi-ros diagnose --excitation validation_input.csv`,'
               ' play that input on the rig, record the answer and diagnose again with'
@@ -539,7 +530,7 @@ def _evidence_section(residual: Residual, decision: Decision,
     lines = ['## Physical evidence (baseline residual, validation data)', '',
              f'- Baseline residual RMS {length(residual.rms, out)}; noise floor'
              f' {length(residual.noise_floor, out)}'
-             f' ({_percent(residual.noise_floor_relative)} of the output range).',
+             f' ({percent(residual.noise_floor_relative)} of the output range).',
              f'- Holds: {_holds_of(residual)}.']
     holds = residual.hold_signature
     if holds is not None:
@@ -573,7 +564,7 @@ def _data_section(report: DiagnosisReport, units: Mapping[str, str]) -> list[str
     data = report.data
     lines = ['## Data', '',
              f'- Training: `{data.source}`, {data.samples} samples'
-             + (f', the first {_percent(data.split)} of the record' if data.split is not None
+             + (f', the first {percent(data.split)} of the record' if data.split is not None
                 else '')
              + (f' after its leading hold of {data.leading_hold} samples'
                 if data.leading_hold else '') + '.']
