@@ -27,6 +27,7 @@ import numpy.typing as npt
 
 from .signatures import BurstSignature, HoldSignature
 from ..extensions import EFFECTS
+from ..extensions.effect import key_words
 from ..identification.finding import DynamicsFinding
 
 __all__ = ['ReportPart', 'Baseline', 'OperatingPoint', 'Residual', 'HoldCount', 'StepOnsetCheck',
@@ -243,7 +244,7 @@ class ScoredCandidate(ReportPart):
         for key, value in self.parameters.items():
             known = registered.get(key)
             unit = known.unit if known else ''
-            name = known.words if known else key.rsplit('.', 1)[-1].replace('_', ' ')
+            name = known.words if known else key_words(key)
             if isinstance(value, (list, tuple, np.ndarray)):
                 out.append(FittedParameter(key, tuple(float(v) for v in value), unit, name))
             elif isinstance(value, (int, float, np.number)) and not isinstance(value, bool):

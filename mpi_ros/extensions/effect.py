@@ -45,7 +45,7 @@ __all__ = ['Effect', 'EffectModel', 'EffectParameter', 'ExtendedModelBase', 'EFF
            'effects_present', 'FAST_TIME_LIMIT', 'SLOW_TIME_LIMIT', 'PlantChunk', 'PlantEffect',
            'PlantParameter', 'PLANT_STAGES', 'EFFECT_STAGES', 'plant_effects', 'plant_switch',
            'unidentified_parameters', 'SIGNATURE_TESTS', 'separating_measurement',
-           'effect_caption']
+           'effect_caption', 'key_words']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -134,6 +134,19 @@ class ExtendedModelBase:
         return replace(cast(Any, self), model=gamma)
 
 
+def key_words(key: str) -> str:
+    """
+    Return a parameter key's last part in words.
+
+    Examples
+    --------
+    >>> key_words('model.resonance.initial_deflection')
+    'initial deflection'
+
+    """
+    return key.rsplit('.', 1)[-1].replace('_', ' ')
+
+
 @dataclass(frozen=True)
 class EffectParameter:
     """
@@ -175,7 +188,7 @@ class EffectParameter:
     @property
     def words(self) -> str:
         """Return :attr:`name`, or else the key's last part with spaces: ``time constant``."""
-        return self.name or self.key.rsplit('.', 1)[-1].replace('_', ' ')
+        return self.name or key_words(self.key)
 
 
 @dataclass(frozen=True)
