@@ -20,7 +20,8 @@ Targets: 10,000 messages/s for 10 s, zero drops, p99 <= 1 ms (ROS package issue)
 Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]
 [--reliability reliable|best_effort] [--qos-depth 10000] [--pin] [--axes N [--chunk K]]
 [--node compensator|relay:events|relay:waitset|relay:poll|relay:naive]
-[--receiver ordinary|naive|raw] [--adaptation [--worker process|thread] [--rounds N]]``
+[--receiver ordinary|naive|raw] [--adaptation [--worker process|thread] [--priority idle|low]
+[--rounds N]]``
 
 ``--adaptation --rounds N`` measures adaptation off (``--echo``: the receiver answers as
 the actuator all the same), off with a process that takes the readings as the adaptation's
@@ -82,7 +83,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
                   receiver_kind: str = 'ordinary', axes: int = 1,
                   chunk: int = 1, adaptation: bool = False,
                   echo: bool = False, worker: str = 'process',
-                  sink: bool = False) -> dict[str, Any]:
+                  sink: bool = False, priority: str = 'idle') -> dict[str, Any]:
     """
     Drive a compensator process at ``rate`` messages/s for ``duration`` s and measure it.
 
@@ -138,6 +139,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     worker : str
         Where the adaptation fits: ``process`` (``adaptation.process`` true, the node's
         default) or ``thread``.
+    priority : str
+        ``adaptation.priority`` of the child process: ``idle`` (the node's default) or
+        ``low``.
     sink : bool
         With ``echo`` and without ``adaptation``: a process of its own takes the readings
         on ``displacement`` as the adaptation's child process does (the same subscriber,
@@ -197,6 +201,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         # adaptation.min_excitation (30 %) the adaptation would pause and never solve.
         extra = (['-p', 'adaptation.enabled:=true', '-p', f'sample_period:={1.0 / rate!r}',
                   '-p', f'adaptation.process:={str(worker == "process").lower()}',
+                  '-p', f'adaptation.priority:={priority}',
                   '-p', 'adaptation.min_excitation:=0.1']
                  if adaptation else [])
         comp = NodeProcess('compensator', ['--params-file', str(params), '-p',
@@ -338,6 +343,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
             float(np.max(np.abs(commands[:, k] - Compensator(
                 model, output_min=output_min, output_max=output_max).command_batch(
                     desired[:, k])))) for k in range(axes))
+    adaptation_log = ([line.strip() for line in
+                       (tmp / 'compensator.log').read_text().splitlines()
+                       if 'adaptation' in line] if adaptation else [])
     results: dict[str, Any] = {
         'cores': os.cpu_count(), 'domain_id': os.environ.get('ROS_DOMAIN_ID'),
         'rate': rate, 'duration': duration, 'sent': count, 'received': n,
@@ -348,9 +356,9 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'latency_us': {}, 'windows': [], 'rss_kib': rss,
         'rss_growth_mib': (rss[-1][1] - rss[1][1]) / 1024 if len(rss) > 2 else None,
         'compensator_exit': status, 'workdir': str(tmp), 'processes_left': left,
-        'adaptation_log': ([line.strip() for line in
-                            (tmp / 'compensator.log').read_text().splitlines()
-                            if 'adaptation' in line][-3:] if adaptation else []),
+        'adaptation_log': adaptation_log[-3:],
+        'adaptation_updates': sum('adaptation: update' in line for line in adaptation_log),
+        'adaptation_restarts': sum('fell behind' in line for line in adaptation_log),
         'cpu_percent': cpu_percent, 'compensator_threads': thread_percent,
         'child_threads': child_percent,
         'qos_depth': qos_depth, 'reliability': reliability,
@@ -458,6 +466,9 @@ def main() -> None:
                              '(single axis; use with --receiver raw)')
     parser.add_argument('--worker', choices=('process', 'thread'), default='process',
                         help='with --adaptation: fit in a child process (default) or a thread')
+    from mpi_ros.compensation.adaptation import PRIORITIES
+    parser.add_argument('--priority', choices=PRIORITIES, default=PRIORITIES[0],
+                        help='with --adaptation: adaptation.priority of the child process')
     parser.add_argument('--echo', action='store_true',
                         help='the receiver answers as the actuator on displacement (implied by '
                              '--adaptation; alone: the same receiver load without adaptation)')
@@ -487,7 +498,8 @@ def main() -> None:
                                        node_kind=args.node, receiver_kind=args.receiver,
                                        axes=args.axes, chunk=args.chunk,
                                        adaptation=args.adaptation, echo=args.echo,
-                                       worker=args.worker, sink=args.sink)),
+                                       worker=args.worker, sink=args.sink,
+                                       priority=args.priority)),
           flush=True)
 
 
@@ -497,7 +509,8 @@ def _compare_adaptation(args: argparse.Namespace) -> None:
     runs: dict[str, list[dict[str, Any]]] = {mode: [] for mode in modes}
     print(f'adaptation off (--echo: the receiver answers on displacement, no one reads it),'
           f' off+sink (a process takes the readings as the adaptation child does) and on'
-          f' (--worker {args.worker}), alternately, {args.rounds} runs each of'
+          f' (--worker {args.worker} --priority {args.priority}), alternately,'
+          f' {args.rounds} runs each of'
           f' {args.duration:g} s at {args.rate:g}/s; latency desired -> command [ms]',
           flush=True)
     for _ in range(args.rounds):
@@ -506,7 +519,8 @@ def _compare_adaptation(args: argparse.Namespace) -> None:
             r = run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
                               reliability=args.reliability, pin=args.pin,
                               receiver_kind=args.receiver, adaptation=mode == 'on',
-                              echo=True, worker=args.worker, sink=mode == 'off+sink')
+                              echo=True, worker=args.worker, sink=mode == 'off+sink',
+                              priority=args.priority)
             r['load_before'] = before
             runs[mode].append(r)
             print(_run_line(r, mode), flush=True)
@@ -533,7 +547,9 @@ def _run_line(r: dict[str, Any], mode: str) -> str:
     return (f'{time.strftime("%H:%M:%S")} {mode}: load '
             f'{r["load_before"]:.1f}-{r["load_average"][0]:.1f}, lost {r["drops"]} of '
             f'{r["sent"]}, p50 {lat.get("p50", float("nan")) / 1e3:.2f}, p99 '
-            f'{lat.get("p99", float("nan")) / 1e3:.2f} whole / {late} 10-20 s; CPU {cpu}')
+            f'{lat.get("p99", float("nan")) / 1e3:.2f} whole / {late} 10-20 s; CPU {cpu}'
+            + (f'; adaptation updates {r["adaptation_updates"]}, restarts at low'
+               f' {r["adaptation_restarts"]}' if mode == 'on' else ''))
 
 
 def _sink(out: str, qos_depth: int, reliability: str, sample_period: float) -> None:

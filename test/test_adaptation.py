@@ -17,7 +17,7 @@ import time
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
 from mpi_ros.compensation.adaptation import (
-    Adaptation, AdaptationProcess, AdaptationSettings, ReadingSource,
+    Adaptation, AdaptationProcess, AdaptationSettings, ReadingSource, with_gaps,
 )
 from mpi_ros.errors import ModelError
 from mpi_ros.extensions.thermal_drift import fit_thermal_drift, ThermalDriftModel
@@ -444,20 +444,59 @@ def test_a_child_asked_to_take_readings_without_a_subscriber_says_so_and_ends():
     assert process.pending == (0, 0)
 
 
-@pytest.mark.skipif(not hasattr(os, 'getpriority'), reason='needs process priorities')
-def test_the_child_runs_below_the_node_so_the_command_path_keeps_the_cpu():
-    """The adaptation's child is niced by CHILD_NICE against the node (capped at 19)."""
+def _policies(pid):
+    # The scheduling policy of every thread of process PID.
+    return {os.sched_getscheduler(int(tid)) for tid in os.listdir(f'/proc/{pid}/task')}
+
+
+@pytest.mark.skipif(not hasattr(os, 'getpriority') or not hasattr(os, 'sched_getscheduler'),
+                    reason='needs process priorities')
+@pytest.mark.parametrize('priority', ['idle', 'low'])
+def test_the_child_runs_below_the_node_so_the_command_path_keeps_the_cpu(priority):
+    """
+    The child is niced by CHILD_NICE against the node (capped at 19).
+
+    At ``idle`` every thread of it then runs at idle priority (SCHED_IDLE), at ``low`` none
+    does.
+    """
     from mpi_ros.compensation.adaptation import CHILD_NICE
     model, _, _ = _model(SEEDS[0])
-    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE))
+    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE,
+                                                          priority=priority))
     process.start()
+    mine = os.getpriority(os.PRIO_PROCESS, 0)
     try:
         assert process.wait_ready(CHILD_START_S)
-        mine = os.getpriority(os.PRIO_PROCESS, 0)
         assert os.getpriority(os.PRIO_PROCESS, process.pid) == min(mine + CHILD_NICE, 19)
         assert os.getpriority(os.PRIO_PROCESS, 0) == mine          # the node's own is kept
+        policies = _policies(process.pid)
+        if priority == 'idle' and hasattr(os, 'SCHED_IDLE'):
+            assert process.priority == 'idle'
+            assert policies == {os.SCHED_IDLE}
+        elif priority == 'low':
+            assert process.priority == 'low'
+            assert getattr(os, 'SCHED_IDLE', None) not in policies
+        assert _policies(os.getpid()) == {os.sched_getscheduler(0)}  # the node's untouched
     finally:
         process.stop()
+
+
+def test_a_lost_reading_keeps_its_place_so_the_pairs_still_line_up():
+    # Publication sequence numbers 5, 6, 9, 10 after 3: readings 4, 7 and 8 are missing.
+    values, lost, last = with_gaps(np.array([1.0, 2.0, 3.0, 4.0]), np.array([5, 6, 9, 10]), 3)
+    np.testing.assert_array_equal(values, [np.nan, 1.0, 2.0, np.nan, np.nan, 3.0, 4.0])
+    assert (lost, last) == (3, 10)
+    # None missing, the first batch (no previous), and a publisher started again (1 < 40).
+    for previous, sequences in ((1, [2, 3]), (-1, [7, 8]), (40, [1, 2])):
+        values, lost, last = with_gaps(np.array([1.0, 2.0]), np.array(sequences), previous)
+        np.testing.assert_array_equal(values, [1.0, 2.0])
+        assert (lost, last) == (0, sequences[-1])
+    # The placeholder freezes the adaptation, which says why.
+    model, _, _ = _model(SEEDS[0])
+    adaptation = Adaptation(model, AdaptationSettings(sample_period=1 / RATE))
+    adaptation.record_pairs([1.0, 1.0], [math.nan, 1e-5])
+    adaptation.step()
+    assert adaptation.status()['adaptation_state'].startswith('frozen: 1 non-finite or missing')
 
 
 @pytest.mark.skipif(not hasattr(os, 'sched_getaffinity') or len(os.sched_getaffinity(0)) < 2,

@@ -64,8 +64,8 @@ from ..operators.model import MPIModel
 from ..operators.play import play_end_state
 
 __all__ = ['Adaptation', 'AdaptationProcess', 'AdaptationSettings', 'AdaptationWorker',
-           'adaptable', 'Candidate', 'child_cpus', 'ReadingSource', 'ReadingSubscription',
-           'serve_socket', 'Subscribe']
+           'adaptable', 'Candidate', 'CHILD_NICE', 'child_cpus', 'PRIORITIES', 'ReadingSource',
+           'ReadingSubscription', 'serve_socket', 'Subscribe', 'with_gaps', 'yield_cpu']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -83,6 +83,13 @@ _IN_FLIGHT = 4
 _ENDED = 'stopped: the adaptation process ended'
 #: ... and when it was stopped for not taking the commands.
 _BEHIND = 'stopped: the adaptation process did not take the commands (stalled)'
+#: The child process's CPU priorities (``adaptation.priority``), the default first.
+PRIORITIES = ('idle', 'low')
+#: A child at idle priority with this many held-out windows of commands not taken, or that
+#: has lost a reading, is restarted at ``'low'`` (it would lose its readings next).
+_IDLE_BEHIND_WINDOWS = 2
+#: Longest wait [s] for a child restarted at ``'low'`` to end after it was asked to.
+_RETIRE_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -177,6 +184,12 @@ class AdaptationSettings:
         Adapt the weights of H as well (default: S' and the operating point only; the
         plays that a trajectory inside the range never wipes out are not determined by
         its data, see :meth:`RecursiveFit.solve`).
+    priority : str
+        The child process's share of the CPU (:data:`PRIORITIES`): ``'idle'``, only the
+        CPU time no other work wants (``SCHED_IDLE``, once its subscription is open), and
+        back to ``'low'`` by itself when it falls behind (:class:`AdaptationProcess`);
+        ``'low'``, niceness :data:`CHILD_NICE` below the node.  A thread of the node
+        (``adaptation.process`` false) shares the node's priority either way.
 
     """
 
@@ -192,6 +205,7 @@ class AdaptationSettings:
     jump: float = 0.2
     stuck_samples: int = 50
     hysteresis: bool = False
+    priority: str = 'idle'
 
     def __post_init__(self) -> None:
         """Check the values (a ``ModelError`` naming the key)."""
@@ -207,6 +221,10 @@ class AdaptationSettings:
             if not (math.isfinite(value) and 0.0 <= value < 1.0):
                 msg = f'adaptation.{name} must lie in [0, 1); found {value!r}'
                 raise ModelError(msg)
+        if self.priority not in PRIORITIES:
+            msg = (f'adaptation.priority must be one of {", ".join(PRIORITIES)}; found'
+                   f' {self.priority!r}')
+            raise ModelError(msg)
         if self.delay < 0 or self.stuck_samples < 2:
             msg = (f'adaptation.delay must be >= 0 and adaptation.stuck_samples >= 2; found'
                    f' {self.delay!r} and {self.stuck_samples!r}')
@@ -550,7 +568,7 @@ class Adaptation:
             count = int(np.count_nonzero(bad))
             self._counts.garbage += count
             self._counts.frozen += 1
-            what = ('non-finite' if not np.all(finite) else 'stuck' if np.any(stuck)
+            what = ('non-finite or missing' if not np.all(finite) else 'stuck' if np.any(stuck)
                     else 'jumping')
             self._set_state(f'frozen: {count} {what} readings; resumes after a clean'
                             f' {s.holdout:g} s')
@@ -806,7 +824,45 @@ class AdaptationWorker:
 #: path's p99 with adaptation on was 1.55-1.61x the runs without it at niceness 0, 1.26-1.35x
 #: at 10 and 1.19x at 19; 10 is kept so that the child, 9-13 % of a core there, still gets
 #: its share on a loaded machine (at 19 it would lose readings first, and then freeze).
+#: It is the child's priority with ``adaptation.priority`` ``'low'``, and its priority
+#: until its subscription is open with ``'idle'`` (:func:`yield_cpu`).
 CHILD_NICE = 10
+
+
+def yield_cpu() -> bool:
+    """
+    Put every thread of this process at idle priority (``SCHED_IDLE``).
+
+    An idle thread runs only on CPU time that no other thread of the machine wants; threads
+    started later inherit it from the thread that starts them.  At 10 kHz on 2 cores the
+    adaptation child at idle priority cost the command path's p99 1.06-1.17x the runs
+    without adaptation, at niceness 10 1.51-1.88x (2026-11-26, docs/adaptation.md).  An
+    unprivileged process cannot leave ``SCHED_IDLE`` again, so a child that falls behind is
+    restarted instead (:class:`AdaptationProcess`).
+
+    Returns
+    -------
+    bool
+        True when every thread took it; False where the platform has no ``SCHED_IDLE``
+        or a thread refused (those keep niceness :data:`CHILD_NICE`).
+
+    """
+    policy = getattr(os, 'SCHED_IDLE', None)
+    if policy is None or not hasattr(os, 'sched_setscheduler'):
+        return False
+    try:
+        threads = [int(tid) for tid in os.listdir('/proc/self/task')]
+    except OSError:
+        threads = [0]
+    done = True
+    for tid in threads:
+        try:
+            os.sched_setscheduler(tid, policy, os.sched_param(0))
+        except ProcessLookupError:
+            pass                        # the thread ended meanwhile
+        except OSError:
+            done = False
+    return done
 
 
 def child_cpus() -> set[int] | None:
@@ -849,7 +905,11 @@ class AdaptationProcess:
     those recorded before the child says its subscription is open are dropped (their
     readings went to no one).  A child that stops taking the commands (20 held-out windows of
     them waiting) is stopped: its own readings have overflowed by then, so their order no
-    longer pairs; the node shows why and compensates on.
+    longer pairs; the node shows why and compensates on.  A child at idle priority
+    (``settings.priority``, :func:`yield_cpu`) is not stopped but restarted at ``'low'`` as
+    soon as it falls behind (:data:`_IDLE_BEHIND_WINDOWS` held-out windows of commands not
+    taken, or a reading lost): the machine is too busy to leave it only the idle CPU time.
+    The restarted child starts from the running model; an event says so.
 
     Parameters
     ----------
@@ -894,6 +954,12 @@ class AdaptationProcess:
         self._params = model.to_params()
         self._process: subprocess.Popen[bytes] | None = None
         self._conn: multiprocessing.connection.Connection | None = None
+        #: The priority the child runs at, as it said when ready (``'idle'``, or ``'low'``
+        #: also when it could not take ``SCHED_IDLE``; None before).
+        self.priority: str | None = None
+        self._behind = ''
+        # Children restarted at 'low', asked to end: (process, when asked).
+        self._retired: list[tuple[subprocess.Popen[bytes], float]] = []
 
     @property
     def model(self) -> AdaptedModel:
@@ -904,6 +970,15 @@ class AdaptationProcess:
     def pid(self) -> int | None:
         """Return the child's process id (None before :meth:`start`)."""
         return None if self._process is None else self._process.pid
+
+    @property
+    def priority_words(self) -> str:
+        """Return the child's CPU priority in words, for the node's log."""
+        if self.priority == 'idle':
+            return 'at idle priority: only CPU time nothing else wants'
+        if self.priority == 'low':
+            return f'at niceness {CHILD_NICE} below the node'
+        return 'its priority not reported yet'
 
     @property
     def running(self) -> bool:
@@ -974,6 +1049,9 @@ class AdaptationProcess:
 
     def stop(self, timeout: float = 1.0) -> None:
         """Stop the child (asked first, terminated after ``timeout`` seconds)."""
+        for retired, _ in self._retired:
+            _end(retired, timeout)
+        self._retired.clear()
         process, conn = self._process, self._conn
         if process is None or conn is None:
             return
@@ -981,15 +1059,7 @@ class AdaptationProcess:
             conn.send(('stop',))
         except (OSError, ValueError):
             pass
-        try:
-            process.wait(timeout)
-        except subprocess.TimeoutExpired:
-            process.terminate()
-            try:
-                process.wait(timeout)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait(timeout)
+        _end(process, timeout)
         conn.close()
 
     def record_command(self, current: float) -> None:
@@ -1026,7 +1096,16 @@ class AdaptationProcess:
             conn.send_bytes(_PAIRS + array('q', [len(a)]).tobytes()
                             + array('d', a).tobytes() + array('d', b).tobytes())
             self._in_flight += 1
-        limit = 20 * self.settings.samples(self.settings.holdout)
+        self._reap()
+        window = self.settings.samples(self.settings.holdout)
+        if self.priority == 'idle' and not self._behind and (
+                len(commands) > _IDLE_BEHIND_WINDOWS * window):
+            self._behind = (f'{len(commands)} commands not taken, more than'
+                            f' {_IDLE_BEHIND_WINDOWS} held-out windows')
+        if self._behind:
+            self._fall_back()
+            return
+        limit = 20 * window
         if self._source is not None:
             # The child takes the readings: one that has not taken the commands of 20
             # held-out windows has lost its readings too (its subscription's depth is far
@@ -1082,6 +1161,45 @@ class AdaptationProcess:
         events, self._events = self._events, []
         return events
 
+    def _fall_back(self) -> None:
+        # The machine leaves the idle child too little CPU: the same adaptation again, from
+        # the running model, in a child at niceness CHILD_NICE.  The old one is asked to end
+        # (reaped by later exchanges: the command path never waits for it).
+        why, self._behind = self._behind, ''
+        process, conn = self._process, self._conn
+        if process is not None and conn is not None:
+            self._send(('stop',))
+            conn.close()
+            self._retired.append((process, time.monotonic()))
+        self.settings = replace(self.settings, priority='low')
+        self._params = self._model.to_params()
+        self._commands.clear()
+        self._readings.clear()
+        self._ready = False
+        self._in_flight = 0
+        self._candidate = None
+        self._sequence.clear()
+        self.priority = None
+        self.publishers = None
+        self._status = {'adaptation_state': 'restarting the adaptation process at niceness'
+                                            f' {CHILD_NICE}'}
+        self.start()
+        self._events.append(f'the adaptation process at idle priority fell behind ({why}: the'
+                            ' machine leaves it too little CPU); restarted from the running'
+                            f' model at niceness {CHILD_NICE} as process {self.pid}')
+
+    def _reap(self) -> None:
+        # Children asked to end: reaped once they have, killed after _RETIRE_S.
+        now = time.monotonic()
+        keep = []
+        for process, asked in self._retired:
+            if process.poll() is not None:
+                continue
+            if now - asked > _RETIRE_S:
+                process.kill()
+            keep.append((process, asked))
+        self._retired = keep
+
     def _send(self, message: Any) -> None:
         # To a child that has ended, nothing is sent (the next exchange reports it).
         if self._conn is not None:
@@ -1097,6 +1215,7 @@ class AdaptationProcess:
         elif kind == 'ready':
             self._ready = True
             self.publishers = message[1]
+            self.priority = message[2]
             if self._source is not None:
                 # Commands published before the child's subscription was open: their
                 # readings went to no one, so they pair with nothing.  The child drops the
@@ -1111,12 +1230,28 @@ class AdaptationProcess:
             self._status, events = message[1], message[2]
             self._events.extend(events)
             self.malformed = int(self._status.get('adaptation_malformed_readings', 0))
+            lost = int(self._status.get('adaptation_lost_readings', 0))
+            if self.priority == 'idle' and lost > 0 and not self._behind:
+                self._behind = f'{lost} readings lost'
             self.last_malformed = str(self._status.get('adaptation_last_malformed_reading',
                                                        ''))
         elif kind == 'error':
             self.errors += 1
             if self._on_error is not None:
                 self._on_error(message[1])
+
+
+def _end(process: 'subprocess.Popen[bytes]', timeout: float) -> None:
+    # Wait for a child asked to end; terminated after TIMEOUT, killed after another.
+    try:
+        process.wait(timeout)
+    except subprocess.TimeoutExpired:
+        process.terminate()
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(timeout)
 
 
 def serve_socket(descriptor: int, *, subscribe: Subscribe | None = None) -> None:
@@ -1210,7 +1345,9 @@ def _loop(conn: multiprocessing.connection.Connection, adaptation: Adaptation,
 
     listener = threading.Thread(target=listen, name='pipe', daemon=True)
     listener.start()
-    reply(('ready', None if readings is None else readings.faults()['publishers']))
+    # Idle priority from here on (the imports and the subscription ran at CHILD_NICE).
+    priority = 'idle' if settings.priority == 'idle' and yield_cpu() else 'low'
+    reply(('ready', None if readings is None else readings.faults()['publishers'], priority))
     number = 0
     deadline = time.monotonic() + settings.period
     while not stop.wait(max(0.0, deadline - time.monotonic())):
@@ -1237,6 +1374,42 @@ def _loop(conn: multiprocessing.connection.Connection, adaptation: Adaptation,
         except (BrokenPipeError, OSError):
             break
     conn.close()
+
+
+def with_gaps(readings: FloatArray, sequences: npt.NDArray[np.int64],
+              previous: int) -> tuple[FloatArray, int, int]:
+    """
+    Return readings with a NaN in the place of each one missing from the publisher's sequence.
+
+    The adaptation pairs the k-th reading with the k-th command: a reading the
+    subscription's history dropped would shift every later pair by one.  Its NaN keeps the
+    order, and the adaptation freezes over it as over any garbage reading.  A sequence
+    number that goes back (a publisher started again) starts counting afresh.
+
+    Parameters
+    ----------
+    readings : ndarray of float, shape (N,)
+        The readings taken [m], in order.
+    sequences : ndarray of int, shape (N,)
+        Their publication sequence numbers.
+    previous : int
+        The sequence number of the reading before them (-1: none yet).
+
+    Returns
+    -------
+    readings, lost, last : ndarray of float, int, int
+        The readings with the NaN placeholders, how many were missing, and the last
+        sequence number.
+
+    """
+    if sequences.size == 0:
+        return readings, 0, previous
+    before = np.concatenate([[previous], sequences[:-1]])
+    missing = np.where((before >= 0) & (sequences > before + 1), sequences - before - 1, 0)
+    lost = int(missing.sum())
+    if lost:
+        readings = np.insert(readings, np.repeat(np.arange(readings.size), missing), np.nan)
+    return readings, lost, int(sequences[-1])
 
 
 def adaptable(model: object) -> bool:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Iterable, List, Mapping, Sequence, Tuple
 
 from .spec import loop_qos_parameters, ParameterSpec
+from ..compensation.adaptation import CHILD_NICE, PRIORITIES
 from ..compensation.updates import axis_key, LIMIT_KEYS, model_keys
 from ..errors import ParameterRejected
 from ..extensions import EFFECTS
@@ -255,6 +256,13 @@ ADAPTATION_PARAMETERS = (
         'true: the adaptation fits in a child process (the command path never waits for '
         'it); false: in a thread of the node, sharing the interpreter lock',
         read_only=True),
+    ParameterSpec(
+        'adaptation.priority', 'string', PRIORITIES[0],
+        "The adaptation process's CPU priority: idle, only CPU time nothing else wants "
+        '(the command path keeps its latency; if the machine leaves it too little, it is '
+        f'restarted at low by itself and says so); low, niceness {CHILD_NICE} below the node'
+        ' (a share of a busy machine). A thread (adaptation.process false) has the'
+        " node's priority", choices=PRIORITIES, read_only=True),
     ParameterSpec(
         'adaptation.hysteresis', 'bool', False,
         "false: adapt S' (gain, shape) and the operating point; true: the weights of H too",

@@ -21,9 +21,12 @@ meanwhile (``qos_depth`` 10000 holds 1 s of a 10 kHz stream), so the child wakes
 a second, not once per reading.  A message that is not a CDR Float64 is dropped and
 counted (the node shows ``adaptation_malformed_readings`` and adds them to its
 ``malformed``); a gap in the publisher's sequence numbers (readings the history dropped) is
-counted as ``adaptation_lost_readings``.
+counted as ``adaptation_lost_readings``.  Either keeps its place as a NaN reading
+(:func:`~mpi_ros.compensation.adaptation.with_gaps`): the k-th reading still answers the
+k-th command, and the adaptation freezes over the gap as over any garbage reading.
 """
 
+import math
 import threading
 import time
 from typing import Any, Callable, List
@@ -37,7 +40,7 @@ from std_msgs.msg import Float64
 
 from .qos import loop_qos
 from ..array_layout import FLOAT64_SIZE, malformed_float64
-from ..compensation.adaptation import ReadingSource
+from ..compensation.adaptation import ReadingSource, with_gaps
 from ..compensation.adaptation import serve_socket as serve_adaptation
 
 __all__ = ['MATCH_TIMEOUT_S', 'POLL_PERIOD_S', 'ReadingSubscriber', 'serve_socket',
@@ -156,32 +159,34 @@ class ReadingSubscriber:
         # anything else one by one.
         take = self._subscription.handle.take_message
         batch: List[bytes] = []
+        sequences: List[int] = []
         while True:
             taken = take(Float64, True)
             if taken is None:
                 break
             data, info = taken
             batch.append(data)
-            sequence = int(info['publication_sequence_number'])
-            if self._sequence >= 0 and sequence > self._sequence + 1:
-                self.lost += sequence - self._sequence - 1
-            self._sequence = sequence
+            sequences.append(int(info['publication_sequence_number']))
         if not batch:
             return
         joined = b''.join(batch)
+        values = None
         if len(joined) == FLOAT64_SIZE * len(batch):
             rows = np.frombuffer(joined, dtype=np.uint8).reshape(len(batch), FLOAT64_SIZE)
             if np.all(rows[:, 0] == 0) and np.all(rows[:, 1] == 1):
-                self._record(rows[:, 4:].copy().view('<f8').reshape(-1))
-                return
-        values = [self._decode(data) for data in batch]
-        self._record(np.array([v for v in values if v is not None], dtype=np.float64))
+                values = rows[:, 4:].copy().view('<f8').reshape(-1)
+        if values is None:
+            values = np.array([self._decode(data) for data in batch], dtype=np.float64)
+        values, lost, self._sequence = with_gaps(values, np.array(sequences), self._sequence)
+        self.lost += lost
+        self._record(values)
 
-    def _decode(self, data: bytes) -> Any:
+    def _decode(self, data: bytes) -> float:
+        # A malformed message keeps its place as a NaN reading.
         if len(data) < FLOAT64_SIZE or data[0] != 0 or data[1] > 1:
             self.malformed += 1
             self.last_malformed = malformed_float64(data)
-            return None
+            return math.nan
         return float(np.frombuffer(data, dtype='<f8' if data[1] == 1 else '>f8',
                                    count=1, offset=4)[0])
 

@@ -101,6 +101,7 @@ ordered, makes the node refuse to start (exit status 1) rather than run a model
 nobody asked for (with ``autostart: false`` it starts, and configure fails instead).
 """
 
+import math
 import struct
 import sys
 import time
@@ -388,6 +389,9 @@ class CompensatorNode(CompensatorNodeBase):
         for _ in range(_DRAIN_LIMIT):
             if len(data) < FLOAT64_SIZE or data[0] != 0 or data[1] > 1:
                 self._inputs.refuse('malformed', malformed_float64(data))
+                if adaptation is not None:
+                    # Its place kept: the next reading still answers the next command.
+                    adaptation.record_measurement(math.nan)
             elif adaptation is not None:
                 adaptation.record_measurement(
                     (_LITTLE(data, 4) if data[1] == 1 else _BIG(data, 4))[0])
@@ -448,7 +452,8 @@ class CompensatorNode(CompensatorNodeBase):
             f' in lock step (delay {settings.delay} samples), memory'
             f' {settings.forgetting_time:g} s, candidates every {settings.period:g} s,'
             f' held out {settings.holdout:g} s, margin {100 * settings.margin:g} %; fitting in'
-            + (f' process {self._worker.pid} (which takes the readings)'
+            + (f' process {self._worker.pid} (which takes the readings;'
+               f' {self._worker.priority_words})'
                if isinstance(self._worker, AdaptationProcess) else ' a thread'))
         if isinstance(self._worker, AdaptationProcess) and self._worker.publishers == 0:
             self.get_logger().warning(

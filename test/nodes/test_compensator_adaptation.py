@@ -20,7 +20,7 @@ import time
 from mpi_ros import identify
 from mpi_ros.compensation import Compensator
 from mpi_ros.compensation.adaptation import (
-    AdaptationProcess, AdaptationSettings, AdaptationWorker, ReadingSource,
+    AdaptationProcess, AdaptationSettings, AdaptationWorker, CHILD_NICE, ReadingSource,
 )
 from mpi_ros.extensions.thermal_drift import ThermalDriftModel
 from mpi_ros.nodes import adaptation_readings
@@ -235,10 +235,11 @@ def test_a_thermal_drift_model_is_adapted_with_its_weight(ros_context, monkeypat
 def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
     # The child takes the readings itself: one that has not taken 20 held-out windows of
     # commands has lost its readings too, so the node stops it and says so once, rather
-    # than pair what no longer pairs (holdout 0.1 s: 1000 commands at 500 Hz).
+    # than pair what no longer pairs (holdout 0.1 s: 1000 commands at 500 Hz).  At
+    # priority low (one at idle priority is restarted instead: the next test).
     t, x = identification_excitation(10.0, sample_rate=RATE, seed=11)
     y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=11).simulate(t, x)
-    settings = AdaptationSettings(sample_period=1 / RATE, holdout=0.1)
+    settings = AdaptationSettings(sample_period=1 / RATE, holdout=0.1, priority='low')
     source = ReadingSource(topic='/displacement', depth=10000, reliability='reliable',
                            sample_period=1 / RATE, node_name='stalled_adaptation')
     errors = []
@@ -260,6 +261,49 @@ def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
     assert process.status()['adaptation_state'] == state
     assert errors == [state]
     assert process.pending == (0, 0)
+
+
+def test_an_idle_child_that_falls_behind_is_restarted_at_low_priority(ros_context):
+    # The default child runs at idle priority; one the machine leaves behind (here: stopped)
+    # is not stopped for good but restarted at niceness CHILD_NICE from the running model,
+    # with its own subscription, and says so; the old one is ended, nothing is half-kept.
+    t, x = identification_excitation(10.0, sample_rate=RATE, seed=11)
+    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=11).simulate(t, x)
+    settings = AdaptationSettings(sample_period=1 / RATE, holdout=0.1)
+    assert settings.priority == 'idle'
+    source = ReadingSource(topic='/displacement', depth=10000, reliability='reliable',
+                           sample_period=1 / RATE, node_name='idle_adaptation')
+    errors = []
+    process = AdaptationProcess(identify(x, y, n=6, l=3).model, settings,
+                                on_error=errors.append, readings=source,
+                                entry=adaptation_readings.__name__)
+    process.start()
+    first = process.pid
+    try:
+        assert process.wait_ready(60.0)
+        if process.priority != 'idle':
+            pytest.skip('this platform has no SCHED_IDLE')
+        os.kill(first, signal.SIGSTOP)
+        for _ in range(20):
+            for _ in range(1000):
+                process.record_command(1.0)
+            process.exchange()
+            if process.pid != first:
+                break
+        assert process.pid != first
+        events = process.events()
+        assert len(events) == 1 and 'fell behind' in events[0], events
+        assert f'at niceness {CHILD_NICE} as process {process.pid}' in events[0]
+        assert process.settings.priority == 'low'
+        assert process.wait_ready(60.0)
+        assert process.priority == 'low' and process.running
+        os.kill(first, signal.SIGCONT)      # asked to end; ended by stop() at the latest
+    finally:
+        process.stop()
+    with pytest.raises(ProcessLookupError):
+        os.kill(first, 0)
+    assert not process.running
+    assert errors == []
 
 
 def test_the_childs_subscription_lives_from_configure_to_cleanup(ros_context):
