@@ -260,6 +260,9 @@ def loop(folder, results, out):
     not two guesses of the record's start.  (Down to the record's 0 A, below the 0.2 A the
     compensators start at, the plays of the large thresholds kept the plant in another state
     than the compensators' for the whole loop: creep 105's plain 2.03 % against 1.53 %.)
+    The row also has ``loop_shipped`` (and its ratios to the plain and the static model):
+    the effect fitted at the diagnosis' baseline order, the model ``mpi-ros diagnose
+    --params-out`` writes, where ``loop_extended`` selects the effect's order again.
     Creep slower than the 2 s sweep is not at rest then (its lags remember the simulation's
     start); a compensator's creep lags start settled (docs/diagnosis.md, issue 24).
     """
@@ -287,6 +290,12 @@ def loop(folder, results, out):
             parts = verdict.split(' + ')
             extended = (fit_composite(t, x, y, parts, order='auto') if len(parts) > 1
                         else EFFECTS[verdict].fit(t, x, y, order='auto'))
+            # What `mpi-ros diagnose --params-out` writes: the effect fitted at the
+            # diagnosis' baseline order (Gamma of the raw current, the record's time base).
+            base = identify(x, y, order='auto', time=t, dynamics='off').model
+            at = (base.n, base.l)
+            shipped = (fit_composite(t, x, y, parts, order=at) if len(parts) > 1
+                       else EFFECTS[verdict].fit(t, x, y, order=at))
         keep = t >= t[0] + 1.0
         lo, hi = np.percentile(y[keep], [0.5, 99.5])
         span = hi - lo
@@ -300,7 +309,8 @@ def loop(folder, results, out):
         values = {k: v for k, v in meta['values'].items() if k != 'relays'}
         run = plant(values, meta['seed'], meta['values'].get('relays'))
         errors, offsets = {}, {}
-        for label, model in (('plain', plain), ('static', static), ('extended', extended)):
+        for label, model in (('plain', plain), ('static', static), ('extended', extended),
+                             ('shipped', shipped)):
             with warnings.catch_warnings():
                 warnings.simplefilter('ignore')
                 comp = Compensator(extended_model_from_params(model.to_params()),
@@ -323,6 +333,9 @@ def loop(folder, results, out):
                 'loop_mean_plain': offsets['plain'], 'loop_mean_extended': offsets['extended'],
                 'loop_ratio_ac': _about_mean(errors, offsets, 'extended')
                 / _about_mean(errors, offsets, 'plain'),
+                'loop_shipped': errors['shipped'], 'loop_mean_shipped': offsets['shipped'],
+                'loop_ratio_shipped': errors['shipped'] / errors['plain'],
+                'loop_ratio_shipped_static': errors['shipped'] / errors['static'],
                 'seconds': time.perf_counter() - started}
         with out.open('a') as f:
             f.write(json.dumps(line) + '\n')
@@ -359,6 +372,20 @@ def loop_summary(path):
     if static:
         ok = [r for r in static if r['loop_ratio_static'] <= 0.85]
         print(f'extended <= 0.85 x the static plain model on {len(ok)} of {len(static)}')
+    shipped = [r for r in right if 'loop_shipped' in r]
+    if shipped:
+        ok = [r for r in shipped if r['loop_ratio_shipped'] <= 0.85]
+        worse = ', '.join(f'{r["name"]} {r["loop_ratio_shipped"]:.2f}' for r in shipped
+                          if r['loop_ratio_shipped'] > 1.0)
+        print(f'shipped (the effect at the baseline order) <= 0.85 x plain on {len(ok)} of'
+              f' {len(shipped)}; above 1: {worse or "none"}')
+        ok = [r for r in shipped if r['loop_ratio_shipped_static'] <= 0.85]
+        print(f'shipped <= 0.85 x the static plain model on {len(ok)} of {len(shipped)}')
+    means = [r for r in right if 'loop_mean_extended' in r and r['loop_ratio'] > 1.0]
+    if means:
+        print('extended above the plain model, RMS about the mean (ratio): '
+              + ', '.join(f'{r["name"]} {r["loop_ratio"]:.2f} ({r["loop_ratio_ac"]:.2f})'
+                          for r in means))
 
 
 def summary(path):

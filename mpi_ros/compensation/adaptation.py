@@ -958,6 +958,10 @@ class AdaptationProcess:
         #: also when it could not take ``SCHED_IDLE``; None before).
         self.priority: str | None = None
         self._behind = ''
+        #: Times the adaptation was restarted at ``'low'`` (:meth:`_fall_back`).
+        self.restarts = 0
+        # The counters of the children before a restart, added to the current one's.
+        self._carried: dict[str, int] = {}
         # Children restarted at 'low', asked to end: (process, when asked).
         self._retired: list[tuple[subprocess.Popen[bytes], float]] = []
 
@@ -1153,8 +1157,17 @@ class AdaptationProcess:
         self._send(('reset', self._params))
 
     def status(self) -> dict[str, Any]:
-        """Return the values /diagnostics shows (``adaptation_*``), as the child last sent."""
-        return dict(self._status)
+        """
+        Return the values /diagnostics shows (``adaptation_*``), as the child last sent.
+
+        The counters go on across a restart at ``'low'`` (the earlier children's are added),
+        and ``adaptation_restarts`` says how many there were.
+        """
+        status = dict(self._status)
+        for key, value in self._carried.items():
+            status[key] = status.get(key, 0) + value
+        status['adaptation_restarts'] = self.restarts
+        return status
 
     def events(self) -> list[str]:
         """Return and clear the events to log."""
@@ -1166,6 +1179,10 @@ class AdaptationProcess:
         # the running model, in a child at niceness CHILD_NICE.  The old one is asked to end
         # (reaped by later exchanges: the command path never waits for it).
         why, self._behind = self._behind, ''
+        for key, value in self._status.items():
+            if type(value) is int and key != 'adaptation_reading_publishers':
+                self._carried[key] = self._carried.get(key, 0) + value
+        self.restarts += 1
         process, conn = self._process, self._conn
         if process is not None and conn is not None:
             self._send(('stop',))

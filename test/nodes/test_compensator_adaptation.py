@@ -295,6 +295,7 @@ def test_an_idle_child_that_falls_behind_is_restarted_at_low_priority(ros_contex
         assert len(events) == 1 and 'fell behind' in events[0], events
         assert f'at niceness {CHILD_NICE} as process {process.pid}' in events[0]
         assert process.settings.priority == 'low'
+        assert process.status()['adaptation_restarts'] == 1
         assert process.wait_ready(60.0)
         assert process.priority == 'low' and process.running
         os.kill(first, signal.SIGCONT)      # asked to end; ended by stop() at the latest
