@@ -481,6 +481,40 @@ def test_the_child_runs_below_the_node_so_the_command_path_keeps_the_cpu(priorit
         process.stop()
 
 
+def test_an_idle_child_that_cannot_be_restarted_stops_and_says_why(monkeypatch):
+    # The machine leaves the idle child behind and no new process can be had: the
+    # adaptation stops with the reason, once, and the node's side keeps nothing.
+    model, _, _ = _model(SEEDS[0])
+    errors = []
+    process = AdaptationProcess(model, AdaptationSettings(sample_period=1 / RATE, holdout=0.1),
+                                on_error=errors.append)
+    process.start()
+    first = process.pid
+    try:
+        assert process.wait_ready(CHILD_START_S)
+        if process.priority != 'idle':
+            pytest.skip('this platform has no SCHED_IDLE')
+        os.kill(first, signal.SIGSTOP)
+
+        def no_process():
+            raise OSError('no more processes')
+        monkeypatch.setattr(process, 'start', no_process)
+        for _ in range(3):
+            for _ in range(5000):
+                process.record_command(1.0)
+                process.record_measurement(1e-5)
+            process.exchange()
+        os.kill(first, signal.SIGCONT)
+    finally:
+        process.stop()
+    state = 'stopped: the adaptation process could not be restarted (no more processes)'
+    assert process.status()['adaptation_state'] == state
+    assert errors == [state]
+    assert process.pending == (0, 0)
+    with pytest.raises(ProcessLookupError):
+        os.kill(first, 0)
+
+
 def test_a_lost_reading_keeps_its_place_so_the_pairs_still_line_up():
     # Publication sequence numbers 5, 6, 9, 10 after 3: readings 4, 7 and 8 are missing.
     values, lost, last = with_gaps(np.array([1.0, 2.0, 3.0, 4.0]), np.array([5, 6, 9, 10]), 3)

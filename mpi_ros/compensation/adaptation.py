@@ -1078,6 +1078,9 @@ class AdaptationProcess:
         """Send the pairs that arrived to the child; take back what it sent (non-blocking)."""
         conn = self._conn
         if conn is None:
+            if self._status.get('adaptation_state', '').startswith('stopped'):
+                self._commands.clear()          # no child will take them
+                self._readings.clear()
             return
         try:
             while conn.poll():
@@ -1200,7 +1203,12 @@ class AdaptationProcess:
         self.publishers = None
         self._status = {'adaptation_state': 'restarting the adaptation process at niceness'
                                             f' {CHILD_NICE}'}
-        self.start()
+        try:
+            self.start()
+        except OSError as err:          # no process to be had: the node compensates on
+            self._process, self._conn = None, None
+            self._ended(f'stopped: the adaptation process could not be restarted ({err})')
+            return
         self._events.append(f'the adaptation process at idle priority fell behind ({why}: the'
                             ' machine leaves it too little CPU); restarted from the running'
                             f' model at niceness {CHILD_NICE} as process {self.pid}')
