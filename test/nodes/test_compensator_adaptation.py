@@ -232,21 +232,28 @@ def test_a_thermal_drift_model_is_adapted_with_its_weight(ros_context, monkeypat
         node.destroy_node()
 
 
-def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
-    # The child takes the readings itself: one that has not taken 20 held-out windows of
-    # commands has lost its readings too, so the node stops it and says so once, rather
-    # than pair what no longer pairs (holdout 0.1 s: 1000 commands at 500 Hz).  At
-    # priority low (one at idle priority is restarted instead: the next test).
+def _started_child(name, priority):
+    # An adaptation child taking the readings on /displacement itself (holdout 0.1 s: 50
+    # commands at 500 Hz), started; with the list its errors go to.
     t, x = identification_excitation(10.0, sample_rate=RATE, seed=11)
     y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=11).simulate(t, x)
-    settings = AdaptationSettings(sample_period=1 / RATE, holdout=0.1, priority='low')
+    settings = AdaptationSettings(sample_period=1 / RATE, holdout=0.1, priority=priority)
     source = ReadingSource(topic='/displacement', depth=10000, reliability='reliable',
-                           sample_period=1 / RATE, node_name='stalled_adaptation')
+                           sample_period=1 / RATE, node_name=name)
     errors = []
     process = AdaptationProcess(identify(x, y, n=6, l=3).model, settings,
                                 on_error=errors.append, readings=source,
                                 entry=adaptation_readings.__name__)
     process.start()
+    return process, errors
+
+
+def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
+    # The child takes the readings itself: one that has not taken 20 held-out windows of
+    # commands has lost its readings too, so the node stops it and says so once, rather
+    # than pair what no longer pairs (holdout 0.1 s: 1000 commands at 500 Hz).  At
+    # priority low (one at idle priority is restarted instead: the next test).
+    process, errors = _started_child('stalled_adaptation', 'low')
     try:
         assert process.wait_ready(60.0)
         os.kill(process.pid, signal.SIGSTOP)
@@ -267,17 +274,8 @@ def test_an_idle_child_that_falls_behind_is_restarted_at_low_priority(ros_contex
     # The default child runs at idle priority; one the machine leaves behind (here: stopped)
     # is not stopped for good but restarted at niceness CHILD_NICE from the running model,
     # with its own subscription, and says so; the old one is ended, nothing is half-kept.
-    t, x = identification_excitation(10.0, sample_rate=RATE, seed=11)
-    y = MagnetostrictiveActuator(ActuatorConfig(noise_std_m=2e-8), seed=11).simulate(t, x)
-    settings = AdaptationSettings(sample_period=1 / RATE, holdout=0.1)
-    assert settings.priority == 'idle'
-    source = ReadingSource(topic='/displacement', depth=10000, reliability='reliable',
-                           sample_period=1 / RATE, node_name='idle_adaptation')
-    errors = []
-    process = AdaptationProcess(identify(x, y, n=6, l=3).model, settings,
-                                on_error=errors.append, readings=source,
-                                entry=adaptation_readings.__name__)
-    process.start()
+    assert AdaptationSettings().priority == 'idle'
+    process, errors = _started_child('idle_adaptation', 'idle')
     first = process.pid
     try:
         assert process.wait_ready(60.0)
