@@ -85,11 +85,15 @@ _ENDED = 'stopped: the adaptation process ended'
 _BEHIND = 'stopped: the adaptation process did not take the commands (stalled)'
 #: The child process's CPU priorities (``adaptation.priority``), the default first.
 PRIORITIES = ('idle', 'low')
-#: A child at idle priority with this many held-out windows of commands not taken, or that
-#: has lost a reading, is restarted at ``'low'`` (it would lose its readings next).
+#: A child at idle priority with this many held-out windows of commands not taken, that has
+#: taken none for this many held-out durations (``adaptation.holdout`` seconds each), or
+#: that has lost a reading, is restarted at ``'low'`` (it would lose its readings next;
+#: beside two CPU hogs an idle child took under 500 pairs in 120 s).
 _IDLE_BEHIND_WINDOWS = 2
 #: Longest wait [s] for a child restarted at ``'low'`` to end after it was asked to.
 _RETIRE_S = 2.0
+#: Longest wait [s] for a killed child to be gone (see :func:`_end`).
+_KILLED_S = 30.0
 
 
 @dataclass(frozen=True)
@@ -908,7 +912,8 @@ class AdaptationProcess:
     longer pairs; the node shows why and compensates on.  A child at idle priority
     (``settings.priority``, :func:`yield_cpu`) is not stopped but restarted at ``'low'`` as
     soon as it falls behind (:data:`_IDLE_BEHIND_WINDOWS` held-out windows of commands not
-    taken, or a reading lost): the machine is too busy to leave it only the idle CPU time.
+    taken, none taken for as many held-out durations, or a reading lost): the machine is too
+    busy to leave it only the idle CPU time.
     The restarted child starts from the running model; an event says so.
 
     Parameters
@@ -958,6 +963,8 @@ class AdaptationProcess:
         #: also when it could not take ``SCHED_IDLE``; None before).
         self.priority: str | None = None
         self._behind = ''
+        # When the child last took a message of pairs (or was sent one with none waiting).
+        self._progress = time.monotonic()
         #: Times the adaptation was restarted at ``'low'`` (:meth:`_fall_back`).
         self.restarts = 0
         # The counters of the children before a restart, added to the current one's.
@@ -1097,6 +1104,8 @@ class AdaptationProcess:
         # messages of at most _CHUNK pairs each are unacknowledged; the rest waits here.
         commands, readings = self._commands, self._readings
         while self._ready and self._in_flight < _IN_FLIGHT and (commands or readings):
+            if self._in_flight == 0:
+                self._progress = time.monotonic()       # the child's clock starts now
             a, b = commands[:_CHUNK], readings[:_CHUNK]
             del commands[:_CHUNK]
             del readings[:_CHUNK]
@@ -1105,10 +1114,13 @@ class AdaptationProcess:
             self._in_flight += 1
         self._reap()
         window = self.settings.samples(self.settings.holdout)
-        if self.priority == 'idle' and not self._behind and (
-                len(commands) > _IDLE_BEHIND_WINDOWS * window):
-            self._behind = (f'{len(commands)} commands not taken, more than'
-                            f' {_IDLE_BEHIND_WINDOWS} held-out windows')
+        idle = _IDLE_BEHIND_WINDOWS * self.settings.holdout
+        if self.priority == 'idle' and not self._behind:
+            if len(commands) > _IDLE_BEHIND_WINDOWS * window:
+                self._behind = (f'{len(commands)} commands not taken, more than'
+                                f' {_IDLE_BEHIND_WINDOWS} held-out windows')
+            elif self._in_flight and time.monotonic() - self._progress > idle:
+                self._behind = f'no commands taken for {idle:g} s'
         if self._behind:
             self._fall_back()
             return
@@ -1237,6 +1249,7 @@ class AdaptationProcess:
         kind = message[0]
         if kind == 'taken':
             self._in_flight -= 1
+            self._progress = time.monotonic()
         elif kind == 'ready':
             self._ready = True
             self.publishers = message[1]
@@ -1267,16 +1280,19 @@ class AdaptationProcess:
 
 
 def _end(process: 'subprocess.Popen[bytes]', timeout: float) -> None:
-    # Wait for a child asked to end; terminated after TIMEOUT, killed after another.
-    try:
-        process.wait(timeout)
-    except subprocess.TimeoutExpired:
-        process.terminate()
+    # Wait for a child asked to end; terminated after TIMEOUT, killed after another, then
+    # waited for up to _KILLED_S: a child at idle priority runs its exit, too, only on CPU
+    # time nothing else wants (beside two CPU hogs a killed child took over 1 s to go).
+    # Never raises: the node's cleanup and shutdown go on.
+    steps = ((None, timeout), (process.terminate, timeout), (process.kill, _KILLED_S))
+    for end, wait in steps:
+        if end is not None:
+            end()
         try:
-            process.wait(timeout)
+            process.wait(wait)
+            return
         except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait(timeout)
+            continue
 
 
 def serve_socket(descriptor: int, *, subscribe: Subscribe | None = None) -> None:
