@@ -1084,11 +1084,12 @@ class AdaptationProcess:
 
     def exchange(self) -> None:
         """Send the pairs that arrived to the child; take back what it sent (non-blocking)."""
+        if self._stopped:
+            self._commands.clear()              # no child takes them any more
+            self._readings.clear()
+            return
         conn = self._conn
         if conn is None:
-            if self._status.get('adaptation_state', '').startswith('stopped'):
-                self._commands.clear()          # no child will take them
-                self._readings.clear()
             return
         try:
             while conn.poll():
@@ -1096,10 +1097,6 @@ class AdaptationProcess:
         except (EOFError, OSError):
             # The child ended: say so once; what the node records is dropped from now on.
             self._ended(_ENDED)
-            return
-        if self._status.get('adaptation_state', '').startswith('stopped'):
-            self._commands.clear()
-            self._readings.clear()
             return
         # The pipe never fills, so a send never blocks the node: at most _IN_FLIGHT
         # messages of at most _CHUNK pairs each are unacknowledged; the rest waits here.
@@ -1146,11 +1143,16 @@ class AdaptationProcess:
         candidate, self._candidate = self._candidate, None
         return candidate
 
+    @property
+    def _stopped(self) -> bool:
+        # Whether the adaptation has stopped for good (said once by _ended).
+        return bool(self._status.get('adaptation_state', '').startswith('stopped'))
+
     def _ended(self, state: str) -> None:
         # Say once why the adaptation stopped; what the node records is dropped from now on.
         self._commands.clear()
         self._readings.clear()
-        if not self._status.get('adaptation_state', '').startswith('stopped'):
+        if not self._stopped:
             self._status['adaptation_state'] = state
             self.errors += 1
             if self._on_error is not None:

@@ -18,7 +18,7 @@ queued reading as CDR bytes (``take_message``) every :data:`POLL_PERIOD_S` (or a
 the time ``qos_depth`` readings take, if shorter, but at least every millisecond) and
 decodes the batch with one numpy call; the readings wait in the subscription's history
 meanwhile (``qos_depth`` 10000 holds 1 s of a 10 kHz stream), so the child wakes 100 times
-a second, not once per reading.  A message that is not a CDR Float64 is dropped and
+a second, not once per reading.  A message that is not a CDR Float64 is not decoded but
 counted (the node shows ``adaptation_malformed_readings`` and adds them to its
 ``malformed``); a gap in the publisher's sequence numbers (readings the history dropped) is
 counted as ``adaptation_lost_readings``.  Either keeps its place as a NaN reading
