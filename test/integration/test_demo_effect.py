@@ -25,6 +25,7 @@ def test_extended_compensator_beats_plain_on_plant_with_rate_dependence(ros_env,
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=170,
                           env=dict(os.environ), stdin=subprocess.DEVNULL)
     wall_after = time.time()
+    assert (out / 'results.json').is_file(), _failure(proc, out)
     results = json.loads((out / 'results.json').read_text())
     plain, extended = (r['control_error'] for r in results['tracking'])
     assert results['effect'] == 'rate_dependence'
@@ -36,8 +37,8 @@ def test_extended_compensator_beats_plain_on_plant_with_rate_dependence(ros_env,
     # The fitted lag is near the plant's eddy-current time constant.
     tau = results['extension']['model.rate_dependence.time_constant']
     assert 0.0025 < tau < 0.01, tau
-    assert extended < plain, (plain, extended, proc.stderr[-2000:])
-    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert extended < plain, (plain, extended, _failure(proc, out))
+    assert proc.returncode == 0, _failure(proc, out)
     assert (out / 'report.md').is_file() and (out / 'tracking_error.png').is_file()
     # stderr is not a terminal here: the messages, and no progress line.
     assert '[demo] identified' in proc.stderr
@@ -48,3 +49,10 @@ def test_extended_compensator_beats_plain_on_plant_with_rate_dependence(ros_env,
     start = info['starting_time']['nanoseconds_since_epoch'] * 1e-9
     end = start + info['duration']['nanoseconds'] * 1e-9
     assert wall_before <= start <= end <= wall_after, (wall_before, start, end, wall_after)
+
+
+def _failure(proc: subprocess.CompletedProcess, out) -> str:
+    # What a failed run leaves to read: its exit status, stderr and the node logs' ends.
+    logs = ''.join(f'\n--- {log.name} (end) ---\n{log.read_text(errors="replace")[-1500:]}'
+                   for log in sorted(out.glob('*.log')))
+    return f'exit {proc.returncode}; stderr (end):\n{proc.stderr[-3000:]}{logs}'
