@@ -117,7 +117,10 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         ``ordinary``: a ``Float64`` callback (deserialised), one message per call, spun
         by the EventsExecutor as the package's nodes spin; ``naive``: the same callback
         spun by ``rclpy.spin`` (SingleThreadedExecutor); ``raw``: serialized messages,
-        every queued one taken in one callback (the lightest receiver).
+        every queued one taken in one callback (the lightest receiver); ``delivered``: a
+        wait set takes them, each stamped when DDS delivered it (its
+        ``received_timestamp``), so that the receiver's own work, answering as the
+        actuator, is not counted as the node's latency (the take times are reported too).
     axes : int
         1: the single-axis node on Float64 topics; N > 1: the multi-axis node (every axis
         with the benchmark model) on the Float64MultiArray topics.
@@ -330,6 +333,8 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
     n = stamps.size
     latency_us = (stamps - sent[:n]) / 1e3
     np.save(tmp / 'latency_us.npy', latency_us)
+    taken_file = Path(out.replace('.npy', '_taken.npy'))
+    taken_us = (np.load(taken_file) - sent[:n]) / 1e3 if taken_file.exists() else None
     max_error = relay_error = None
     if n == count and node_kind != 'compensator':
         # A relay sends back the desired values themselves: check that instead.
@@ -370,6 +375,11 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
         results['latency_us'] = {'p50': p50, 'p99': p99, 'p999': p999,
                                  'max': float(latency_us.max())}
+        if taken_us is not None and taken_us.size:
+            # --receiver delivered: the same commands stamped when this receiver took them.
+            p50, p99, p999 = np.percentile(taken_us, [50, 99, 99.9])
+            results['latency_taken_us'] = {'p50': p50, 'p99': p99, 'p999': p999,
+                                           'max': float(taken_us.max())}
         size = int(window * rate)
         results['windows'] = [
             (i / rate, *np.percentile(latency_us[i:i + size], [50, 99, 99.9]))
@@ -410,6 +420,11 @@ def format_results(results: dict[str, Any]) -> str:
     if lat:
         lines.append(f'latency desired->command [us]: p50 {lat["p50"]:.0f}, p99 {lat["p99"]:.0f}'
                      f', p99.9 {lat["p999"]:.0f}, max {lat["max"]:.0f} (target p99 <= 1000)')
+    taken = r.get('latency_taken_us')
+    if taken:
+        lines.append(f'  the same, stamped when the receiver took them: p50 {taken["p50"]:.0f}'
+                     f', p99 {taken["p99"]:.0f}, p99.9 {taken["p999"]:.0f}, max '
+                     f'{taken["max"]:.0f}')
     if len(r['windows']) > 1:
         lines.append('latency per window [us] (start s: p50/p99/p99.9):')
         lines.extend(f'  {t:5.0f}: {p50:6.0f} {p99:7.0f} {p999:7.0f}'
@@ -456,7 +471,7 @@ def main() -> None:
                         help='compensator on the last CPU, sender and receiver on the others')
     parser.add_argument('--node', default='compensator',
                         help='compensator, or relay:naive|events|waitset|poll (relay.py)')
-    parser.add_argument('--receiver', choices=('ordinary', 'naive', 'raw'),
+    parser.add_argument('--receiver', choices=('ordinary', 'naive', 'raw', 'delivered'),
                         default='ordinary', help='how the receiver subscribes')
     parser.add_argument('--axes', type=int, default=1,
                         help='1: Float64 topics; N > 1: the multi-axis node, array topics')
@@ -531,8 +546,12 @@ def _compare_adaptation(args: argparse.Namespace) -> None:
                 if r['drops'] == 0 and len(r['windows']) > 1]
         medians[mode] = (float(np.median(whole)) if whole else float('nan'),
                          float(np.median(late)) if late else float('nan'))
+        taken = [r['latency_taken_us']['p99'] / 1e3 for r in results
+                 if r['drops'] == 0 and 'latency_taken_us' in r]
         print(f'median p99 {mode} (runs without loss): {medians[mode][0]:.2f} ms whole, '
-              f'{medians[mode][1]:.2f} ms 10-20 s', flush=True)
+              f'{medians[mode][1]:.2f} ms 10-20 s'
+              + (f' (taken: {float(np.median(taken)):.2f} ms whole)' if taken else ''),
+              flush=True)
     for base in ('off', 'off+sink'):
         print(f'on / {base}: {medians["on"][0] / medians[base][0]:.2f}x whole, '
               f'{medians["on"][1] / medians[base][1]:.2f}x 10-20 s (goal: loss 0, <= 1.2x)',
@@ -547,7 +566,10 @@ def _run_line(r: dict[str, Any], mode: str) -> str:
     return (f'{time.strftime("%H:%M:%S")} {mode}: load '
             f'{r["load_before"]:.1f}-{r["load_average"][0]:.1f}, lost {r["drops"]} of '
             f'{r["sent"]}, p50 {lat.get("p50", float("nan")) / 1e3:.2f}, p99 '
-            f'{lat.get("p99", float("nan")) / 1e3:.2f} whole / {late} 10-20 s; CPU {cpu}'
+            f'{lat.get("p99", float("nan")) / 1e3:.2f} whole / {late} 10-20 s'
+            + (f' (taken: p99 {r["latency_taken_us"]["p99"] / 1e3:.2f})'
+               if 'latency_taken_us' in r else '')
+            + f'; CPU {cpu}'
             + (f'; adaptation updates {r["adaptation_updates"]}, restarts at low'
                f' {r["adaptation_restarts"]}' if mode == 'on' else ''))
 
@@ -642,6 +664,10 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
         received[0] = k + 1
 
     qos = loop_qos(qos_depth, reliability)
+    if kind == 'delivered':
+        _deliveries(node, out, count, timeout, qos, stamps, values,
+                    publish_raw if echo else None, actuator if echo else None)
+        return
     if axes > 1:
         subscription = node.create_subscription(Float64MultiArray, 'current_commands',
                                                 on_array, qos)
@@ -667,6 +693,69 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
     np.save(out.replace('.npy', '_values.npy'), values[:n])
     np.save(out, stamps[:n])
     node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def _deliveries(node: Any, out: str, count: int, timeout: float, qos: Any,
+                stamps: np.ndarray, values: np.ndarray, publish_raw: Any,
+                actuator: Any) -> None:
+    """
+    Receive the commands with a wait set, each stamped when DDS delivered it.
+
+    The stamp is the reader's ``received_timestamp`` (set by Fast DDS as the sample enters
+    the reader's history, in its receive thread), not the time this thread takes it: what
+    this thread does in between (answering as the actuator) is not counted as the node's
+    latency.  Fast DDS stamps with the realtime clock; it is mapped to CLOCK_MONOTONIC by
+    the offset measured at the start and at the end (linearly between them, so a slewing
+    clock shifts no stamp by more than the offset's change, which is printed).  The take
+    times are saved too (``*_taken.npy``).
+    """
+    import struct
+
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    from std_msgs.msg import Float64
+    taken_at = np.zeros(count, dtype=np.int64)
+    received_ns = np.zeros(count, dtype=np.int64)
+    little, big = struct.Struct('<d').unpack_from, struct.Struct('>d').unpack_from
+    pack = struct.Struct('<H2xd').pack
+    subscription = node.create_subscription(Float64, 'current_command', lambda _: None, qos,
+                                            raw=True)
+    deadline = time.monotonic() + 60.0
+    while subscription.get_publisher_count() < 1 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    offset_start = time.time_ns() - time.monotonic_ns()
+    Path(out + '.ready').touch()
+    take = subscription.handle.take_message
+    wait_set = _rclpy.WaitSet(1, 0, 0, 0, 0, 0, node.context.handle)
+    k = 0
+    deadline = time.monotonic() + timeout
+    with subscription.handle, node.context.handle:
+        while k < count and time.monotonic() < deadline:
+            wait_set.clear_entities()
+            wait_set.add_subscription(subscription.handle)
+            wait_set.wait(100_000_000)
+            first = k
+            while k < count and (taken := take(Float64, True)) is not None:
+                data, info = taken
+                taken_at[k] = time.monotonic_ns()
+                received_ns[k] = info['received_timestamp']
+                values[k] = (little if data[1] == 1 else big)(data, 4)[0]
+                k += 1
+            if publish_raw is not None:
+                for j in range(first, k):
+                    publish_raw(pack(0x0100, actuator.step(values[j])))
+    offset_end = time.time_ns() - time.monotonic_ns()
+    if k:
+        share = (received_ns[:k] - received_ns[0]) / max(1, received_ns[k - 1] - received_ns[0])
+        offset = offset_start + share * (offset_end - offset_start)
+        stamps[:k] = received_ns[:k] - np.round(offset).astype(np.int64)
+    print(f'receiver: realtime - monotonic offset changed by '
+          f'{(offset_end - offset_start) / 1e3:.1f} us over the run', flush=True)
+    np.save(out.replace('.npy', '_values.npy'), values[:k])
+    np.save(out.replace('.npy', '_taken.npy'), taken_at[:k])
+    np.save(out, stamps[:k])
+    node.destroy_node()
+    import rclpy
     rclpy.try_shutdown()
 
 

@@ -951,18 +951,16 @@ class AdaptationProcess:
         self.errors = 0
         self._commands: list[float] = []
         self._readings: list[float] = []
-        self._ready = False
-        self._in_flight = 0
-        self._candidate: Candidate | None = None
         self._sequence: dict[int, int] = {}
-        self._status: dict[str, Any] = {'adaptation_state': 'starting the adaptation process'}
         self._events: list[str] = []
-        self._params = model.to_params()
         self._process: subprocess.Popen[bytes] | None = None
         self._conn: multiprocessing.connection.Connection | None = None
+        self._candidate: Candidate | None = None
         #: The priority the child runs at, as it said when ready (``'idle'``, or ``'low'``
         #: also when it could not take ``SCHED_IDLE``; None before).
         self.priority: str | None = None
+        self._status: dict[str, Any] = {}
+        self._fresh_child('starting the adaptation process')
         self._behind = ''
         # When the child last took a message of pairs (or was sent one with none waiting).
         self._progress = time.monotonic()
@@ -1207,17 +1205,7 @@ class AdaptationProcess:
             conn.close()
             self._retired.append((process, time.monotonic()))
         self.settings = replace(self.settings, priority='low')
-        self._params = self._model.to_params()
-        self._commands.clear()
-        self._readings.clear()
-        self._ready = False
-        self._in_flight = 0
-        self._candidate = None
-        self._sequence.clear()
-        self.priority = None
-        self.publishers = None
-        self._status = {'adaptation_state': 'restarting the adaptation process at niceness'
-                                            f' {CHILD_NICE}'}
+        self._fresh_child(f'restarting the adaptation process at niceness {CHILD_NICE}')
         try:
             self.start()
         except OSError as err:          # no process to be had: the node compensates on
@@ -1227,6 +1215,20 @@ class AdaptationProcess:
         self._events.append(f'the adaptation process at idle priority fell behind ({why}: the'
                             ' machine leaves it too little CPU); restarted from the running'
                             f' model at niceness {CHILD_NICE} as process {self.pid}')
+
+    def _fresh_child(self, state: str) -> None:
+        # What the parent holds of one child, as before its start: nothing pending, not
+        # ready, no candidate; the child starts from the running model.
+        self._params = self._model.to_params()
+        self._commands.clear()
+        self._readings.clear()
+        self._sequence.clear()
+        self._ready = False
+        self._in_flight = 0
+        self._candidate = None
+        self.priority = None
+        self.publishers = None
+        self._status = {'adaptation_state': state}
 
     def _reap(self) -> None:
         # Children asked to end: reaped once they have, killed after _RETIRE_S.
