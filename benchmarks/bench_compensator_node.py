@@ -20,14 +20,16 @@ Targets: 10,000 messages/s for 10 s, zero drops, p99 <= 1 ms (ROS package issue)
 Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]
 [--reliability reliable|best_effort] [--qos-depth 10000] [--pin] [--axes N [--chunk K]]
 [--node compensator|relay:events|relay:waitset|relay:poll|relay:naive]
-[--receiver ordinary|naive|raw] [--adaptation [--worker process|thread] [--priority idle|low]
+[--receiver ordinary|naive|raw|delivered] [--adaptation [--worker process|thread] [--priority idle|low]
 [--rounds N]]``
 
 ``--adaptation --rounds N`` measures adaptation off (``--echo``: the receiver answers as
 the actuator all the same), off with a process that takes the readings as the adaptation's
-child does (``--sink``: the second 10 kHz stream's cost without the adaptation) and on,
-alternately, N runs each, on the same machine load, and prints one line per run and the
-medians: the comparison of docs/adaptation.md (issue 29).
+child does (``--sink``: the second 10 kHz stream's cost without the adaptation), on, and
+on beside that process (``on+sink``: adaptation added to a loop whose readings someone reads
+already, as a tracking controller or a logger does), alternately, N runs each, on the same
+machine load, and prints one line per run and the medians: the comparison of
+docs/adaptation.md (issue 29).
 
 ``--axes N`` (N > 1) runs the multi-axis compensator on the Float64MultiArray topics, each
 message carrying ``--chunk`` samples of every axis (``--rate`` is messages per second).
@@ -146,11 +148,12 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         ``adaptation.priority`` of the child process: ``idle`` (the node's default) or
         ``low``.
     sink : bool
-        With ``echo`` and without ``adaptation``: a process of its own takes the readings
-        on ``displacement`` as the adaptation's child process does (the same subscriber,
-        :class:`mpi_ros.nodes.adaptation_readings.ReadingSubscriber`), so that the second
-        10 kHz stream costs the machine what it costs with adaptation on, and only the
-        adaptation differs.
+        With ``echo`` or ``adaptation``: a process of its own takes the readings on
+        ``displacement`` as the adaptation's child process does (the same subscriber,
+        :class:`mpi_ros.nodes.adaptation_readings.ReadingSubscriber`). Without
+        ``adaptation``: the second 10 kHz stream costs the machine what it costs with
+        adaptation on, and only the adaptation differs; with it: the loop's readings
+        have a reader besides the adaptation's (a tracking controller, a logger).
 
     Returns
     -------
@@ -224,7 +227,7 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
          '--chunk', str(chunk), *(['--echo'] if adaptation or echo else [])],
         env=dict(os.environ))
     sink_proc = None
-    if sink and echo and not adaptation:
+    if sink and (echo or adaptation):
         sink_proc = subprocess.Popen(
             [sys.executable, __file__, '--role', 'sink', '--out', out, '--qos-depth',
              str(qos_depth), '--reliability', reliability, '--rate', str(rate)],
@@ -520,11 +523,12 @@ def main() -> None:
 
 def _compare_adaptation(args: argparse.Namespace) -> None:
     """Run adaptation off and on alternately ``args.rounds`` times; print runs and medians."""
-    modes = ('off', 'off+sink', 'on')
+    modes = ('off', 'off+sink', 'on', 'on+sink')
     runs: dict[str, list[dict[str, Any]]] = {mode: [] for mode in modes}
     print(f'adaptation off (--echo: the receiver answers on displacement, no one reads it),'
-          f' off+sink (a process takes the readings as the adaptation child does) and on'
-          f' (--worker {args.worker} --priority {args.priority}), alternately,'
+          f' off+sink (a process takes the readings as the adaptation child does), on'
+          f' (--worker {args.worker} --priority {args.priority}) and on+sink (on, the'
+          f' readings taken by that process too), alternately,'
           f' {args.rounds} runs each of'
           f' {args.duration:g} s at {args.rate:g}/s; latency desired -> command [ms]',
           flush=True)
@@ -533,8 +537,8 @@ def _compare_adaptation(args: argparse.Namespace) -> None:
             before = os.getloadavg()[0]
             r = run_benchmark(args.rate, args.duration, qos_depth=args.qos_depth,
                               reliability=args.reliability, pin=args.pin,
-                              receiver_kind=args.receiver, adaptation=mode == 'on',
-                              echo=True, worker=args.worker, sink=mode == 'off+sink',
+                              receiver_kind=args.receiver, adaptation=mode.startswith('on'),
+                              echo=True, worker=args.worker, sink=mode.endswith('+sink'),
                               priority=args.priority)
             r['load_before'] = before
             runs[mode].append(r)
@@ -552,9 +556,9 @@ def _compare_adaptation(args: argparse.Namespace) -> None:
               f'{medians[mode][1]:.2f} ms 10-20 s'
               + (f' (taken: {float(np.median(taken)):.2f} ms whole)' if taken else ''),
               flush=True)
-    for base in ('off', 'off+sink'):
-        print(f'on / {base}: {medians["on"][0] / medians[base][0]:.2f}x whole, '
-              f'{medians["on"][1] / medians[base][1]:.2f}x 10-20 s (goal: loss 0, <= 1.2x)',
+    for on, base in (('on', 'off'), ('on', 'off+sink'), ('on+sink', 'off+sink')):
+        print(f'{on} / {base}: {medians[on][0] / medians[base][0]:.2f}x whole, '
+              f'{medians[on][1] / medians[base][1]:.2f}x 10-20 s (goal: loss 0, <= 1.2x)',
               flush=True)
 
 
@@ -571,7 +575,7 @@ def _run_line(r: dict[str, Any], mode: str) -> str:
                if 'latency_taken_us' in r else '')
             + f'; CPU {cpu}'
             + (f'; adaptation updates {r["adaptation_updates"]}, restarts at low'
-               f' {r["adaptation_restarts"]}' if mode == 'on' else ''))
+               f' {r["adaptation_restarts"]}' if mode.startswith('on') else ''))
 
 
 def _sink(out: str, qos_depth: int, reliability: str, sample_period: float) -> None:
