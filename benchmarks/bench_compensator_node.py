@@ -20,8 +20,8 @@ Targets: 10,000 messages/s for 10 s, zero drops, p99 <= 1 ms (ROS package issue)
 Usage: ``python benchmarks/bench_compensator_node.py [--rate 10000] [--duration 10]
 [--reliability reliable|best_effort] [--qos-depth 10000] [--pin] [--axes N [--chunk K]]
 [--node compensator|relay:events|relay:waitset|relay:poll|relay:naive]
-[--receiver ordinary|naive|raw|delivered] [--adaptation [--worker process|thread] [--priority idle|low]
-[--rounds N]]``
+[--receiver ordinary|naive|raw|delivered] [--adaptation [--worker process|thread]
+[--priority idle|low] [--rounds N]]``
 
 ``--adaptation --rounds N`` measures adaptation off (``--echo``: the receiver answers as
 the actuator all the same), off with a process that takes the readings as the adaptation's
