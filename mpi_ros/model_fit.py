@@ -207,8 +207,12 @@ class IdentificationResult:
         straight line reads the judged folds.
     weights_from : str
         Where the weights came from: ``'determined'`` (the rows after the plays are
-        determined; the start state explains the rows before with those weights) or
-        ``'joint'`` (every row with the start state), chosen by the held-out error.
+        determined; the start state explains the rows before with those weights),
+        ``'joint'`` (every row with the start state chosen under those weights), ``'joint
+        start'`` (every row, the start state chosen jointly with the weights) or
+        ``'averaged'`` (the mean of the weights of ``'joint start'`` and ``'determined'``,
+        where their held-out errors tie: the record cannot tell them apart, and they differ
+        in plays it never wipes out), chosen by the held-out error.
 
     """
 

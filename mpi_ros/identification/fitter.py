@@ -28,7 +28,15 @@ from ..operators.deadzone import dead_zone_operator
 from ..operators.model import MPIModel
 from ..operators.play import play_operator
 
-__all__ = ['RecordFit', 'fit_record', 'fold_line_errors']
+__all__ = ['RecordFit', 'fit_record', 'fold_line_errors', 'AVERAGED']
+
+#: The rule of a tie: the mean of the weights of ``'joint start'`` and ``'determined'`` (the
+#: rows after the plays are determined), where blocked cross-validation cannot tell the two
+#: apart and the joint start is a memory (every play's state free).  They differ in the
+#: weights of plays the record never wipes out, which a new trajectory may reach: taking
+#: either one risks its whole error there, the mean half of it.
+#: The constraints are linear, so the mean is a feasible (invertible) model.
+AVERAGED = 'averaged'
 
 
 #: Tolerance of the OSQP solves (polished): trial fits are compared on held-out rows,
@@ -141,7 +149,8 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
     states (``'joint'``), or the start states are chosen jointly with the weights (``'joint
     start'``, the choice before cross-validation): by default the rule with the smallest
     held-out error of blocked cross-validation (:meth:`_Fitter.fold_errors`), beyond the
-    folds' noise (:func:`better_on_folds`; a tie keeps ``'joint start'``).
+    folds' noise (:func:`better_on_folds`); where ``'joint start'`` starts from a memory and
+    ties with ``'determined'``, the mean of their weights (:data:`AVERAGED`).
 
     Parameters
     ----------
@@ -168,11 +177,14 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         Where a memory beats every simple history, refine it also by the steps between
         plays (see :func:`refine_memory`); the final fit of :func:`mpi_ros.identify` does,
         the trial fits of the order selection and the dynamics grid do not.
-    rule : {'determined', 'joint', 'joint start'}, optional
+    rule : {'determined', 'joint', 'joint start', 'averaged'}, optional
         Where the weights come from (``'joint start'``: every row, the start states chosen
-        jointly with the weights, one QP per candidate); None: the one of the three with the
-        smallest held-out error of blocked cross-validation when the start states are
-        chosen (:func:`better_on_folds`; a tie keeps ``'joint start'``), ``'joint'``
+        jointly with the weights, one QP per candidate; ``'averaged'``: the mean of the
+        weights of ``'joint start'`` and of ``'determined'``, the start states of ``'joint
+        start'``); None: the one of the three with the smallest held-out error of blocked
+        cross-validation when the start states are chosen (:func:`better_on_folds`), and
+        ``'averaged'`` where ``'joint start'`` starts from a memory and ties with
+        ``'determined'``; ``'joint'``
         otherwise (trial fits pass their reference fit's rule).
     validate : bool
         Cross-validate the rule used (``RecordFit.folds[rule]``) when it was not already.
@@ -224,22 +236,26 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
                 folds[label] = fitter.fold_errors(option, _weight_rule(label), x, y)
                 if rule is None or better_on_folds(folds[label], folds[rule]):
                     rule, segments = label, option
+            # Where the start chosen jointly is a memory (a state of its own for every play,
+            # free to trade against the weights of plays the record never wipes out) and stays
+            # only because the determined rows' weights do not beat it beyond the folds'
+            # noise, nor it them: a tie, the mean of the two.  A simple history (virgin, a
+            # descent, reversals) has too few parameters to pull a weight.
+            if (rule == 'joint start' and _has_memory(jointly)
+                    and fitter.determined_parts(jointly) is not None
+                    and not better_on_folds(folds['joint start'], folds['determined'])):
+                rule = AVERAGED
+                folds[rule] = fitter.fold_errors(jointly, AVERAGED, x, y)
     rule = rule or 'joint'
-    if rule == 'determined' and fitter.determined_parts(segments) is None:
-        rule = 'joint'
+    if rule in ('determined', AVERAGED) and fitter.determined_parts(segments) is None:
+        rule = 'joint' if rule == 'determined' else 'joint start'
     burn = int(burn_in or 0)
     every = fitter
-    fitter = _rule_fitter(every, segments, _weight_rule(rule), burn)
-    parts = fitter.parts(segments)
-    if fitter is every and rule == 'determined':
-        parts = fitter.determined_parts(segments) or parts      # cached: no new pass
-    weights = fitter.solve(parts, tolerance)
+    fitter, parts, weights = _solve_rule(every, segments, rule, burn, tolerance)
     if burn_in is None and choose:
         burn = every.undetermined_start(segments, weights)
     if burn and not burn_in:
-        fitter = _rule_fitter(every, segments, _weight_rule(rule), burn)
-        parts = fitter.parts(segments)
-        weights = fitter.solve(parts, tolerance)
+        fitter, parts, weights = _solve_rule(every, segments, rule, burn, tolerance)
         notes.append(f'the first {burn} samples are left out of the fit: no start state'
                      ' explains them (the record starts on a transient or after a history'
                      ' none of the candidates covers)')
@@ -256,8 +272,41 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
 
 
 def _weight_rule(label: str) -> str:
-    # 'joint start' (start states chosen jointly with the weights) fits the weights jointly.
-    return 'determined' if label == 'determined' else 'joint'
+    # 'joint start' (start states chosen jointly with the weights) fits the weights jointly;
+    # 'averaged' is cross-validated as itself (the mean of both rules' weights per fold).
+    if label in ('determined', AVERAGED):
+        return label
+    return 'joint'
+
+
+def _has_memory(segments: list[Segment]) -> bool:
+    # Whether a segment starts from a memory (every play's state estimated).
+    return any(seg.start_state is not None and seg.start_state.kind == 'memory'
+               for seg in segments)
+
+
+def _solve_rule(every: '_Fitter', segments: list[Segment], rule: str, burn: int,
+                tolerance: float) -> tuple['_Fitter', GramParts,
+                                           tuple[FloatArray, FloatArray, float, Any]]:
+    # The final weights of a rule: its fitter (the burn-in's rows left out), the Gram parts
+    # of its training rows and the QP's solution; for 'averaged' the fitter and parts of
+    # every row, and the mean of the joint and the determined rows' solutions.
+    if rule != AVERAGED:
+        fitter = _rule_fitter(every, segments, _weight_rule(rule), burn)
+        parts = fitter.parts(segments)
+        if fitter is every and rule == 'determined':
+            parts = fitter.determined_parts(segments) or parts      # cached: no new pass
+        return fitter, parts, fitter.solve(parts, tolerance)
+    fitter, parts, joint = _solve_rule(every, segments, 'joint', burn, tolerance)
+    _, _, determined = _solve_rule(every, segments, 'determined', burn, tolerance)
+    return fitter, parts, _mean_weights(joint, determined)
+
+
+def _mean_weights(a: tuple[FloatArray, FloatArray, float, Any],
+                  b: tuple[FloatArray, FloatArray, float, Any]) -> tuple[
+                      FloatArray, FloatArray, float, Any]:
+    # The mean of two solutions of the QP (the first one's solver info).
+    return (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2]), a[3])
 
 
 def _rule_fitter(fitter: '_Fitter', segments: list[Segment], rule: str,
@@ -634,37 +683,17 @@ class _Fitter:
         rows before the plays are determined left out with ``rule='determined'``), the model
         is simulated from the record's start state (each segment from its own) and scored by
         the RMS output error on the block's rows.  The Gram matrices are accumulated once
-        per block and added.
+        per block and added.  With ``rule='averaged'`` each fold's weights are the mean of
+        the ``'joint'`` and the ``'determined'`` solutions on the other folds.
         """
         size = min(self.xs.size, _CV_WINDOW)
         fold = fold_index(size, folds)
-        classes = np.full(self.xs.size, -1, dtype=np.int8)
         train = self.classes[:size] == 0
-        classes[:size] = np.where(train, fold, -1)
-        if rule == 'determined':
-            for seg in segments:
-                classes[seg.start:min(self.split(seg), size)] = -1
-        parts: GramParts | None = None
-        state: FloatArray | None = None
         present = [seg for seg in segments if seg.start < size]
-        for seg in present:
-            # The rows after the plays are determined are the same for every start state
-            # and rule: accumulated once per segment.
-            z0 = self._state(seg, state)
-            stop = min(seg.stop, size)
-            split = min(self.split(seg), stop)
-            p = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
-                               classes=classes, n_classes=folds, start=seg.start, stop=split)
-            if split < stop:
-                key = (seg.start, stop, folds)
-                if key not in self._fold_suffix:
-                    self._fold_suffix[key] = regressor_gram(
-                        self.xs, self.ys, self.r_h, self.r_s, state=p.end_state,
-                        classes=classes, n_classes=folds, start=split, stop=stop)
-                p = p + self._fold_suffix[key]
-            state = p.end_state
-            parts = p if parts is None else parts + p
-        assert parts is not None
+        rules = ('joint', 'determined') if rule == AVERAGED else (rule,)
+        fold_parts = [self._fold_parts(present, r, fold, train, folds) for r in rules]
+        classes = self._fold_classes(present, rules[0], fold, train)
+        parts = fold_parts[0]
         windowed = [replace(seg, stop=min(seg.stop, size)) for seg in present]
         span = float(np.ptp(displacement))
         per_fold: list[float] = []
@@ -696,7 +725,9 @@ class _Fitter:
                 total, count = math.inf, count + int(np.count_nonzero(rows))
                 continue
             try:
-                w_h, w_s, constant, _ = self.solve(parts, _TRIAL_TOLERANCE, others)
+                solutions = [self.solve(p, _TRIAL_TOLERANCE, others) for p in fold_parts]
+                w_h, w_s, constant, _ = (solutions[0] if len(solutions) == 1
+                                         else _mean_weights(*solutions))
             except IdentificationError:
                 per_fold.append(math.inf)
                 total, count = math.inf, count + int(np.count_nonzero(rows))
@@ -717,6 +748,46 @@ class _Fitter:
         return FoldErrors(pooled, per_fold, rule, interior,
                           1.0 - inner_count / count if count else 0.0, inner_per_fold,
                           excursions, counts)
+
+    def _fold_classes(self, segments: list[Segment], rule: str,
+                      fold: npt.NDArray[np.int8], train: npt.NDArray[np.bool_]
+                      ) -> npt.NDArray[np.int8]:
+        # Each training row's fold (-1: not fitted; with 'determined' also the rows before
+        # each segment's plays are determined).
+        size = fold.size
+        classes = np.full(self.xs.size, -1, dtype=np.int8)
+        classes[:size] = np.where(train, fold, -1)
+        if rule == 'determined':
+            for seg in segments:
+                classes[seg.start:min(self.split(seg), size)] = -1
+        return classes
+
+    def _fold_parts(self, segments: list[Segment], rule: str, fold: npt.NDArray[np.int8],
+                    train: npt.NDArray[np.bool_], folds: int) -> GramParts:
+        # The Gram parts per fold of a rule's training rows, each segment from its start.
+        classes = self._fold_classes(segments, rule, fold, train)
+        size = fold.size
+        parts: GramParts | None = None
+        state: FloatArray | None = None
+        for seg in segments:
+            # The rows after the plays are determined are the same for every start state
+            # and rule: accumulated once per segment.
+            z0 = self._state(seg, state)
+            stop = min(seg.stop, size)
+            split = min(self.split(seg), stop)
+            p = regressor_gram(self.xs, self.ys, self.r_h, self.r_s, state=z0,
+                               classes=classes, n_classes=folds, start=seg.start, stop=split)
+            if split < stop:
+                key = (seg.start, stop, folds)
+                if key not in self._fold_suffix:
+                    self._fold_suffix[key] = regressor_gram(
+                        self.xs, self.ys, self.r_h, self.r_s, state=p.end_state,
+                        classes=classes, n_classes=folds, start=split, stop=stop)
+                p = p + self._fold_suffix[key]
+            state = p.end_state
+            parts = p if parts is None else parts + p
+        assert parts is not None
+        return parts
 
     def _refine_memory(self, chosen: list[Segment], i: int,
                        best: tuple[float, StartState | None, Any],
