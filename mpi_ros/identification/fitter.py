@@ -184,8 +184,8 @@ def fit_record(record: PreparedRecord, n: int, l: int, *,  # noqa: E741
         start'``); None: the one of the three with the smallest held-out error of blocked
         cross-validation when the start states are chosen (:func:`better_on_folds`), and
         ``'averaged'`` where ``'joint start'`` starts from a memory and ties with
-        ``'determined'``; ``'joint'``
-        otherwise (trial fits pass their reference fit's rule).
+        ``'determined'``; ``'joint'`` otherwise (trial fits pass their reference fit's
+        rule).
     validate : bool
         Cross-validate the rule used (``RecordFit.folds[rule]``) when it was not already.
 
