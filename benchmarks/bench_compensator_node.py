@@ -375,19 +375,21 @@ def run_benchmark(rate: float, duration: float, *, output_min: float = 0.0,
         'max_error_vs_core': max_error, 'max_error_vs_desired': relay_error,
     }
     if n:
-        p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
-        results['latency_us'] = {'p50': p50, 'p99': p99, 'p999': p999,
-                                 'max': float(latency_us.max())}
+        results['latency_us'] = _percentiles(latency_us)
         if taken_us is not None and taken_us.size:
             # --receiver delivered: the same commands stamped when this receiver took them.
-            p50, p99, p999 = np.percentile(taken_us, [50, 99, 99.9])
-            results['latency_taken_us'] = {'p50': p50, 'p99': p99, 'p999': p999,
-                                           'max': float(taken_us.max())}
+            results['latency_taken_us'] = _percentiles(taken_us)
         size = int(window * rate)
         results['windows'] = [
             (i / rate, *np.percentile(latency_us[i:i + size], [50, 99, 99.9]))
             for i in range(0, n - size + 1, size)]
     return results
+
+
+def _percentiles(latency_us: np.ndarray) -> dict[str, float]:
+    """Return p50, p99, p99.9 and the largest of latencies [us], by those names."""
+    p50, p99, p999 = np.percentile(latency_us, [50, 99, 99.9])
+    return {'p50': p50, 'p99': p99, 'p999': p999, 'max': float(latency_us.max())}
 
 
 def format_results(results: dict[str, Any]) -> str:
@@ -499,6 +501,9 @@ def main() -> None:
     parser.add_argument('--out', default='', help=argparse.SUPPRESS)
     parser.add_argument('--count', type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.receiver == 'delivered' and args.axes > 1:
+        parser.error('--receiver delivered takes the single-axis Float64 commands; use it '
+                     'without --axes, or another receiver with --axes N')
     if args.role == 'sink':
         _sink(args.out, args.qos_depth, args.reliability, 1.0 / args.rate)
         return
