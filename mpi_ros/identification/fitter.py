@@ -691,9 +691,9 @@ class _Fitter:
         train = self.classes[:size] == 0
         present = [seg for seg in segments if seg.start < size]
         rules = ('joint', 'determined') if rule == AVERAGED else (rule,)
-        fold_parts = [self._fold_parts(present, r, fold, train, folds) for r in rules]
-        classes = self._fold_classes(present, rules[0], fold, train)
-        parts = fold_parts[0]
+        built = [self._fold_parts(present, r, fold, train, folds) for r in rules]
+        fold_parts = [parts for parts, _ in built]
+        parts, classes = built[0]
         windowed = [replace(seg, stop=min(seg.stop, size)) for seg in present]
         span = float(np.ptp(displacement))
         per_fold: list[float] = []
@@ -763,8 +763,10 @@ class _Fitter:
         return classes
 
     def _fold_parts(self, segments: list[Segment], rule: str, fold: npt.NDArray[np.int8],
-                    train: npt.NDArray[np.bool_], folds: int) -> GramParts:
-        # The Gram parts per fold of a rule's training rows, each segment from its start.
+                    train: npt.NDArray[np.bool_], folds: int
+                    ) -> tuple[GramParts, npt.NDArray[np.int8]]:
+        # The Gram parts per fold of a rule's training rows, each segment from its start,
+        # and each row's fold (see _fold_classes).
         classes = self._fold_classes(segments, rule, fold, train)
         size = fold.size
         parts: GramParts | None = None
@@ -787,7 +789,7 @@ class _Fitter:
             state = p.end_state
             parts = p if parts is None else parts + p
         assert parts is not None
-        return parts
+        return parts, classes
 
     def _refine_memory(self, chosen: list[Segment], i: int,
                        best: tuple[float, StartState | None, Any],
