@@ -17,15 +17,19 @@ Evaluate the identification on a rig's operating point and on measured records (
 (c) Cross-rate: a TUM model identified on one rate, simulated on the others.
 (d) Issue 17's synthetic plants (lag, dead time, ringing, starts, rising sines, a 300-sample
     loop), three seeds: refusals, the dynamics estimated against the truth, the errors.
+(e) The rest of each measured record: identified (order auto, its time base) on its first
+    70 %, simulated over the whole record from its start (the state carried on), scored on
+    the last 30 %, which the fit never saw, against a straight line fitted on the same 70 %.
 
-Usage: ``python benchmarks/evaluate_identification.py [--measured DIR] [--parts abcd]``
+Usage: ``python benchmarks/evaluate_identification.py [--measured DIR] [--parts abcde]``
 """
 
 import argparse
 from pathlib import Path
 import time
+import warnings
 
-from mpi_ros import IdentificationError, identify
+from mpi_ros import IdentificationError, identify, MPIWarning
 from mpi_ros.identification import burn_in, fit_plain, identify_weights
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
@@ -245,6 +249,41 @@ def evaluate_cross_rate(directory):
         print(f'{rate + " " + str(result.order):14s} ' + ' '.join(f'{c:>16s}' for c in cells))
 
 
+def evaluate_rest(directory, share=0.7):
+    """Print part (e): each measured record fitted on its first part, scored on the rest."""
+    print(f'\n(e) the rest of each measured record: identified on its first {100 * share:.0f} %'
+          ' (order auto, its time base), simulated on from its start over the whole record;'
+          ' RMS % of the whole output range on the last'
+          f' {100 * (1 - share):.0f} % (never fitted),'
+          ' then on the part fitted; the straight line fitted on the same part, on the rest; the'
+          " share of the rest's input outside the range fitted (%)")
+    print(f'{"record":38s} {"N":>6s} {"order":>8s} {"rest":>7s} {"line":>7s} {"fitted":>7s}'
+          f' {"outside":>8s}  weights from / refusal')
+    for name, (t, x, y) in measured_records(directory).items():
+        cut = int(share * x.size)
+        head = f'{name:38s} {x.size:6d}'
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter('ignore', MPIWarning)
+                result = identify(x[:cut], y[:cut], order='auto',
+                                  time=None if t is None else t[:cut])
+        except IdentificationError as err:
+            print(f'{head} {"refused":>8s}  {str(err)[:110]}')
+            continue
+        sim = result.full_model.response(t, x)
+        line = np.polyval(np.polyfit(x[:cut], y[:cut], 1), x[cut:])
+        span = float(np.ptp(y))
+
+        def error(a, b):
+            return float(np.sqrt(np.mean((a - b) ** 2)) / span)
+
+        seen = (float(np.min(x[:cut])), float(np.max(x[:cut])))
+        outside = float(np.mean((x[cut:] < seen[0]) | (x[cut:] > seen[1])))
+        print(f'{head} {str(result.order):>8s} {_pct(error(sim[cut:], y[cut:]))}'
+              f' {_pct(error(line, y[cut:]))} {_pct(error(sim[:cut], y[:cut]))}'
+              f' {100 * outside:8.0f}  {result.weights_from}')
+
+
 def evaluate_synthetic(seeds=(1, 2, 3)):
     """Print part (d): issue 17's synthetic plants, identified whole."""
     print('\n(d) synthetic plants (mpi_ros.plant.synthetic; built-in actuator, 0.2 % noise,'
@@ -280,7 +319,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     default = Path(__file__).resolve().parents[1].parent / 'shared' / 'data' / 'measured'
     parser.add_argument('--measured', type=Path, default=default)
-    parser.add_argument('--parts', default='abcd', help='which parts to run (default abcd)')
+    parser.add_argument('--parts', default='abcde', help='which parts to run (default abcde)')
     args = parser.parse_args()
     started = time.perf_counter()
     if 'a' in args.parts:
@@ -290,6 +329,8 @@ def main() -> None:
             evaluate_measured(args.measured)
         if 'c' in args.parts:
             evaluate_cross_rate(args.measured)
+        if 'e' in args.parts:
+            evaluate_rest(args.measured)
     else:
         print(f'\n(b), (c) skipped: no measured data at {args.measured}')
     if 'd' in args.parts:
