@@ -57,6 +57,7 @@ import os
 from pathlib import Path
 import random
 import signal
+import struct
 import subprocess
 import sys
 import tempfile
@@ -66,6 +67,16 @@ from typing import Any, Optional
 import numpy as np
 
 __all__ = ['BENCH_MODEL', 'run_benchmark', 'format_results', 'main']
+
+#: A Float64 serialized as the actuator publishes it: the CDR little-endian encapsulation
+#: header (0x0001 read little-endian, two bytes of options), then the double.
+_PACK_READING = struct.Struct('<H2xd').pack
+
+
+def _reading(value: float) -> bytes:
+    """Return a displacement reading serialized as a little-endian CDR Float64."""
+    return _PACK_READING(0x0100, value)
+
 
 #: The model the benchmark's compensator runs (n=14, l=7, as in the paper).
 BENCH_MODEL = {
@@ -603,11 +614,10 @@ def _sink(out: str, qos_depth: int, reliability: str, sample_period: float) -> N
 def _receiver(out: str, count: int, timeout: float, qos_depth: int,
               reliability: str, kind: str, axes: int, chunk: int,
               echo: bool = False) -> None:
-    import struct
-
     import rclpy
     from std_msgs.msg import Float64
 
+    from mpi_ros.array_layout import float64_of
     from mpi_ros.nodes.qos import loop_qos
     from mpi_ros.nodes.spinning import events_executor
     rclpy.init()
@@ -617,19 +627,16 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
     values = np.zeros(count) if axes == 1 else np.zeros((count, chunk * axes))
     received = [0]
 
-    little, big = struct.Struct('<d').unpack_from, struct.Struct('>d').unpack_from
     if echo:
         # The actuator: the benchmark model's displacement for every command, published
         # raw (4-byte CDR header, the double) on displacement for the adaptation.
         from mpi_ros import MPIModel
-        from mpi_ros.nodes.qos import loop_qos as _qos
         actuator = MPIModel.from_params(BENCH_MODEL).stream()
         # Compile the stream's step now, on a throwaway stream, before the receiver says
         # it is ready: compiled on the first command, it held that command's answer (and
         # every later one queued behind it) for 0.5-1 s, a p99 that said nothing of the node.
         MPIModel.from_params(BENCH_MODEL).stream().step(0.0)
-        pack = struct.Struct('<H2xd').pack
-        readings = node.create_publisher(Float64, 'displacement', _qos(qos_depth, reliability))
+        readings = node.create_publisher(Float64, 'displacement', loop_qos(qos_depth, reliability))
         publish_raw = readings.handle.publish_raw
 
     def on_command(data: bytes) -> None:
@@ -646,7 +653,7 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
             k = received[0]
             if k < count:
                 stamps[k] = time.monotonic_ns()
-                values[k] = (little if data[1] == 1 else big)(data, 4)[0]
+                values[k] = float64_of(data)
             received[0] = k + 1
             taken = take(Float64, True)
             if taken is None:
@@ -654,7 +661,7 @@ def _receiver(out: str, count: int, timeout: float, qos_depth: int,
             data = taken[0]
         if echo:
             for k in range(first, min(received[0], count)):
-                publish_raw(pack(0x0100, actuator.step(values[k])))
+                publish_raw(_reading(actuator.step(values[k])))
 
     def on_message(msg: Float64) -> None:
         # An ordinary subscriber: rclpy deserialises every command into a Float64.
@@ -719,14 +726,12 @@ def _deliveries(node: Any, out: str, count: int, timeout: float, qos: Any,
     clock shifts no stamp by more than the offset's change, which is printed).  The take
     times are saved too (``*_taken.npy``).
     """
-    import struct
-
     from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
     from std_msgs.msg import Float64
+
+    from mpi_ros.array_layout import float64_of
     taken_at = np.zeros(count, dtype=np.int64)
     received_ns = np.zeros(count, dtype=np.int64)
-    little, big = struct.Struct('<d').unpack_from, struct.Struct('>d').unpack_from
-    pack = struct.Struct('<H2xd').pack
     subscription = node.create_subscription(Float64, 'current_command', lambda _: None, qos,
                                             raw=True)
     deadline = time.monotonic() + 60.0
@@ -748,11 +753,11 @@ def _deliveries(node: Any, out: str, count: int, timeout: float, qos: Any,
                 data, info = taken
                 taken_at[k] = time.monotonic_ns()
                 received_ns[k] = info['received_timestamp']
-                values[k] = (little if data[1] == 1 else big)(data, 4)[0]
+                values[k] = float64_of(data)
                 k += 1
             if publish_raw is not None:
                 for j in range(first, k):
-                    publish_raw(pack(0x0100, actuator.step(values[j])))
+                    publish_raw(_reading(actuator.step(values[j])))
     offset_end = time.time_ns() - time.monotonic_ns()
     if k:
         share = (received_ns[:k] - received_ns[0]) / max(1, received_ns[k - 1] - received_ns[0])

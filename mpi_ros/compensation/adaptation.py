@@ -838,10 +838,8 @@ def yield_cpu() -> bool:
     Put every thread of this process at idle priority (``SCHED_IDLE``).
 
     An idle thread runs only on CPU time that no other thread of the machine wants; threads
-    started later inherit it from the thread that starts them.  At 10 kHz on 2 cores the
-    adaptation child at idle priority cost the command path's p99 1.01-1.70x the runs
-    without adaptation (median 1.23x of 12 runs), at niceness 10 1.12-1.88x (median 1.51x of
-    9; 2026-11-26, docs/adaptation.md).  An
+    started later inherit it from the thread that starts them.  docs/adaptation.md measures
+    what the child costs the command path at idle priority and at niceness 10.  An
     unprivileged process cannot leave ``SCHED_IDLE`` again, so a child that falls behind is
     restarted instead (:class:`AdaptationProcess`).
 
