@@ -68,7 +68,7 @@ Procedure (documented in ``docs/diagnosis.md``):
 
 from collections.abc import Iterator, Mapping
 from copy import deepcopy
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import partial
 import math
 from typing import Any, Callable
@@ -706,13 +706,10 @@ class Candidate:
 
     def public(self) -> ScoredCandidate:
         """Return the report's form (no model; a pair's parts only for a pair)."""
-        pair = bool(self.parts)
-        return ScoredCandidate(
-            self.cause, self.rms_error, self.nonlinearity_error, self.gain, self.z,
-            self.bandwidth, self.training_rms_error, self.validation_output_offset,
-            self.parameter_count, deepcopy(self.parameters), dict(self.not_identified),
-            self.signature, self.significant, list(self.parts) if pair else None,
-            dict(self.part_gains) if pair else None, dict(self.part_z) if pair else None)
+        values = {f.name: deepcopy(getattr(self, f.name)) for f in fields(ScoredCandidate)}
+        if not self.parts:
+            values.update(parts=None, part_gains=None, part_z=None)
+        return ScoredCandidate(**values)
 
 
 class _Scorer:
