@@ -368,7 +368,8 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
         For malformed data (lengths, non-finite values) or options.
     IdentificationError
         For an output the MPI model cannot represent (the message names the cause), too
-        little excitation, a failed QP, or a fit no better than a straight line.
+        little excitation, a start that no history explains over more than half of the
+        record, a failed QP, or a fit no better than a straight line.
 
     Examples
     --------
