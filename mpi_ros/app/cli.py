@@ -321,7 +321,7 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
         result = _compensate(described, time, time_column, values, args, limits, start,
                              ranges.current, unit)
     else:
-        result = _simulate(_started(described, start, ranges.current, None), time,
+        result = _simulate(_started(described, start, ranges.current, None, unit), time,
                            time_column, values, args)
         if ranges.current is None:
             _progress(f'note: {_UNKNOWN_RANGE.format(params=args.params)}: no range check')
@@ -379,12 +379,12 @@ def _limits(args: argparse.Namespace, parameters: dict[str, Any],
 
 
 def _started(model: Any, start: Any, identified: tuple[float, float] | None,
-             limits: tuple[float, float, str] | None) -> Any:
-    """Return the model starting where ``start`` says (a note tells where)."""
+             limits: tuple[float, float, str] | None, unit: str) -> Any:
+    """Return the model starting where ``start`` says (a note tells where, in ``unit``)."""
     from ..extensions import start_model
     from ..operators.start import start_range
     allowed = start_range(identified, None if limits is None else limits[:2])
-    started, _, words = start_model(model, start, allowed)
+    started, _, words = start_model(model, start, allowed, unit)
     _progress(f'note: start: {words}')
     return started
 
@@ -427,12 +427,13 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
             _progress(f'warning: {out.describe("desired displacements", where, "m")}')
     if limits is None or args.no_clamp:
         if plain:
-            result = _started(model, start, identified, limits).gamma.inverse().simulate(values)
+            result = _started(model, start, identified, limits,
+                              unit).gamma.inverse().simulate(values)
         else:
             wide = 1e12 * (1.0 + float(np.max(np.abs(values))))
             allowed = start_range(identified, None if limits is None else limits[:2])
             unclamped = _streaming_compensator(model, time, -wide, wide, start=start,
-                                               current_range=allowed)
+                                               current_range=allowed, unit=unit)
             _progress(f'note: start: {unclamped.start_description}')
             result = unclamped.command_batch(values, time)
         if limits is not None:
@@ -444,7 +445,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
         return result
     lo, hi, source = limits
     compensator = _streaming_compensator(model, time, lo, hi, start=start,
-                                         current_range=identified)
+                                         current_range=identified, unit=unit)
     _progress(f'note: start: {compensator.start_description}')
     result = compensator.command_batch(values, None if plain else time)
     clamped = compensator.counters['clamped']
@@ -456,13 +457,13 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
 
 
 def _streaming_compensator(model: Any, time: Any, lo: float, hi: float, *,
-                           start: Any,
-                           current_range: tuple[float, float] | None = None) -> Any:
+                           start: Any, current_range: tuple[float, float] | None = None,
+                           unit: str = 'A') -> Any:
     import numpy as np
     from ..compensation import Compensator
     period = 1e-3 if time is None or len(time) < 2 else float(np.median(np.diff(time)))
     return Compensator(model, output_min=lo, output_max=hi, sample_period=period,
-                       start=start, current_range=current_range)
+                       start=start, current_range=current_range, input_unit=unit)
 
 
 def _check_time_column(model: Any, time: Any, time_column: str | None,

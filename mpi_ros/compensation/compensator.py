@@ -198,6 +198,9 @@ class Compensator:
         True (the default): compensate a model's dead time by prediction (see above);
         False: Gamma^-1 of the desired displacement itself, the dead time left in the
         tracking error (``kind`` says ``not compensated``).
+    input_unit : str
+        The input's unit in :attr:`start_description` (``'A'``, or ``'V'`` for a voltage
+        model: ``model.input_quantity``); the commands are the model's numbers either way.
 
     Attributes
     ----------
@@ -218,8 +221,10 @@ class Compensator:
                  memory: TurningPointMemory | None = None,
                  inverse: MPIModel | None = None, start: StartState | str = 'rest_low',
                  current_range: tuple[float, float] | None = None,
-                 lead_gain: float | None = None, dead_time_prediction: bool = True) -> None:
+                 lead_gain: float | None = None, dead_time_prediction: bool = True,
+                 input_unit: str = 'A') -> None:
         self._check_limits(output_min, output_max)
+        self.input_unit = str(input_unit)
         self.dead_time_prediction = bool(dead_time_prediction)
         self._predictor: DeadTimePredictor | None = None
         self.start = StartState.parse(start)
@@ -262,7 +267,8 @@ class Compensator:
             found = identified_ranges(gamma, inverse)
             current_range = None if found is None else found[0]
         allowed = start_range(current_range, (self.output_min, self.output_max))
-        _, current, description = self.start.plays(gamma, allowed, strict=False)
+        _, current, description = self.start.plays(gamma, allowed, strict=False,
+                                                   unit=self.input_unit)
         if current is not None:
             self._rest = (current, self.start.name == 'rest_low')
             self.last_command = current

@@ -76,6 +76,8 @@ class MultiAxisCompensator:
     dead_time_prediction : bool
         Compensate an axis's dead time by prediction (see :class:`Compensator`; such an
         axis is served sample by sample).
+    input_units : sequence of str, optional
+        Each axis's input unit in its start's words (``'A'`` or ``'V'``); ``'A'`` by default.
 
     """
 
@@ -83,7 +85,8 @@ class MultiAxisCompensator:
                  output_max: float | Sequence[float], enabled: bool = True,
                  sample_period: float = 1e-3, memory_capacity: int = 4096,
                  inverses: Sequence[MPIModel | None] | None = None,
-                 start: Any = 'rest_low', dead_time_prediction: bool = True) -> None:
+                 start: Any = 'rest_low', dead_time_prediction: bool = True,
+                 input_units: Sequence[str] | None = None) -> None:
         if len(models) == 0:
             msg = 'a multi-axis compensator needs at least one axis model'
             raise ModelError(msg)
@@ -91,12 +94,13 @@ class MultiAxisCompensator:
         lows = _per_axis(output_min, count, 'output.min')
         highs = _per_axis(output_max, count, 'output.max')
         built = list(inverses) if inverses is not None else [None] * count
+        units = list(input_units) if input_units is not None else ['A'] * count
         self._memory = np.zeros((count, memory_capacity + 1))
         self._memory_state = np.zeros((count, 2), dtype=np.int64)
         self._axes = [
             Compensator(model, output_min=lo, output_max=hi, enabled=enabled,
                         sample_period=sample_period, inverse=built[k], start=start,
-                        dead_time_prediction=dead_time_prediction,
+                        dead_time_prediction=dead_time_prediction, input_unit=units[k],
                         memory=TurningPointMemory(memory_capacity, points=self._memory[k],
                                                   state=self._memory_state[k]))
             for k, (model, lo, hi) in enumerate(zip(models, lows, highs))]

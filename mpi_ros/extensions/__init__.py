@@ -115,7 +115,8 @@ def extended_model_from_params(mapping: Mapping[str, Any]) -> MPIModel | EffectM
 
 
 def start_model(model: Any, start: StartState | str,
-                current_range: tuple[float, float] | None) -> tuple[Any, float | None, str]:
+                current_range: tuple[float, float] | None,
+                unit: str = 'A') -> tuple[Any, float | None, str]:
     """
     Return the model that starts a new input where ``start`` says, its current and the words.
 
@@ -129,6 +130,8 @@ def start_model(model: Any, start: StartState | str,
     current_range : (float, float) or None
         The identified current range [A] (None: unknown; a rest start then keeps the
         record start, and says so).
+    unit : str
+        The input's unit in the description (``'A'`` or ``'V'``).
 
     Returns
     -------
@@ -147,7 +150,7 @@ def start_model(model: Any, start: StartState | str,
 
     """
     chosen = StartState.parse(start)
-    states, current, description = chosen.plays(model.gamma, current_range)
+    states, current, description = chosen.plays(model.gamma, current_range, unit=unit)
     params = model.to_params()
     params[RECORD_START_STATES] = [float(v) for v in states]
     if current is not None or chosen.name == 'explicit':

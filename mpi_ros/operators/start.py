@@ -234,7 +234,7 @@ class StartState:
         return ', '.join(repr(v) for v in self.states)
 
     def plays(self, gamma: Any, current_range: tuple[float, float] | None, *,
-              strict: bool = True) -> tuple[FloatArray, float | None, str]:
+              strict: bool = True, unit: str = 'A') -> tuple[FloatArray, float | None, str]:
         """
         Return the play states of this start for a model, the current, and a description.
 
@@ -249,6 +249,9 @@ class StartState:
             True: explicit states of another number of plays are refused; False: the record
             start is used instead, and the description says so (a running compensator's
             model arrives after its start was chosen).
+        unit : str
+            The input's unit in the description (``'A'``, or ``'V'`` for a voltage-driven
+            actuator: ``model.input_quantity``); the numbers are the model's either way.
 
         Returns
         -------
@@ -271,7 +274,7 @@ class StartState:
                    f' {record.size} plays (thresholds of H): give one state per play,'
                    f' or rest_low, rest_high or record')
             if len(self.states) == record.size:
-                return np.array(self.states), None, f'explicit play states [{self.text}] A'
+                return np.array(self.states), None, f'explicit play states [{self.text}] {unit}'
             if strict:
                 raise ModelError(msg)
             return record, None, f"record: the model's record start ({msg})"
@@ -284,7 +287,7 @@ class StartState:
         words = ('at rest after a descent to the lowest identified input' if low
                  else 'at rest after an ascent to the highest identified input')
         return (rest_states(gamma, current, descent=low), current,
-                f'{self.name}: {words}, {current:.6g} A')
+                f'{self.name}: {words}, {current:.6g} {unit}')
 
 
 def _spaced_as_identified(branch: FloatArray) -> bool:

@@ -97,13 +97,23 @@ def test_multi_axis_node_starts_every_axis_where_start_state_says(ros_context):
     axes = {f'axis{k}.{key}': value for k in range(2) for key, value in MODEL_A.items()}
     node = MultiAxisCompensatorNode(
         context=ros_context, parameter_overrides=limits() + as_parameters(axes) + [
-            Parameter('axes', value=2), Parameter('start_state', value='-0.5, -0.2, 0.1')])
+            Parameter('axes', value=2), Parameter('start_state', value='-0.5, -0.2, 0.1'),
+            Parameter('axis1.model.input_quantity', value='voltage')])
     try:
-        for axis in node.compensator.axes:
+        for axis, unit in zip(node.compensator.axes, ('A', 'V')):
             np.testing.assert_array_equal(axis.state, [-0.5, -0.2, 0.1])
-            assert axis.start_description.startswith('explicit play states')
+            assert axis.start_description == f'explicit play states [-0.5, -0.2, 0.1] {unit}'
     finally:
         node.destroy_node()
+
+
+def test_a_voltage_model_starts_in_volts(make_node):
+    # The start's words carry the model's input unit (they said A for every model).
+    node = make_node(limits() + as_parameters(MODEL_A)
+                     + [Parameter('model.input_quantity', value='voltage')])
+    low = max(identified_ranges(MPIModel.from_params(MODEL_A))[0][0], OUTPUT_MIN)
+    assert node.compensator.start_description == (
+        f'rest_low: at rest after a descent to the lowest identified input, {low:.6g} V')
 
 
 @pytest.mark.parametrize('start', ['rest_low', 'record'])
