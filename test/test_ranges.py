@@ -15,6 +15,7 @@ from mpi_ros import identify, MPIModel
 from mpi_ros.app.cli import main
 from mpi_ros.app.ranges import identified_range, outside, recorded_range
 from mpi_ros.compensation import Compensator, operating_range
+from mpi_ros.compensation.limits import limits_shortfall
 from mpi_ros.params import read_params_yaml, write_params_yaml
 from mpi_ros.plant.synthetic import synthetic_record
 from mpi_ros.recordings import read_csv_table, write_csv_columns
@@ -318,3 +319,12 @@ def test_ringing_widens_the_thresholds_range_the_header_does_not(tmp_path, capsy
                  '--output', str(tmp_path / 'c.csv')]) == 0
     commands = read_csv_table(tmp_path / 'c.csv')[1][:, 2]
     assert lo <= commands.min() and commands.max() == hi
+    # The header's limits are the recorded range: no share of it is called unreachable (the
+    # thresholds' wider range made every such model warn, the README's TUM example too);
+    # limits that cut the recorded range still are.
+    err = capsys.readouterr().err
+    assert 'is unreachable' not in err
+    assert limits_shortfall(model, lo, hi) is not None
+    assert limits_shortfall(model, lo, hi, (lo, hi)) is None
+    cut = limits_shortfall(model, lo, 0.5 * (lo + hi), (lo, hi))
+    assert cut is not None and cut.identified == (lo, hi) and 0.2 < cut.unreachable < 0.8

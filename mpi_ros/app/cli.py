@@ -415,7 +415,7 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
     else:
         lo, hi, source = limits
         # The node's rule (compensation.limits): limits that cut the identified range.
-        shortfall = limits_shortfall(model, lo, hi)
+        shortfall = limits_shortfall(model, lo, hi, identified)
         if shortfall is not None:
             _progress(f'warning: {shortfall.describe(unit=unit, names=source)}')
         reach = operating_range(model.gamma, lo, hi)

@@ -138,8 +138,8 @@ def identified_range(model: Any) -> IdentifiedRange:
     return IdentifiedRange() if found is None else IdentifiedRange(*found)
 
 
-def limits_shortfall(model: Any, output_min: float,
-                     output_max: float) -> LimitsShortfall | None:
+def limits_shortfall(model: Any, output_min: float, output_max: float,
+                     recorded: tuple[float, float] | None = None) -> LimitsShortfall | None:
     """
     Tell whether limits cut the range a model was identified on, and by how much.
 
@@ -149,6 +149,10 @@ def limits_shortfall(model: Any, output_min: float,
         A forward model (an extended model's Gamma is used).
     output_min, output_max : float
         The command limits [A].
+    recorded : (float, float), optional
+        The input range the record held (``identify`` writes it in the parameter file's
+        header): the identified input range, and the displacement range is what Gamma
+        reaches over it.  By default both come from the model's thresholds.
 
     Returns
     -------
@@ -159,10 +163,11 @@ def limits_shortfall(model: Any, output_min: float,
 
     Notes
     -----
-    The displacement range is the one the model's thresholds span, (29)-(31): a record
+    From the thresholds, the displacement range is the one S' spans, (29)-(31): a record
     whose output overshoots (a step at its start, ringing) widens it beyond what the
-    recorded inputs reach through Gamma; such a cut is reported too, since desired
-    displacements in it are clamped.
+    recorded inputs reach through Gamma (TUM's 20 Hz capture: -143 to 90 V for a record
+    of -90 to 90 V); such a cut is reported too, since desired displacements in it are
+    clamped.  With the recorded range, only what the recorded inputs reach counts.
 
     Examples
     --------
@@ -180,14 +185,21 @@ def limits_shortfall(model: Any, output_min: float,
     True
 
     """
-    known = identified_range(model)
-    if known.current is None or known.displacement is None:
-        return None
-    a, b = known.current
+    if recorded is not None:
+        a, b = float(recorded[0]), float(recorded[1])
+        if not a < b:
+            return None
+        d_lo, d_hi = operating_range(gamma_of(model), a, b)
+    else:
+        known = identified_range(model)
+        if known.current is None or known.displacement is None:
+            return None
+        (a, b), (d_lo, d_hi) = known.current, known.displacement
     tolerance = 1e-9 * (b - a)
     if output_min <= a + tolerance and b - tolerance <= output_max:
         return None
-    d_lo, d_hi = known.displacement
+    if not d_lo < d_hi:
+        return None
     r_lo, r_hi = operating_range(gamma_of(model), output_min, output_max)
     overlap = max(0.0, min(d_hi, r_hi) - max(d_lo, r_lo))
     unreachable = min(1.0, max(0.0, 1.0 - overlap / (d_hi - d_lo)))
