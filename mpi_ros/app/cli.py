@@ -315,11 +315,13 @@ def _apply_model(args: argparse.Namespace, *, inverse: bool) -> int:
     if units.found:
         _progress(f'units: {units.found} (converted to SI)')
     # The range identify wrote in the file's header, else the one the model's thresholds tell.
-    ranges = recorded_range(args.params) or identified_range(described)
+    recorded = recorded_range(args.params)
+    ranges = recorded or identified_range(described)
     if inverse:
         limits = _limits(args, parameters, ranges.current, unit)
         result = _compensate(described, time, time_column, values, args, limits, start,
-                             ranges.current, unit)
+                             ranges.current, unit,
+                             recorded=recorded.current if recorded is not None else None)
     else:
         result = _simulate(_started(described, start, ranges.current, None, unit), time,
                            time_column, values, args)
@@ -392,7 +394,7 @@ def _started(model: Any, start: Any, identified: tuple[float, float] | None,
 def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                 args: argparse.Namespace, limits: tuple[float, float, str] | None,
                 start: Any, identified: tuple[float, float] | None,
-                unit: str = 'A') -> Any:
+                unit: str = 'A', *, recorded: tuple[float, float] | None = None) -> Any:
     # As the compensator node: the inverse of the model, its commands clamped to the safe
     # current range (the forward state follows the clamped command), unless --no-clamp.
     # With an effect (time column needed) the compensator's streaming inverse, as the node
@@ -414,8 +416,9 @@ def _compensate(model: Any, time: Any, time_column: str | None, values: Any,
                   ' clamping; pass --output-min and --output-max to clamp')
     else:
         lo, hi, source = limits
-        # The node's rule (compensation.limits): limits that cut the identified range.
-        shortfall = limits_shortfall(model, lo, hi, identified)
+        # The node's rule (compensation.limits): limits that cut the identified range, the
+        # one the header records where the file has it.
+        shortfall = limits_shortfall(model, lo, hi, recorded)
         if shortfall is not None:
             _progress(f'warning: {shortfall.describe(unit=unit, names=source)}')
         reach = operating_range(model.gamma, lo, hi)
