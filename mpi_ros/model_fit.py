@@ -410,7 +410,7 @@ def identify(current: npt.ArrayLike, displacement: npt.ArrayLike, *, n: int | No
     fit = fit_record(record, n, l, dynamics=found, choose=choose, memory_steps=True,
                      validate=True)
     notes.extend(fit.notes)
-    _check_burn_in(fit.burn_in, int(np.count_nonzero(record.keep)), (n, l))
+    _check_burn_in(fit.burn_in, record.keep, (n, l))
     held_out = fit.folds.get(fit.rule, FoldErrors())
     line = _line_on_folds(x, y, record.keep, fit.burn_in)
     resonance = ResonanceEstimate()
@@ -610,20 +610,24 @@ def _silent(text: str) -> None:
     pass
 
 
-def _check_burn_in(burn_in: int, kept: int, order: tuple[int, int]) -> None:
+def _check_burn_in(burn_in: int, keep: npt.NDArray[np.bool_], order: tuple[int, int]) -> None:
     # A record whose start no candidate history explains leaves its first samples out (the
     # burn-in); when that is most of the record, the weights rest on its last samples only
     # and the model explains the rest no better than chance: refused.  (A cut record could
     # keep 19 of 280 samples for an order (8, 4) and then reproduce itself from sample 0 at
-    # 112 % of the output range, against 17 % for a straight line.)
-    if 2 * burn_in <= kept:
+    # 112 % of the output range, against 17 % for a straight line.)  Counted among the
+    # samples the fit may use (``keep``: outside ringing windows).
+    left_out = int(np.count_nonzero(keep[:burn_in]))
+    fitted = int(np.count_nonzero(keep[burn_in:]))
+    if left_out <= fitted:
         return
     n, l = order  # noqa: E741
-    msg = (f'no start state explains the first {burn_in} of {kept} samples'
-           f' ({100 * burn_in / kept:.3g} %): the plays are determined only after them (the'
+    kept = left_out + fitted
+    msg = (f'no start state explains the first {left_out} of {kept} samples'
+           f' ({100 * left_out / kept:.3g} %): the plays are determined only after them (the'
            f" record's widest excursion comes late) and no candidate history before the record"
            f' reproduces them, so the model (n={n}, l={l}) would rest on its last'
-           f' {kept - burn_in} samples; start the record with a sweep over the whole input range'
+           f' {fitted} samples; start the record with a sweep over the whole input range'
            ' (or at rest after a descent to the lowest input), or give the whole record')
     raise IdentificationError(msg)
 
