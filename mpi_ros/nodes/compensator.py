@@ -131,7 +131,7 @@ from ..compensation.updates import (
 )
 from ..node_parameters import specs_by_name
 from ..node_parameters.compensator import compensator_parameters, wants_multi_axis
-from ..units import INPUT_QUANTITY_KEY, input_unit_of
+from ..units import INPUT_QUANTITY_KEY
 
 __all__ = ['CompensatorNode', 'main', 'make_node']
 
@@ -347,7 +347,7 @@ class CompensatorNode(CompensatorNodeBase):
                 sample_period=self.get_parameter('sample_period').value, inverse=inverse,
                 start=self.get_parameter('start_state').value,
                 dead_time_prediction=self.get_parameter('dead_time_prediction').value,
-                input_unit=input_unit_of(self.get_parameter(INPUT_QUANTITY_KEY).value))
+                input_unit=self._input_unit())
         self._warn_if_not_compensated(compensator.model)
         self._check_limits_fit('', compensator)
         self._set_live()

@@ -535,10 +535,13 @@ class CompensatorNodeBase(LifecycleNode):
         names = 'output.min / output.max'
         if prefix:
             names = f'{prefix}output.min / {prefix}output.max (or {names})'
-        unit = input_unit_of(self.get_parameter(prefix + INPUT_QUANTITY_KEY).value)
-        note = shortfall.describe(unit=unit, names=names)
+        note = shortfall.describe(unit=self._input_unit(prefix), names=names)
         self._limits_notes[label] = note
         self.get_logger().warning(f'{label}{note}')
+
+    def _input_unit(self, prefix: str = '') -> str:
+        """Return the input unit of the model at ``prefix`` (``'A'``, or ``'V'``)."""
+        return input_unit_of(self.get_parameter(prefix + INPUT_QUANTITY_KEY).value)
 
     # -- hooks of the nodes -------------------------------------------------------------
     def _load(self) -> None:

@@ -124,7 +124,6 @@ from ..node_parameters.compensator import (
     AXES, axis_limit_parameters, axis_parameters, AxisKeys, INPUT_MESSAGE, JOINTS,
     multi_axis_parameters, OUTPUT_LAYOUT, single_axis_keys, WIRING,
 )
-from ..units import INPUT_QUANTITY_KEY, input_unit_of
 
 __all__ = ['AXES', 'INPUT_MESSAGE', 'JOINTS', 'MultiAxisCompensatorNode', 'OUTPUT_LAYOUT',
            'axis_key', 'axis_parameters', 'joint_names']
@@ -358,8 +357,7 @@ class MultiAxisCompensatorNode(CompensatorNodeBase):
                 inverses=self._axis_models.inverses,
                 start=self.get_parameter('start_state').value,
                 dead_time_prediction=self._axis_models.dead_time_prediction,
-                input_units=[input_unit_of(self.get_parameter(p + INPUT_QUANTITY_KEY).value)
-                             for p in self._keys.prefixes])
+                input_units=[self._input_unit(p) for p in self._keys.prefixes])
         self._set_live()
         compensator = self._compensator
         self._timed = (compensator is not None and self._arrival_clock is not None
