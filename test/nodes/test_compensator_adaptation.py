@@ -248,6 +248,24 @@ def _started_child(name, priority):
     return process, errors
 
 
+def _state(pid):
+    # The process's state letter from /proc ('T': stopped; '' where there is no /proc).
+    try:
+        with open(f'/proc/{pid}/stat') as stat:
+            return stat.read().rpartition(')')[2].split()[0]
+    except OSError:
+        return ''
+
+
+def _stop(pid):
+    # SIGSTOP, then wait (bounded) until the process is seen stopped where /proc shows it.
+    os.kill(pid, signal.SIGSTOP)
+    deadline = time.monotonic() + 10.0
+    while _state(pid) not in ('T', '') and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert _state(pid) in ('T', ''), _state(pid)
+
+
 def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
     # The child takes the readings itself: one that has not taken 20 held-out windows of
     # commands has lost its readings too, so the node stops it and says so once, rather
@@ -256,12 +274,15 @@ def test_a_child_that_stops_taking_the_commands_is_stopped(ros_context):
     process, errors = _started_child('stalled_adaptation', 'low')
     try:
         assert process.wait_ready(60.0)
-        os.kill(process.pid, signal.SIGSTOP)
+        _stop(process.pid)
+        seen = []
         for _ in range(10):
             for _ in range(1000):
                 process.record_command(1.0)
             process.exchange()
-        assert not process.running
+            seen.append((process.pending[0], _state(process.pid)))
+        # What each exchange left waiting and the child's state: a flake names its cause.
+        assert not process.running, (seen, process.status())
     finally:
         process.stop()
     state = 'stopped: the adaptation process did not take the commands (stalled)'
@@ -281,7 +302,7 @@ def test_an_idle_child_that_falls_behind_is_restarted_at_low_priority(ros_contex
         assert process.wait_ready(60.0)
         if process.priority != 'idle':
             pytest.skip('this platform has no SCHED_IDLE')
-        os.kill(first, signal.SIGSTOP)
+        _stop(first)
         for _ in range(20):
             for _ in range(1000):
                 process.record_command(1.0)
