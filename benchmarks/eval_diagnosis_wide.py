@@ -203,12 +203,15 @@ def read(folder, out, only=None):
                       'signature': c['signature'], 'significant': c['significant'],
                       'parameters': c.get('parameters', {}),
                       'not_identified': c.get('not_identified', {}),
-                      'sine_gain': sine_gain(r, c['cause'], meta['sine_start'])}
+                      'sine_gain': sine_gain(r, c['cause'], meta['sine_start']),
+                      'training_rms': c['training_rms_error']}
                      for c in r.candidates]
             row = {'name': name, **meta, 'verdict': r.cause, 'gain': r.gain,
                    'ambiguous': r.decision.get('ambiguous'),
                    'tied_with': r.decision.get('tied_with'),
-                   'baseline_rms': r.baseline['rms_error'], 'candidates': cands,
+                   'baseline_rms': r.baseline['rms_error'],
+                   'baseline_training_rms': r.baseline['training_rms_error'],
+                   'candidates': cands,
                    'truth_parts': truth_parts, 'seconds': time.perf_counter() - started}
         with out.open('a') as f:
             f.write(json.dumps(row, default=float) + '\n')

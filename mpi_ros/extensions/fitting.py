@@ -810,7 +810,7 @@ def _correlation(a: FloatArray, b: FloatArray) -> float:
 
 
 def with_record_start(model: Any, time: FloatArray, current: FloatArray,
-                      displacement: FloatArray) -> Any:
+                      displacement: FloatArray, *, whole: bool = False) -> Any:
     """
     Return a material effect's fit with the record's start estimated, as ``identify`` does.
 
@@ -829,6 +829,16 @@ def with_record_start(model: Any, time: FloatArray, current: FloatArray,
         The fit (its Gamma's thresholds and weights are kept).
     time, current, displacement : ndarray of float, shape (N,)
         The record it was fitted on.
+    whole : bool
+        For an effect that carries Gamma's output through the record (creep's lags of up to
+        twice its length): the histories are judged on the whole record, about its mean,
+        and the output offset ``y0`` is then the mean residual; the fit's own start (and
+        ``y0``) compete.  The weights stay.  Fitted from the design's default start, the
+        slow lags carry that start's error through the record, and ``y0`` had taken its
+        mean: on the wide sweep's creep plant 102 the fit missed the whole record by 7.3x
+        identify's RMS error (2.83 % of the range against 0.39 %), 0.53x with the estimated
+        start and ``y0`` (on its test twin, the samples it was fitted on: 1.3x their error
+        before; 2.2x with the start alone, ``y0`` kept).
 
     Returns
     -------
@@ -836,4 +846,15 @@ def with_record_start(model: Any, time: FloatArray, current: FloatArray,
         The same model with the plays' initial states of the record's start.
 
     """
-    return estimate_start_state(model, current, displacement, time=time)[0]
+    if not whole:
+        return estimate_start_state(model, current, displacement, time=time)[0]
+    started = estimate_start_state(model, current, displacement, time=time,
+                                   through=current.size, offset_free=True)[0]
+    gamma = started.model
+    shift = float(np.mean(displacement - started.response(time, current)))
+    started = started.with_gamma(
+        gamma.with_operating_point(output_offset=gamma.output_offset + shift))
+
+    def error(candidate: Any) -> float:
+        return float(np.mean((candidate.response(time, current) - displacement) ** 2))
+    return started if error(started) < error(model) else model

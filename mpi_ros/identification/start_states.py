@@ -367,7 +367,8 @@ def with_initial_states(model: Any, states: FloatArray) -> Any:
 def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArray, *,
                          time: FloatArray | None = None,
                          rows: npt.NDArray[np.bool_] | None = None,
-                         offset_free: bool = False) -> tuple[Any, StartState, int]:
+                         offset_free: bool = False,
+                         through: int | None = None) -> tuple[Any, StartState, int]:
     """
     Estimate the start state of another record of a fitted model (e.g. a validation record).
 
@@ -387,6 +388,10 @@ def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArr
         The samples that count (e.g. outside ringing); all by default.
     offset_free : bool
         The record has its own sensor zero: the error is taken about its mean.
+    through : int, optional
+        Judge the candidates on the samples before this one (default: before the plays are
+        determined; a model whose memory outlasts the plays', such as creep's slow lags of
+        Gamma's output, needs more).
 
     Returns
     -------
@@ -404,7 +409,7 @@ def estimate_start_state(model: Any, current: FloatArray, displacement: FloatArr
     y = np.asarray(displacement, dtype=np.float64)
     split = determined_from(u, float(r[-1]))
     keep = np.ones(u.size, dtype=bool) if rows is None else np.asarray(rows, dtype=bool)
-    part = slice(0, max(split, 2))
+    part = slice(0, max(split if through is None else int(through), 2))
     counted = keep[part]
     ends = end_state(u, r)
     best: tuple[float, StartState, Any] | None = None
