@@ -376,13 +376,13 @@ def fit_creep(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt.Arr
             model = _creep_fit(t, x, y, final, model.time_constants, model.weights, epsilon)
     keep = scored
     if not (_mse(model, t, x, y, keep) < _mse(off, t, x, y, keep)):
-        rest: CreepModel = with_record_start(off, t, x, y)
+        rest = with_record_start(off, t, x, y)
         return rest
     # The record's start (creep's lags carry Gamma's output from it through the record:
     # judged on all of it, with y0).  Whether there is creep stays the held-out blocks'
     # choice: a second check on the whole record fitted creep off on four of the wide
     # sweep's ten creep plants (validation gains 0.17-0.47 with it).
-    started: CreepModel = with_record_start(model, t, x, y, whole=True)
+    started = with_record_start(model, t, x, y, whole=True)
     model = started
     used = model.time_constants[model.weights > _USED * float(np.max(model.weights))]
     edges = [f'{v:.3g} s' for v, side in ((grid[0], 'shortest'), (grid[-1], 'longest'))

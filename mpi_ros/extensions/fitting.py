@@ -37,6 +37,8 @@ FloatArray = npt.NDArray[np.float64]
 Order = tuple[int, int] | str
 #: The result of one trial fit in :func:`search_fit` (a model).
 ResultT = TypeVar('ResultT')
+#: An extended model (its type is kept by :func:`with_record_start`).
+ModelT = TypeVar('ModelT')
 BoolArray = npt.NDArray[np.bool_]
 #: Where the weights of every fit of an effect's search come from (see
 #: :func:`mpi_ros.identification.fitter.fit_record`): the start states chosen jointly with
@@ -812,8 +814,8 @@ def _correlation(a: FloatArray, b: FloatArray) -> float:
     return r if math.isfinite(r) else 0.0
 
 
-def with_record_start(model: Any, time: FloatArray, current: FloatArray,
-                      displacement: FloatArray, *, whole: bool = False) -> Any:
+def with_record_start(model: ModelT, time: FloatArray, current: FloatArray,
+                      displacement: FloatArray, *, whole: bool = False) -> ModelT:
     """
     Return a material effect's fit with the record's start estimated, as ``identify`` does.
 
@@ -849,9 +851,11 @@ def with_record_start(model: Any, time: FloatArray, current: FloatArray,
         The same model with the plays' initial states of the record's start.
 
     """
+    fitted: Any = model
     if not whole:
-        return estimate_start_state(model, current, displacement, time=time)[0]
-    started = estimate_start_state(model, current, displacement, time=time,
+        found: ModelT = estimate_start_state(fitted, current, displacement, time=time)[0]
+        return found
+    started = estimate_start_state(fitted, current, displacement, time=time,
                                    through=current.size, offset_free=True)[0]
     residual = displacement - started.response(time, current)
     shift = float(np.mean(residual))
@@ -860,5 +864,6 @@ def with_record_start(model: Any, time: FloatArray, current: FloatArray,
         gamma.with_operating_point(output_offset=gamma.output_offset + shift))
     # y0 moves the whole response by ``shift``: the started model's error is the
     # residual's about its mean.
-    own = float(np.mean((model.response(time, current) - displacement) ** 2))
-    return started if float(np.mean((residual - shift) ** 2)) < own else model
+    own = float(np.mean((fitted.response(time, current) - displacement) ** 2))
+    chosen: ModelT = started if float(np.mean((residual - shift) ** 2)) < own else model
+    return chosen

@@ -371,7 +371,7 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
         model, error, _ = _fit_at(t, x, y, n, l, choice.value, epsilon, None, base)
         holds = _hold_errors(t, x, y, model)
         if error < off_error and (holds is None or holds[0] < holds[1]):
-            started: ThermalDriftModel = with_record_start(model, t, x, y)
+            started = with_record_start(model, t, x, y)
             if choice.bound:
                 return replace(started,
                                not_identified={THERMAL_TIME_CONSTANT: bound_note(choice)})
@@ -385,7 +385,7 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
                 ' changes of the output during the holds of the record by'
                 f' {holds[0] ** 0.5:.3g} m RMS, no drift by {holds[1] ** 0.5:.3g} m;'
                 ' fitted off')}
-    rest: ThermalDriftModel = with_record_start(off, t, x, y)
+    rest = with_record_start(off, t, x, y)
     return replace(rest, not_identified=unknown)
 
 
