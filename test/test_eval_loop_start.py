@@ -24,7 +24,7 @@ def _benchmark():
 @pytest.mark.skipif(not BENCHMARK.exists(), reason='benchmarks/ not present')
 def test_the_loop_prelude_ends_where_the_compensators_start():
     # A record from 0 A (the wide sweep's excitation) and the loop's command range from
-    # 0.2 A: the compensators start at rest after a descent to 0.2 A.  The prelude went
+    # 0.2 A: the compensators start at rest after a sweep down to 0.2 A.  The prelude went
     # down to the record's 0 A, so the plays of the large thresholds stayed in another
     # state than the compensators' for the whole loop (creep 105: plain 2.03 % instead of
     # 1.53 %, docs/diagnosis.md, issue 24).

@@ -123,8 +123,8 @@ def test_compensate_names_volts_and_the_unreachable_share(piezo_csv, capsys):
     assert 'warning' not in err and "'desired_um': µm" in err
     # The start's words carry the model's unit (they said A for every model).
     rest = read_params_yaml(tmp / 'named.yaml')['output.min']
-    assert f'note: start: rest_low: at rest after a descent to the lowest identified input,' \
-        f' {rest:.6g} V' in err
+    assert 'note: start: rest_low: at rest after a sweep up to the highest identified input,' \
+        in err and f'V, and down to the lowest, {rest:.6g} V' in err
     header_limits = read_params_yaml(tmp / 'named.yaml')
     assert main(['compensate', str(tmp / 'named.yaml'), '--input', str(tmp / 'desired.csv'),
                  '--output-min', '0', '--output-max', '2', '--output', str(tmp / 'c.csv')]) == 0

@@ -11,7 +11,8 @@ Subcommands
 ``compensate PARAMS``     inverse model Gamma^-1 on a CSV column (offline feed-forward),
                           clamped as the compensator node clamps (``--no-clamp``: not)
 
-                          Both start at rest after a descent to the lowest identified input
+                          Both start at rest after a sweep over the identified input range,
+                          down to its lowest input
                           (``--start``: ``rest_low``, ``rest_high``, ``record`` to reproduce
                           the identification record, or explicit play states; see
                           :mod:`mpi_ros.operators.start`)
@@ -114,7 +115,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     _progress(f'operating point: input offset {model.input_offset:.6g}, output offset '
               f"{model.output_offset:.6g}, output sign {model.output_sign:+d}; the record's "
               'start (record_start.*, for simulate --start record; a new input starts at '
-              'rest after a descent to the lowest identified input): '
+              'rest after a sweep down to the lowest identified input): '
               f"{result.start_state.get('description', 'n/a')}")
     record_range = range_header(recording.current, recording.displacement,
                                 recording.units.input_quantity)
@@ -608,11 +609,11 @@ def _parser() -> argparse.ArgumentParser:
                             "file's only node)")
         p.add_argument('--start', default='rest_low', metavar='START',
                        help='where the actuator is before the first sample: rest_low '
-                            '(default: at rest after a descent to the lowest identified '
-                            'input, a mode at rest), rest_high (after an ascent to the '
-                            "highest), record (the identification record's start: "
-                            'record_start.* of PARAMS, to reproduce that record), or the '
-                            'play states [A] separated by commas')
+                            '(default: at rest after a sweep up to the highest identified '
+                            'input and down to the lowest, a mode at rest), rest_high (after '
+                            'a sweep down and up to the highest), record (the identification '
+                            "record's start: record_start.* of PARAMS, to reproduce that"
+                            ' record), or the play states [A] separated by commas')
         if name == 'compensate':
             p.add_argument('--output-min', type=float, default=None, metavar='A',
                            help="lowest current command [A], as the node's output.min "

@@ -181,8 +181,9 @@ class Compensator:
         Gamma^-1 of ``model`` when already built; None: built here.
     start : StartState or str
         Where the actuator is before the first command (:mod:`mpi_ros.operators.start`):
-        ``rest_low`` (default: at rest after a descent to the lowest identified input,
-        raised to ``output_min`` if below it; the last command starts there), ``rest_high``,
+        ``rest_low`` (default: at rest after a sweep up to the highest identified input and
+        down to the lowest, each moved inside the limits; the last command starts there),
+        ``rest_high``,
         ``record`` (the model's record start) or explicit play states [A] (of another
         number than the model's plays: the record start, as :attr:`start_description` says).
     current_range : (float, float), optional
@@ -244,7 +245,8 @@ class Compensator:
         self._started = False
         self._step: InverseStep | None = None
         self._own_pack: Pack | None = None
-        self._rest: tuple[float, bool] | None = None     # a rest start: (current, descent)
+        # A rest start: (current, descent, where the sweep turned before).
+        self._rest: tuple[float, bool, float] | None = None
         if inverse is None:
             inverse = gamma_of(model).inverse()            # (12)-(14), (22)-(25), once
         self.start_description = self._settle(gamma_of(model), inverse, current_range)
@@ -262,21 +264,23 @@ class Compensator:
     def _settle(self, gamma: MPIModel, inverse: MPIModel,
                 current_range: tuple[float, float] | None) -> str:
         # The start of the first model: a rest start keeps its current (a later model
-        # replays from the same history, descent or ascent to it, by wiping-out).
+        # replays from the same sweep to it, by wiping-out).
         if current_range is None:
             found = identified_ranges(gamma, inverse)
             current_range = None if found is None else found[0]
         allowed = start_range(current_range, (self.output_min, self.output_max))
         _, current, description = self.start.plays(gamma, allowed, strict=False,
                                                    unit=self.input_unit)
-        if current is not None:
-            self._rest = (current, self.start.name == 'rest_low')
+        if current is not None and allowed is not None:
+            low = self.start.name == 'rest_low'
+            self._rest = (current, low, allowed[1] if low else allowed[0])
             self.last_command = current
         return description
 
     def _start_states(self, gamma: MPIModel) -> FloatArray:
         if self._rest is not None:
-            return rest_states(gamma, self._rest[0], descent=self._rest[1])
+            current, descent, turn = self._rest
+            return rest_states(gamma, current, descent=descent, turn=turn)
         record = np.array(gamma.hysteresis.initial_states, dtype=np.float64)
         if self.start.name == 'explicit' and len(self.start.states) == record.size:
             return np.array(self.start.states, dtype=np.float64)
@@ -332,7 +336,7 @@ class Compensator:
 
         The new forward play state is the replay of the applied current's turning points
         through the new H (the inverse state follows by (14)), from the start: a rest start
-        the same descent (ascent) to the same current, the record start the new model's,
+        the same sweep to the same current, the record start the new model's,
         explicit states themselves (the new model's record start when its number of plays
         differs); an effect of the same kind
         keeps its slow states, a new one starts them settled at the last command.  The

@@ -154,11 +154,11 @@ SAMPLE_PERIOD = ParameterSpec(
 
 START_STATE = ParameterSpec(
     'start_state', 'string', 'rest_low',
-    'Where the actuator is before the first command: rest_low (at rest after a descent to '
-    'the lowest identified input, raised to output.min; a mode at rest), rest_high (after an '
-    "ascent to the highest, lowered to output.max), record (the identification record's "
-    'start, record_start.*), or the play states z_H0 [A] separated by commas; taken when '
-    'the core is built (configure), logged at activation',
+    'Where the actuator is before the first command: rest_low (at rest after a sweep up to '
+    'the highest identified input and down to the lowest, within output.min and output.max;'
+    ' a mode at rest), rest_high (after a sweep down and up to the highest), record (the '
+    "identification record's start, record_start.*), or the play states z_H0 [A] separated"
+    ' by commas; taken when the core is built (configure), logged at activation',
     constraints=f'{", ".join(START_CHOICES)}, or numbers separated by commas',
     check=lambda name, value: StartState.parse(value, option=name))
 

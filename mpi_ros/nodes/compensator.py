@@ -19,7 +19,7 @@ Managed node (lifecycle)
     A :class:`rclpy.lifecycle.LifecycleNode` (the states and transitions are in
     :mod:`mpi_ros.nodes.compensator_base`): configure loads and validates the model of the
     parameters and builds the core, starting where ``start_state`` says (default
-    ``rest_low``: at rest after a descent to the lowest identified input; ``record``: the
+    ``rest_low``: at rest after a sweep down to the lowest identified input; ``record``: the
     identification record's ``record_start.*``; see :mod:`mpi_ros.operators.start`);
     activate publishes and logs the start; deactivate publishes nothing
     (inputs taken and dropped, the memory held, so re-activation continues bumplessly);

@@ -69,10 +69,11 @@ def test_start_state_is_declared_validated_and_logged_at_activation(make_node):
     finally:
         rig.close()
     gamma = MPIModel.from_params(MODEL_A)
-    high = min(identified_ranges(gamma)[0][1], OUTPUT_MAX)
+    low, high = identified_ranges(gamma)[0]
+    low, high = max(low, OUTPUT_MIN), min(high, OUTPUT_MAX)
     started = [line for line in log.lines if line.startswith('start state: ')]
-    assert started == [f'start state: rest_high: at rest after an ascent to the highest '
-                       f'identified input, {high:.6g} A']
+    assert started == [f'start state: rest_high: at rest after a sweep down to the lowest '
+                       f'identified input, {low:.6g} A, and up to the highest, {high:.6g} A']
     # The core starts there: the node's commands are the core's with the same start.
     core = Compensator(gamma, output_min=OUTPUT_MIN, output_max=OUTPUT_MAX, start='rest_high')
     assert core.last_command == high
@@ -82,7 +83,7 @@ def test_start_state_is_declared_validated_and_logged_at_activation(make_node):
 
 def test_the_default_start_is_rest_low_and_record_is_the_record_start(make_node):
     record = dict(MODEL_A, **{'record_start.hysteresis.initial_states': [0.3, 0.1, -0.1]})
-    for start, expected in (('rest_low', 'rest_low: at rest after a descent'),
+    for start, expected in (('rest_low', 'rest_low: at rest after a sweep up to'),
                             ('record', "record: the model's record start")):
         node = make_node(limits() + as_parameters(record)
                          + [Parameter('start_state', value=start)])
@@ -111,9 +112,11 @@ def test_a_voltage_model_starts_in_volts(make_node):
     # The start's words carry the model's input unit (they said A for every model).
     node = make_node(limits() + as_parameters(MODEL_A)
                      + [Parameter('model.input_quantity', value='voltage')])
-    low = max(identified_ranges(MPIModel.from_params(MODEL_A))[0][0], OUTPUT_MIN)
+    low, high = identified_ranges(MPIModel.from_params(MODEL_A))[0]
+    low, high = max(low, OUTPUT_MIN), min(high, OUTPUT_MAX)
     assert node.compensator.start_description == (
-        f'rest_low: at rest after a descent to the lowest identified input, {low:.6g} V')
+        f'rest_low: at rest after a sweep up to the highest identified input, {high:.6g} V,'
+        f' and down to the lowest, {low:.6g} V')
 
 
 @pytest.mark.parametrize('start', ['rest_low', 'record'])
