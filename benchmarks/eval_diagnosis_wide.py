@@ -261,9 +261,10 @@ def loop(folder, results, out):
     the state every compensator assumes by default (``start='rest_low'``, after a sweep up to
     the highest identified input and down to the lowest raised to ``output_min``; the
     closed form of the highest is within 1-2 % of the record's), so the two models are
-    compared, not two guesses of the record's start.  (Down to the record's 0 A, below the 0.2 A the
-    compensators start at, the plays of the large thresholds kept the plant in another state
-    than the compensators' for the whole loop: creep 105's plain 2.03 % against 1.53 %.)
+    compared, not two guesses of the record's start.  (Down to the record's 0 A, below the
+    0.2 A the compensators start at, the plays of the large thresholds kept the plant in
+    another state than the compensators' for the whole loop: creep 105's plain 2.03 %
+    against 1.53 %.)
     The row also has ``loop_shipped`` (and its ratios to the plain and the static model):
     the effect fitted at the diagnosis' baseline order, the model ``mpi-ros diagnose
     --params-out`` writes, where ``loop_extended`` selects the effect's order again.
