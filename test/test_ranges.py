@@ -9,6 +9,7 @@ with the count and how far the samples go.  The range is the one ``identify`` wr
 YAML's header, else the one the model's thresholds tell.
 """
 
+from dataclasses import replace
 import re
 
 from mpi_ros import identify, MPIModel
@@ -66,8 +67,16 @@ def test_identified_range_is_the_records(kind, order):
     rec = synthetic_record(kind, 1)
     model = identify(rec.current, rec.displacement, order=order, time=rec.time,
                      dynamics='off').model
+    # identify keeps the record's input range; the displacement range is what the major
+    # loop over it reaches, the record's output range up to the model's error there.
     found = identified_range(model)
-    # The displacement range follows exactly from the thresholds (29)-(31) place.
+    assert found.current == (rec.current.min(), rec.current.max())
+    np.testing.assert_allclose(found.displacement,
+                               [rec.displacement.min(), rec.displacement.max()],
+                               rtol=0, atol=0.02 * np.ptp(rec.displacement))
+    # A model without it (an older file): the thresholds tell both.  The displacement
+    # range follows exactly from the thresholds (29)-(31) place.
+    found = identified_range(replace(model, identified_input_range=None))
     np.testing.assert_allclose(found.displacement,
                                [rec.displacement.min(), rec.displacement.max()],
                                rtol=0, atol=1e-9 * np.ptp(rec.displacement))
@@ -81,11 +90,15 @@ def test_a_hand_written_model_does_not_tell_its_range():
     assert found.current is None and found.displacement is None
 
 
-def test_clamping_to_the_identified_range_never_clips_inside_its_displacement_range():
+@pytest.mark.parametrize('kept', [True, False])
+def test_clamping_to_the_identified_range_never_clips_inside_its_displacement_range(kept):
     # Any history of desired values inside the identified displacement range is reached
-    # with currents inside the identified current range: nothing is clamped.
+    # with currents inside the identified current range: nothing is clamped (the range
+    # identify keeps, and the thresholds' of an older file).
     rec = synthetic_record('mid-history', 2)
     model = identify(rec.current, rec.displacement, order=(8, 4), dynamics='off').model
+    if not kept:
+        model = replace(model, identified_input_range=None)
     found = identified_range(model)
     rng = np.random.default_rng(3)
     lo, hi = found.displacement
@@ -309,9 +322,17 @@ def test_ringing_widens_the_thresholds_range_the_header_does_not(tmp_path, capsy
                                               'displacement': rec.displacement})
     assert main(['identify', str(tmp_path / 'ring.csv'), '--order', '8,4', '--dynamics',
                  'off', '-o', str(tmp_path / 'ring.yaml')]) == 0
-    model = MPIModel.from_params(read_params_yaml(tmp_path / 'ring.yaml'))
+    params = read_params_yaml(tmp_path / 'ring.yaml')
     lo, hi = recorded_range(tmp_path / 'ring.yaml').current
     assert (lo, hi) == (rec.current.min(), rec.current.max())
+    # The model keeps the recorded range (model.identified_input_range): a node, which
+    # reads no header, judges its limits by it.
+    assert params['model.identified_input_range'] == [lo, hi]
+    assert identified_range(MPIModel.from_params(params)).current == (lo, hi)
+    assert limits_shortfall(MPIModel.from_params(params), lo, hi) is None
+    # A file without it (written before): the thresholds' range.
+    del params['model.identified_input_range']
+    model = MPIModel.from_params(params)
     assert identified_range(model).current[1] > hi + 0.5 * (hi - lo)
     path, _ = _desired_file(tmp_path, rec, 1.4)
     capsys.readouterr()

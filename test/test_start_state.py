@@ -8,6 +8,8 @@ starts at rest after a sweep down to the lowest identified input, with no transi
 record's start; files written before the split still load.
 """
 
+from dataclasses import replace
+import math
 from pathlib import Path
 
 from mpi_ros import identify, MPIModel
@@ -109,6 +111,10 @@ def test_rest_starts_reach_the_ends_of_the_identified_range():
     record = synthetic_record('mid-history', 1)
     gamma = identify(record.current, record.displacement, order=(8, 4)).model
     assert gamma.output_sign == -1
+    # The record's range identify keeps, and the closed form of the thresholds (a model
+    # without it, written before): Gamma at the ends of the displacement range.
+    assert identified_ranges(gamma)[0] == (record.current.min(), record.current.max())
+    gamma = replace(gamma, identified_input_range=None)
     (a, b), (y_lo, y_hi) = identified_ranges(gamma)
     low = gamma.with_initial_states(rest_states(gamma, a)).simulate([a])[0]
     high = gamma.with_initial_states(rest_states(gamma, b, descent=False)).simulate([b])[0]
@@ -307,6 +313,34 @@ def test_a_rest_start_is_the_state_a_sweep_within_the_limits_leaves():
     _, swept = gamma.hysteresis_output(back, rest_states(gamma, 100.0, descent=False))
     assert comp.last_command == pytest.approx(top)
     np.testing.assert_allclose(comp.state, swept, rtol=0.0, atol=1e-12)
+
+
+def test_the_record_range_the_model_keeps_is_where_rest_low_turns():
+    # identify keeps the record's input range (model.identified_input_range), written and
+    # read back with the model; rest_low's sweep turns there.  Without it (an older file)
+    # the thresholds' closed form is 1-2 % of the span short of the recorded top, which a
+    # heavy largest play turns into an offset for the whole loop (docs/diagnosis.md).
+    t = np.arange(0.0, 20.0, 0.005)
+    x = 0.9 - 0.9 * np.cos(2 * np.pi * 0.3 * t) * np.exp(-t / 15.0)
+    y = MagnetostrictiveActuator(ActuatorConfig()).simulate(t, x)
+    gamma = identify(x, y, order=(8, 4)).model
+    assert gamma.identified_input_range == (float(x.min()), float(x.max()))
+    params = gamma.to_params()
+    assert params['model.identified_input_range'] == [float(x.min()), float(x.max())]
+    read = MPIModel.from_params(params)
+    assert read.identified_input_range == gamma.identified_input_range
+    assert read.inverse().inverse().identified_input_range == gamma.identified_input_range
+    comp = Compensator(read, output_min=0.2, output_max=1.8)
+    np.testing.assert_array_equal(comp.state, rest_states(read, 0.2, turn=float(x.max())))
+    older = {k: v for k, v in params.items() if k != 'model.identified_input_range'}
+    closed = identified_ranges(MPIModel.from_params(older))[0]
+    assert closed[1] != float(x.max())
+    # A range that is not two increasing finite numbers is refused, naming the key.
+    for bad in ([1.0, 0.0], [0.0, math.nan], [0.5], ['a', 'b'], 'x'):
+        with pytest.raises(ModelError, match='model.identified_input_range must be'):
+            MPIModel.from_params(dict(params, **{'model.identified_input_range': bad}))
+    assert MPIModel.from_params(dict(
+        params, **{'model.identified_input_range': []})).identified_input_range is None
 
 
 @pytest.mark.parametrize('seed', [1, 2])

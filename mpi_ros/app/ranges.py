@@ -13,7 +13,8 @@ Where the range comes from:
   file holds only node parameters; the comment is what ROS ignores), as
   ``# identified on current 0 to 1.8 A, displacement 6.3e-06 to 4.36e-05 m``.  Exact.
 - **The model itself**, when the file has no such line (written by an older ``identify``,
-  by ``diagnose --params-out``, or by hand): :func:`identified_range`, below.
+  by ``diagnose --params-out``, or by hand): :func:`identified_range`, below; exact where it
+  holds ``model.identified_input_range`` (``identify`` and ``diagnose`` write it).
 
 What a model knows of its identification record (:func:`identified_range`):
 

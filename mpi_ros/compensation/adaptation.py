@@ -1501,7 +1501,8 @@ def _gamma_with_start(candidate: MPIModel, running: MPIModel) -> MPIModel:
                                                   - candidate.input_offset)
     return MPIModel(PIHysteresisOperator(h.thresholds, h.weights, states),
                     candidate.superposition, input_offset=candidate.input_offset,
-                    output_offset=candidate.output_offset, output_sign=candidate.output_sign)
+                    output_offset=candidate.output_offset, output_sign=candidate.output_sign,
+                    identified_input_range=running.identified_input_range)
 
 
 def _rms(values: FloatArray) -> float:

@@ -3,19 +3,21 @@
 The model-update policy of the compensator nodes, on plain dicts (no ROS).
 
 A compensator node's parameters describe its running model: Gamma's four ``model.*``
-arrays, the operating point, the identification record's start (``record_start.*``, optional)
-and the keys of every registered effect (read from the
-registry :data:`mpi_ros.extensions.EFFECTS` when used).  A multi-axis node holds the same
+arrays, the operating point, what it knows of its identification record (its start,
+``record_start.*``, and its input range, ``model.identified_input_range``; optional) and the
+keys of every registered effect (read from the registry :data:`mpi_ros.extensions.EFFECTS`
+when used).  A multi-axis node holds the same
 keys once per axis under the prefix ``axis<k>.``.  Here, on ``{name: value}`` dicts
 (``None``: unset, or YAML ``null`` in a request), is what a request does to them:
 
 :func:`complete` (the pre-set step)
     A ``null`` for a key that is unset already is left out; for an effect key it is the
     key's "off" value, for an operating-point key its default; for a key of Gamma it stays
-    (and is refused: a running model cannot be removed); for a record-start key it is the
-    empty array (no record start).  A request with all four keys of Gamma describes the
-    *whole* model: every operating-point key it leaves out returns to its default, every
-    effect key it leaves out is switched off and a record start it leaves out is removed.
+    (and is refused: a running model cannot be removed); for a record key it is the
+    empty array (no record start, no recorded range).  A request with all four keys of
+    Gamma describes the *whole* model: every operating-point key it leaves out returns to
+    its default, every effect key it leaves out is switched off and a record start or range
+    it leaves out is removed.
 :func:`prepare` (the on-set step: it only checks)
     The request is laid over the current values and the whole resulting model is
     validated and inverted ((12)-(14), (22)-(25): Gamma^-1 is built here, once per
@@ -46,20 +48,24 @@ from .prediction import prediction_horizon
 from ..errors import ModelError, MPIError, ParameterRejected
 from ..extensions import extended_model_from_params
 from ..extensions.effect import effect_keys, effect_off_values
-from ..operators.model import HYSTERESIS_INITIAL_STATES, MODEL_KEYS, MPIModel, \
-    OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS, RECORD_START_STATES
+from ..operators.model import HYSTERESIS_INITIAL_STATES, IDENTIFIED_INPUT_RANGE, MODEL_KEYS, \
+    MPIModel, OPERATING_POINT_DEFAULTS, OPERATING_POINT_KEYS, RECORD_START_STATES
 from ..operators.usability import check_usable, usability_sweep
 from ..units import INPUT_QUANTITY_KEY
 
-__all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'START_KEYS', 'Prepared', 'UpdateRule', 'apply', 'axis_key',
-           'complete', 'is_off', 'limits_of', 'load', 'load_axes', 'model_keys', 'model_params',
-           'ordered_limits', 'prepare', 'refusal', 'touches', 'uncompensated', 'usable']
+__all__ = ['LIMIT_KEYS', 'PLAIN_KEYS', 'RECORD_KEYS', 'START_KEYS', 'Prepared', 'UpdateRule',
+           'apply', 'axis_key', 'complete', 'is_off', 'limits_of', 'load', 'load_axes',
+           'model_keys', 'model_params', 'ordered_limits', 'prepare', 'refusal', 'touches',
+           'uncompensated', 'usable']
 
 #: The two output limits [A]; node-wide without a prefix, one axis's under ``axis<k>.``.
 LIMIT_KEYS = ('output.min', 'output.max')
 #: The record start of Gamma's plays (its mode's deflection is the resonance effect's key);
 #: optional, the empty array when absent.
 START_KEYS = (RECORD_START_STATES, HYSTERESIS_INITIAL_STATES)
+#: What a model knows of its identification record: its start and its input range;
+#: optional, the empty array when absent (a whole model pushed without one removes it).
+RECORD_KEYS = START_KEYS + (IDENTIFIED_INPUT_RANGE,)
 #: Node-wide keys whose new value is handed on as it is.
 PLAIN_KEYS = ('enabled', 'sample_period', 'diagnostics_period')
 #: A single-axis model key at the start of a word, as core error messages name it.
@@ -241,11 +247,11 @@ def model_keys() -> tuple[str, ...]:
     Returns
     -------
     tuple of str
-        Gamma's four, the operating point's three, the record start's, then every
-        registered effect's keys.
+        Gamma's four, the operating point's three, the record's (start, input range), then
+        every registered effect's keys.
 
     """
-    return MODEL_KEYS + OPERATING_POINT_KEYS + START_KEYS + effect_keys()
+    return MODEL_KEYS + OPERATING_POINT_KEYS + RECORD_KEYS + effect_keys()
 
 
 def is_off(value: Any) -> bool:
@@ -298,7 +304,7 @@ def model_params(values: Mapping[str, Any], prefix: str = '') -> dict[str, Any] 
     if any(values[prefix + key] is None for key in MODEL_KEYS):
         return None
     params = {key: values[prefix + key] for key in MODEL_KEYS + OPERATING_POINT_KEYS}
-    params.update({key: values[prefix + key] for key in START_KEYS
+    params.update({key: values[prefix + key] for key in RECORD_KEYS
                    if not is_off(values.get(prefix + key))})
     keys_of = _effect_keys_by_name()
     for keys in keys_of.values():
@@ -340,7 +346,7 @@ def complete(current: Mapping[str, Any], request: Mapping[str, Any],
     {'model.input_offset': 0.0}
 
     """
-    off = {**effect_off_values(), **{key: [] for key in START_KEYS}}
+    off = {**effect_off_values(), **{key: [] for key in RECORD_KEYS}}
     keys = set(model_keys())
     completed: dict[str, Any] = {}
     for name, value in request.items():

@@ -136,6 +136,9 @@ class ScaledDesign:
         The input [A] at which the returned model's plays start at rest (its initial
         states): the lowest input of the record, where an actuator rests when it is off;
         None: ``z_H0 = 0`` (32).
+    input_range : (float, float) or None
+        The record's lowest and highest input [A], the model's
+        ``identified_input_range`` (None for ``anchor='origin'``, which does not keep it).
 
     """
 
@@ -150,6 +153,7 @@ class ScaledDesign:
     burn_in: int = 0
     constant: bool = False
     input_rest: float | None = None
+    input_range: tuple[float, float] | None = None
 
     def scaled_input(self, x: FloatArray) -> FloatArray:
         """Return ``(x - x0) / x_scale``, the input the QP sees."""
@@ -208,7 +212,7 @@ class ScaledDesign:
                                               np.full(r_h.size, self.input_rest - x0))
         return MPIModel(hysteresis, invert_superposition(s_inv),                # (22)-(25)
                         input_offset=x0, output_offset=self.output_offset,
-                        output_sign=self.sign)
+                        output_sign=self.sign, identified_input_range=self.input_range)
 
 
 def output_sign(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple[int, float]:
@@ -369,7 +373,8 @@ def scaled_design(x: FloatArray, y: FloatArray, n: int, l: int, *,  # noqa: E741
                     to_turning_point=True)
     return ScaledDesign(x_scale, y_scale, r_h, r_s_inv, c,
                         input_offset=0.5 * (x_lo + x_hi), output_offset=0.5 * (y_lo + y_hi),
-                        sign=sign, burn_in=start, constant=True, input_rest=x_lo)
+                        sign=sign, burn_in=start, constant=True, input_rest=x_lo,
+                        input_range=(x_lo, x_hi) if x_lo < x_hi else None)
 
 
 def check_signals(current: npt.ArrayLike, displacement: npt.ArrayLike) -> tuple[

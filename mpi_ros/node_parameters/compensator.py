@@ -17,8 +17,8 @@ from ..compensation.adaptation import CHILD_NICE, PRIORITIES
 from ..compensation.updates import axis_key, LIMIT_KEYS, model_keys
 from ..errors import ParameterRejected
 from ..extensions import EFFECTS
-from ..operators.model import HYSTERESIS_INITIAL_STATES, INPUT_OFFSET, MODEL_KEYS, \
-    OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN, RECORD_START_STATES
+from ..operators.model import HYSTERESIS_INITIAL_STATES, IDENTIFIED_INPUT_RANGE, INPUT_OFFSET, \
+    MODEL_KEYS, OPERATING_POINT_DEFAULTS, OUTPUT_OFFSET, OUTPUT_SIGN, RECORD_START_STATES
 from ..operators.start import START_CHOICES, StartState
 from ..units import INPUT_QUANTITIES, INPUT_QUANTITY_KEY
 
@@ -73,6 +73,13 @@ MODEL_PARAMETERS = (
         HYSTERESIS_INITIAL_STATES, 'double_array', None,
         f'Where files written before {RECORD_START_STATES} hold the record start (read as '
         'it when that is unset)', 'A'),
+    ParameterSpec(
+        IDENTIFIED_INPUT_RANGE, 'double_array', None,
+        "The identification record's lowest and highest input (mpi-ros identify writes it): "
+        "where start_state rest_low's sweep turns, and the range output.min/output.max are "
+        "judged against; unset: read from the model's thresholds", 'A',
+        constraints='two numbers in increasing order, or empty; part of the model: '
+                    'validated with the other model.* keys'),
 )
 
 

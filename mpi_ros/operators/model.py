@@ -39,7 +39,7 @@ as the record start.  :func:`check_model_parameters` validates such a mapping co
 """
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import Any, ClassVar, Protocol
 
@@ -56,10 +56,11 @@ from .usability import check_usable
 from ..errors import ModelError
 
 __all__ = ['hysteresis_step', 'superposition_value', 'ActuatorModel', 'HYSTERESIS_INITIAL_STATES',
-           'HYSTERESIS_THRESHOLDS', 'RECORD_START_STATES', 'HYSTERESIS_WEIGHTS', 'INPUT_OFFSET',
-           'MODEL_KEYS', 'MPIModel', 'MPIStream', 'OPERATING_POINT_DEFAULTS',
-           'OPERATING_POINT_KEYS', 'OUTPUT_OFFSET', 'OUTPUT_SIGN', 'SUPERPOSITION_THRESHOLDS',
-           'SUPERPOSITION_WEIGHTS', 'check_model_parameters', 'check_operating_point']
+           'HYSTERESIS_THRESHOLDS', 'IDENTIFIED_INPUT_RANGE', 'RECORD_START_STATES',
+           'HYSTERESIS_WEIGHTS', 'INPUT_OFFSET', 'MODEL_KEYS', 'MPIModel', 'MPIStream',
+           'OPERATING_POINT_DEFAULTS', 'OPERATING_POINT_KEYS', 'OUTPUT_OFFSET', 'OUTPUT_SIGN',
+           'SUPERPOSITION_THRESHOLDS', 'SUPERPOSITION_WEIGHTS', 'check_identified_input_range',
+           'check_model_parameters', 'check_operating_point']
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -77,6 +78,9 @@ MODEL_KEYS = (HYSTERESIS_THRESHOLDS, HYSTERESIS_WEIGHTS, SUPERPOSITION_THRESHOLD
 RECORD_START_STATES = 'record_start.hysteresis.initial_states'
 #: Where files written before the split hold the record start (read as it; never written).
 HYSTERESIS_INITIAL_STATES = 'model.hysteresis.initial_states'
+#: The lowest and highest input of the identification record [A] (optional; ``identify``
+#: writes it): where a rest start's sweep turns and what the limits are judged against.
+IDENTIFIED_INPUT_RANGE = 'model.identified_input_range'
 INPUT_OFFSET = 'model.input_offset'
 OUTPUT_OFFSET = 'model.output_offset'
 OUTPUT_SIGN = 'model.output_sign'
@@ -165,6 +169,47 @@ def check_operating_point(mapping: Mapping[str, Any]) -> tuple[float, float, int
                f' (it falls); found {sign:g}')
         raise ModelError(msg)
     return x0, y0, int(sign)
+
+
+def check_identified_input_range(value: Any) -> tuple[float, float] | None:
+    """
+    Validate the identified input range (``model.identified_input_range``).
+
+    Parameters
+    ----------
+    value : sequence of two float, empty sequence or None
+        ``[lowest, highest]`` recorded input [A]; empty or None: not known.
+
+    Returns
+    -------
+    (float, float) or None
+        The range; None when not known.
+
+    Raises
+    ------
+    ModelError
+        Not two finite numbers, the first below the second (naming the key).
+
+    Examples
+    --------
+    >>> check_identified_input_range([0.0, 1.8]), check_identified_input_range([])
+    ((0.0, 1.8), None)
+
+    """
+    if value is None or (hasattr(value, '__len__') and not isinstance(value, (str, bytes))
+                         and len(value) == 0):
+        return None
+    items = list(value) if (hasattr(value, '__len__')
+                            and not isinstance(value, (str, bytes))) else [value]
+    numbers = [float(v) for v in items
+               if isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool)]
+    if len(items) != 2 or len(numbers) != 2 or not all(map(math.isfinite, numbers)) \
+            or not numbers[0] < numbers[1]:
+        msg = (f'{IDENTIFIED_INPUT_RANGE} must be the lowest and the highest input of the '
+               f'identification record, two finite numbers in increasing order [A], or '
+               f'empty (not known); found {value!r}')
+        raise ModelError(msg)
+    return numbers[0], numbers[1]
 
 
 def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
@@ -399,6 +444,10 @@ class MPIModel:
         +1, or -1 for a sensor that falls as the actuator extends (``model.output_sign``).
         The forward model is ``y0 + sign * S[H[x - x0]]``; an inverse model keeps the
         forward model's operating point and computes ``x0 + H'[S'[sign * (y - y0)]]``.
+    identified_input_range : (float, float) or None
+        The lowest and highest input of the identification record [A]
+        (``model.identified_input_range``, written by ``identify``); None: not known, the
+        thresholds tell it (:func:`~mpi_ros.operators.start.identified_ranges`).
 
     Examples
     --------
@@ -420,6 +469,7 @@ class MPIModel:
     input_offset: float = 0.0
     output_offset: float = 0.0
     output_sign: int = 1
+    identified_input_range: tuple[float, float] | None = None
     #: :class:`ActuatorModel`: Gamma alone has no effect and needs no time base.
     cause: ClassVar[str] = 'none'
     timed: ClassVar[bool] = False
@@ -432,6 +482,8 @@ class MPIModel:
         object.__setattr__(self, 'input_offset', x0)
         object.__setattr__(self, 'output_offset', y0)
         object.__setattr__(self, 'output_sign', sign)
+        object.__setattr__(self, 'identified_input_range',
+                           check_identified_input_range(self.identified_input_range))
 
     # -- construction -------------------------------------------------------------------
     @classmethod
@@ -446,9 +498,10 @@ class MPIModel:
             ``model.superposition.thresholds`` and ``model.superposition.weights`` (SI
             units; extra keys ignored), and optionally the operating point
             ``model.input_offset`` [A], ``model.output_offset`` [m], ``model.output_sign``
-            (default 0, 0, +1) and the record start
+            (default 0, 0, +1), the record start
             ``record_start.hysteresis.initial_states`` [A] (default 0; an older file's
-            ``model.hysteresis.initial_states`` is read as it).
+            ``model.hysteresis.initial_states`` is read as it) and the identified input
+            range ``model.identified_input_range`` [A] (default: not known).
 
         Returns
         -------
@@ -467,6 +520,7 @@ class MPIModel:
         """
         p = check_model_parameters(mapping)
         x0, y0, sign = check_operating_point(mapping)
+        known = check_identified_input_range(mapping.get(IDENTIFIED_INPUT_RANGE))
         hysteresis = PIHysteresisOperator(p[HYSTERESIS_THRESHOLDS], p[HYSTERESIS_WEIGHTS],
                                           p[RECORD_START_STATES])
         superposition = PISuperpositionOperator(p[SUPERPOSITION_THRESHOLDS],
@@ -474,7 +528,7 @@ class MPIModel:
         check_usable(hysteresis, superposition, input_offset=x0, output_offset=y0,
                      output_sign=sign)
         return cls(hysteresis, superposition, input_offset=x0, output_offset=y0,
-                   output_sign=sign)
+                   output_sign=sign, identified_input_range=known)
 
     def to_params(self) -> dict[str, Any]:
         """
@@ -486,13 +540,15 @@ class MPIModel:
         Returns
         -------
         dict[str, list of float or float or int]
-            The four ``model.*`` arrays of Gamma, the three operating point keys and the
+            The four ``model.*`` arrays of Gamma, the three operating point keys, the
             record start ``record_start.hysteresis.initial_states`` (the plays' states the
-            model holds).
+            model holds) and, where known, ``model.identified_input_range``.
 
         """
         forward = self.inverse() if self.is_inverse else self
         h, s = forward.hysteresis, forward.superposition
+        known = ({} if self.identified_input_range is None else
+                 {IDENTIFIED_INPUT_RANGE: [float(v) for v in self.identified_input_range]})
         return {
             HYSTERESIS_THRESHOLDS: [float(v) for v in h.thresholds],
             HYSTERESIS_WEIGHTS: [float(v) for v in h.weights],
@@ -502,6 +558,7 @@ class MPIModel:
             OUTPUT_OFFSET: float(self.output_offset),
             OUTPUT_SIGN: int(self.output_sign),
             RECORD_START_STATES: [float(v) for v in h.initial_states],
+            **known,
         }
 
     def with_operating_point(self, *, input_offset: float | None = None,
@@ -525,10 +582,11 @@ class MPIModel:
             A new model; ``self`` is unchanged.
 
         """
-        return MPIModel(self.hysteresis, self.superposition, self.is_inverse,
-                        self.input_offset if input_offset is None else input_offset,
-                        self.output_offset if output_offset is None else output_offset,
-                        self.output_sign if output_sign is None else output_sign)
+        return replace(self,
+                       input_offset=self.input_offset if input_offset is None else input_offset,
+                       output_offset=(self.output_offset if output_offset is None
+                                      else output_offset),
+                       output_sign=self.output_sign if output_sign is None else output_sign)
 
     def with_initial_states(self, states: npt.ArrayLike) -> 'MPIModel':
         """
@@ -546,9 +604,7 @@ class MPIModel:
 
         """
         h = self.hysteresis
-        return MPIModel(PIHysteresisOperator(h.thresholds, h.weights, states),
-                        self.superposition, self.is_inverse, self.input_offset,
-                        self.output_offset, self.output_sign)
+        return replace(self, hysteresis=PIHysteresisOperator(h.thresholds, h.weights, states))
 
     # -- properties ---------------------------------------------------------------------
     @property
@@ -591,10 +647,9 @@ class MPIModel:
             Gamma^-1 (27) for a forward model, Gamma for an inverse model.
 
         """
-        return MPIModel(invert_hysteresis(self.hysteresis),
-                        invert_superposition(self.superposition),
-                        not self.is_inverse, self.input_offset, self.output_offset,
-                        self.output_sign)
+        return replace(self, hysteresis=invert_hysteresis(self.hysteresis),
+                       superposition=invert_superposition(self.superposition),
+                       is_inverse=not self.is_inverse)
 
     # -- operating point ------------------------------------------------------------------
     def hysteresis_output(self, current: npt.ArrayLike,

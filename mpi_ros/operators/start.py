@@ -26,9 +26,10 @@ explicit states
     ``z_H0`` given, one per play [A], relative to the input offset as
     ``record_start.hysteresis.initial_states``; a mode at rest.
 
-The identified range ``[a, b]`` is the record's current range (the header ``identify``
-writes into a parameter file, :mod:`mpi_ros.app.ranges`), else the closed form of the model's
-thresholds (:func:`identified_ranges`); a compensator raises ``a`` to its lowest command and
+The identified range ``[a, b]`` is the record's current range (``model.identified_input_range``,
+which ``identify`` writes, or the header it writes into a parameter file,
+:mod:`mpi_ros.app.ranges`), else the closed form of the model's thresholds
+(:func:`identified_ranges`); a compensator raises ``a`` to its lowest command and
 lowers ``b`` to its highest: the sweep is the one its own commands can make.  (A start after a
 descent from above every threshold, ``z_i = a - x0 + r_i`` for every play, is a state no input
 inside the range reaches when ``2 r_i > b - a``: the largest play of a model identified on
@@ -109,9 +110,14 @@ def rest_states(gamma: Any, current: float, *, descent: bool = True,
 def identified_ranges(gamma: Any, inverse: Any = None) -> tuple[
         tuple[float, float], tuple[float, float]] | None:
     """
-    Return the current and displacement ranges a model's thresholds say it was fitted on.
+    Return the current and displacement ranges a model was fitted on.
 
-    ``identify`` spaces the thresholds of S' over the record's output range (29)-(31): the
+    A model that holds its record's input range (``model.identified_input_range``, which
+    ``identify`` writes) gives it, and the displacement range its major loop over it reaches
+    (so that commands clamped to the input range reach every displacement inside; a record
+    whose output overshoots, ringing after steps, widens S' beyond it).  Otherwise the
+    thresholds tell both.  ``identify`` spaces the thresholds of S' over the record's output
+    range (29)-(31): the
     ``k`` thresholds of a branch end at ``(k - 1/2)/k`` of its extent.  The current range is
     where the major loop reaches the two ends: after a descent to ``a`` every play is at
     ``a - x0 + r_i``, after an ascent to ``b`` at ``b - x0 - r_i``, so with ``W = sum w_i``
@@ -127,11 +133,14 @@ def identified_ranges(gamma: Any, inverse: Any = None) -> tuple[
     Returns
     -------
     ((float, float), (float, float)) or None
-        ``(a, b)`` [A] and the displacement range [m]; None when the thresholds of S' are
-        not spaced as (29)-(31) space them (written by hand, or ``l = 0``) or give no proper
-        range.
+        ``(a, b)`` [A] and the displacement range [m]; None when the model holds no range
+        and the thresholds of S' are not spaced as (29)-(31) space them (written by hand, or
+        ``l = 0``) or give no proper range.
 
     """
+    known = getattr(gamma, 'identified_input_range', None)
+    if known is not None:
+        return _major_loop_reach(gamma, known)
     s_inv = (gamma.inverse() if inverse is None else inverse).superposition
     r = np.asarray(s_inv.thresholds, dtype=np.float64)
     positive, negative = r[r > 0.0], -r[r < 0.0][::-1]
@@ -150,6 +159,20 @@ def identified_ranges(gamma: Any, inverse: Any = None) -> tuple[
     if not (np.isfinite(a) and np.isfinite(b) and a < b and ends[0] < ends[1]):
         return None
     return (float(a), float(b)), (float(ends[0]), float(ends[1]))
+
+
+def _major_loop_reach(gamma: Any, inputs: tuple[float, float]) -> tuple[
+        tuple[float, float], tuple[float, float]] | None:
+    # The input range and the displacements the major loop over it reaches: H at its two
+    # ends (a play wider than the range keeps where the other end left it), then S.
+    a, b = (float(v) for v in inputs)
+    r = np.asarray(gamma.hysteresis.thresholds, dtype=np.float64)
+    w = np.asarray(gamma.hysteresis.weights, dtype=np.float64)
+    u_a, u_b = a - gamma.input_offset, b - gamma.input_offset
+    v = np.array([float(np.dot(w, np.minimum(u_a + r, u_b - r))),
+                  float(np.dot(w, np.maximum(u_b - r, u_a + r)))])
+    reach = sorted(float(y) for y in gamma.output(v))
+    return ((a, b), (reach[0], reach[1])) if reach[0] < reach[1] else None
 
 
 def start_range(identified: tuple[float, float] | None,

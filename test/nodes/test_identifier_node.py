@@ -9,7 +9,8 @@ from mpi_ros.errors import ParameterRejected
 from mpi_ros.nodes import identifier
 from mpi_ros.nodes.compensator import CompensatorNode
 from mpi_ros.nodes.identifier import IdentifierNode, parse_order
-from mpi_ros.operators.model import MODEL_KEYS, OPERATING_POINT_KEYS, RECORD_START_STATES
+from mpi_ros.operators.model import IDENTIFIED_INPUT_RANGE, MODEL_KEYS, OPERATING_POINT_KEYS, \
+    RECORD_START_STATES
 from mpi_ros.params import read_params_yaml
 from mpi_ros.plant.actuator import MagnetostrictiveActuator
 from mpi_ros.plant.excitation import identification_excitation
@@ -72,9 +73,15 @@ def test_fit_and_push_applies_the_model(ros_context, compensator, excitation_bag
     applied = compensator.compensator.model.to_params()
     assert applied == fit.parameters
     written = read_params_yaml(params_file)
-    for key in MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,):
+    kept = MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES, IDENTIFIED_INPUT_RANGE)
+    for key in kept:
         assert written[key] == pytest.approx(fit.parameters[key], rel=1e-12, abs=0.0)
-    assert set(fit.parameters) == set(MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,))
+    assert set(fit.parameters) == set(kept)
+    # The record's input range reaches the running node (its rest start and limits use it).
+    assert compensator.get_parameter(IDENTIFIED_INPUT_RANGE).value.tolist() == \
+        fit.parameters[IDENTIFIED_INPUT_RANGE]
+    assert fit.parameters[IDENTIFIED_INPUT_RANGE] == [float(v) for v in
+                                                      fit.result.model.identified_input_range]
     for key in OPERATING_POINT_KEYS:
         assert compensator.get_parameter(key).value == fit.parameters[key]
 
