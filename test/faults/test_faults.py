@@ -11,8 +11,8 @@ command with the core :class:`~mpi_ros.compensation.Compensator` (exactly, to
 import time
 
 from mpi_ros.nodes.identifier import push_model_parameters
-from mpi_ros.operators.model import MODEL_KEYS, MPIModel, OPERATING_POINT_KEYS, \
-    RECORD_START_STATES
+from mpi_ros.operators.model import IDENTIFIED_INPUT_RANGE, MODEL_KEYS, MPIModel, \
+    OPERATING_POINT_KEYS, RECORD_START_STATES
 import numpy as np
 import pytest
 from std_msgs.msg import Float64
@@ -24,9 +24,9 @@ from .helpers import (
 
 EXACT = 1e-12        # [A] the node and the core run the same float64 code
 ORDER = '6,3'
-#: The keys of a plain model: Gamma, the operating point and the record start (all pushed by
-#: the identifier).
-KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES,)
+#: The keys of a plain model: Gamma, the operating point, the record start and the record's
+#: input range (all pushed by the identifier).
+KEYS = MODEL_KEYS + OPERATING_POINT_KEYS + (RECORD_START_STATES, IDENTIFIED_INPUT_RANGE)
 
 
 def _assert_safe(commands):
