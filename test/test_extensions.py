@@ -13,7 +13,7 @@ from mpi_ros.metrics import control_error, rms_range_error
 from mpi_ros.model_fit import identify
 from mpi_ros.operators.filters import delay, first_order_lag, lag_bank, \
     lag_feedback_inverse
-from mpi_ros.operators.model import MPIModel, OPERATING_POINT_KEYS
+from mpi_ros.operators.model import IDENTIFIED_INPUT_RANGE, MPIModel, OPERATING_POINT_KEYS
 from mpi_ros.plant.actuator import ActuatorConfig, MagnetostrictiveActuator
 from mpi_ros.plant.excitation import diagnostic_excitation, identification_excitation, \
     tracking_trajectory
@@ -285,11 +285,15 @@ def test_extension_fits_do_not_depend_on_the_operating_point(fit, effect, bias):
     assert (plain.model.output_sign, moved.model.output_sign) == (1, -1)
     extension = {k: v for k, v in plain.to_params().items()
                  if not k.startswith(('model.hysteresis', 'model.superposition'))
-                 and k not in OPERATING_POINT_KEYS}
+                 and k not in OPERATING_POINT_KEYS + (IDENTIFIED_INPUT_RANGE,)}
     assert extension
     for key, value in extension.items():
         np.testing.assert_allclose(moved.to_params()[key], value, rtol=1e-6, atol=1e-12,
                                    err_msg=key)
+    # The record's input range moves with the input's bias.
+    np.testing.assert_allclose(moved.to_params()[IDENTIFIED_INPUT_RANGE],
+                               np.add(plain.to_params()[IDENTIFIED_INPUT_RANGE], bias),
+                               rtol=0.0, atol=1e-12)
     span = np.ptp(y)
     np.testing.assert_allclose(moved.simulate(t, x + bias), zero - plain.simulate(t, x),
                                rtol=0.0, atol=1e-6 * span)

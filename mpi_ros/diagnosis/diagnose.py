@@ -100,7 +100,7 @@ from ..identification.start_states import estimate_start_state
 from ..metrics import range_error, rms_range_error
 from ..model_fit import identify
 from ..operators.filters import first_order_lag
-from ..operators.model import MPIModel, OPERATING_POINT_KEYS
+from ..operators.model import IDENTIFIED_INPUT_RANGE, MPIModel, OPERATING_POINT_KEYS
 from ..recordings.recording import check_magnitudes, Recording
 
 __all__ = ['Candidate', 'DiagnosisReport', 'diagnose', 'CAUSES', 'z_wording']
@@ -752,7 +752,8 @@ class _Scorer:
         params = {k: v for k, v in model.to_params().items()
                   if not k.startswith(('model.hysteresis', 'model.superposition',
                                        'record_start.hysteresis'))
-                  and k not in OPERATING_POINT_KEYS and k not in unknown}
+                  and k not in OPERATING_POINT_KEYS + (IDENTIFIED_INPUT_RANGE,)
+                  and k not in unknown}
         tt, xt, yt = self.training
         keep = self.determined
         train = rms_range_error(model.response(tt, xt)[keep], yt[keep])
