@@ -199,17 +199,13 @@ def check_identified_input_range(value: Any) -> tuple[float, float] | None:
     if value is None or (hasattr(value, '__len__') and not isinstance(value, (str, bytes))
                          and len(value) == 0):
         return None
-    items = list(value) if (hasattr(value, '__len__')
-                            and not isinstance(value, (str, bytes))) else [value]
-    numbers = [float(v) for v in items
-               if isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, bool)]
-    if len(items) != 2 or len(numbers) != 2 or not all(map(math.isfinite, numbers)) \
-            or not numbers[0] < numbers[1]:
+    values = _vector({IDENTIFIED_INPUT_RANGE: value}, IDENTIFIED_INPUT_RANGE)
+    if values.size != 2:
         msg = (f'{IDENTIFIED_INPUT_RANGE} must be the lowest and the highest input of the '
-               f'identification record, two finite numbers in increasing order [A], or '
-               f'empty (not known); found {value!r}')
+               f'identification record [A], or empty (not known); found {values.size} values')
         raise ModelError(msg)
-    return numbers[0], numbers[1]
+    _strictly_ascending(values, IDENTIFIED_INPUT_RANGE)
+    return float(values[0]), float(values[1])
 
 
 def check_model_parameters(mapping: Mapping[str, Any]) -> dict[str, FloatArray]:
