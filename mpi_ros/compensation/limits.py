@@ -152,8 +152,8 @@ def limits_shortfall(model: Any, output_min: float, output_max: float,
     recorded : (float, float), optional
         The input range the record held (``identify`` writes it in the parameter file's
         header): the identified input range, and the displacement range is what Gamma
-        reaches over it.  By default the model's own (``model.identified_input_range``),
-        else both come from the model's thresholds.
+        reaches over it.  By default both come from :func:`identified_range`: the model's
+        own input range (``model.identified_input_range``) where it holds one.
 
     Returns
     -------
@@ -186,8 +186,6 @@ def limits_shortfall(model: Any, output_min: float, output_max: float,
     True
 
     """
-    if recorded is None:
-        recorded = getattr(gamma_of(model), 'identified_input_range', None)
     if recorded is not None:
         a, b = float(recorded[0]), float(recorded[1])
         if not a < b:
