@@ -59,7 +59,6 @@ from ..errors import ModelError, MPIError
 from ..extensions import extended_model_from_params
 from ..extensions.thermal_drift import ThermalDriftModel
 from ..identification.recursive import heating, RecursiveFit, WeightPoint
-from ..operators.hysteresis import PIHysteresisOperator
 from ..operators.model import MPIModel
 from ..operators.play import play_end_state
 
@@ -1496,13 +1495,11 @@ def _with_start(candidate: AdaptedModel, running: AdaptedModel) -> AdaptedModel:
 
 
 def _gamma_with_start(candidate: MPIModel, running: MPIModel) -> MPIModel:
-    h = candidate.hysteresis
+    # The record the running model was identified on stays its record (start and range).
     states = running.hysteresis.initial_states + (running.input_offset
                                                   - candidate.input_offset)
-    return MPIModel(PIHysteresisOperator(h.thresholds, h.weights, states),
-                    candidate.superposition, input_offset=candidate.input_offset,
-                    output_offset=candidate.output_offset, output_sign=candidate.output_sign,
-                    identified_input_range=running.identified_input_range)
+    return replace(candidate.with_initial_states(states),
+                   identified_input_range=running.identified_input_range)
 
 
 def _rms(values: FloatArray) -> float:
