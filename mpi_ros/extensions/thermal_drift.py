@@ -20,8 +20,8 @@ where Gamma stands still: each hold's changes (about its mean) are predicted by 
 ``k_T T`` fitted (least squares) on the other holds, ``tau_T`` is the trial that predicts
 them best, and Gamma is fitted on ``y - k_T T``.  Fitted beside Gamma, the drift column
 takes part of Gamma's misfit, which follows the excitation as the lagged power does (on
-the wide sweep's Preisach plants ``k_T`` 1.5-2.1x the plant's, ``tau_T`` up to 2.2x; from
-the holds within 5 %: docs/diagnosis.md, issue 24).
+the wide sweep's Preisach plants ``k_T`` 0.65-2.1x the plant's, ``tau_T`` 0.5-2.2x; from
+the holds within 7 % on 14 of 15: docs/diagnosis.md, issue 24).
 
 Without holds, for a trial ``tau_T``: the displacement's drift is linearised through the
 inverse superposition, ``S'[y - k_T T] ~ S'[y] - k_T T dS'/dy``, so that ``k_T`` is one
@@ -326,8 +326,8 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
     drift is kept when that model predicts the record's held-out blocks (below) better than
     no drift and fits the record better; else it is fitted off, its time constant not
     identified.  Fitted beside Gamma instead, the drift column took part of Gamma's misfit
-    (on the wide sweep's Preisach plants ``k_T`` 1.5-2.1x the plant's, validation -0.04
-    and -0.16; from the holds within 5 % of the plant's, +0.08 and -0.11).
+    (on two of the wide sweep's Preisach plants ``k_T`` 1.5x and 2.1x the plant's,
+    validation -0.04 and -0.16; from the holds within 2 % of the plant's, +0.08 and -0.11).
 
     Without two holds: trials ``tau_T`` log-spaced from a twentieth of the record to five
     records (per trial and fold: two linearised Gauss-Newton steps of ``k_T`` in the QP,
