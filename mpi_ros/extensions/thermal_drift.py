@@ -398,7 +398,7 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
                                           ' is a static term of the current, fitted off'}
     elif choice.value is not None:
         model, error, _ = _fit_at(t, x, y, n, l, choice.value, epsilon, None, base)
-        holds = _hold_errors(t, x, y, model)
+        holds = _hold_errors(t, x, y, model, hold_rows)
         if error < off_error and (holds is None or holds[0] < holds[1]):
             started = with_record_start(model, t, x, y)
             if choice.bound:
@@ -485,8 +485,7 @@ def _fit_from_holds(t: FloatArray, x: FloatArray, y: FloatArray,
                                                     epsilon, rows)
         return ThermalDriftModel(design.model(w_h, w_s_inv, constant), tau, 0.0, k)
     model = fixed(None)
-    keep = scored
-    error = float(np.mean((model.simulate(t, x)[keep] - y[keep]) ** 2))
+    error = float(np.mean((model.simulate(t, x)[scored] - y[scored]) ** 2))
     held = held_out_error(lambda h: fixed(~h).simulate(t, x), y, folds, scored,
                           nested=baseline)
     if not (error < off[1] and held < fixed_held_out_error(baseline, y, folds, scored)):
@@ -501,27 +500,21 @@ def _fit_from_holds(t: FloatArray, x: FloatArray, y: FloatArray,
 
 
 def _hold_errors(time: FloatArray, current: FloatArray, displacement: FloatArray,
-                 model: ThermalDriftModel) -> tuple[float, float] | None:
-    # The mean square [m^2] of the output's changes during the record's input holds (each
-    # about its mean, after _HOLD_SETTLE) less the model's drift there, and without it; None
-    # when the record has no hold of _HOLD_MINIMUM.  In a hold Gamma's output stands still,
-    # so these changes are the drift's (and the noise's) alone: a drift that took Gamma's
-    # misfit on the rest of the record does not predict them.
-    drift = model.model.output_sign * model.gain * model.thermal_state(time, current)
-    with_drift, without = 0.0, 0.0
-    count = 0
-    for a, b in hold_segments(time, current, _HOLD_MINIMUM):
-        rows = np.arange(a, b + 1)[time[a:b + 1] > time[a] + _HOLD_SETTLE]
-        if rows.size < 20:
-            continue
-        change = displacement[rows] - np.mean(displacement[rows])
-        predicted = drift[rows] - np.mean(drift[rows])
-        with_drift += float(np.sum((change - predicted) ** 2))
-        without += float(np.sum(change ** 2))
-        count += rows.size
-    if count == 0:
+                 model: ThermalDriftModel,
+                 holds: list[npt.NDArray[np.intp]]) -> tuple[float, float] | None:
+    # The mean square [m^2] of the output's changes during the record's input holds
+    # (``holds``: _hold_rows; each about its mean) less the model's drift there, and without
+    # it; None when the record has none.  In a hold Gamma's output stands still, so these
+    # changes are the drift's (and the noise's) alone: a drift that took Gamma's misfit on
+    # the rest of the record does not predict them.
+    if not holds:
         return None
-    return with_drift / count, without / count
+    drift = model.model.output_sign * model.gain * model.thermal_state(time, current)
+    changes = [displacement[r] - np.mean(displacement[r]) for r in holds]
+    predicted = [drift[r] - np.mean(drift[r]) for r in holds]
+    count = sum(r.size for r in holds)
+    return (sum(float(np.sum((c - p) ** 2)) for c, p in zip(changes, predicted)) / count,
+            sum(float(np.sum(c ** 2)) for c in changes) / count)
 
 
 def _signature(residual: Mapping[str, Any], level: float) -> str:
