@@ -50,7 +50,7 @@ from .effect import Effect, EffectParameter, ExtendedModelBase, PlantChunk, Plan
     PlantParameter, SLOW_TIME_LIMIT
 from .fitting import AxisUnits, bound_note, check_series, choose_out_of_sample, \
     fixed_held_out_error, fold_simulations, held_out_error, hold_evidence, hold_segments, Order, \
-    residual_axes, resolve_order, scalar_parameter, with_record_start
+    OutOfSampleChoice, residual_axes, resolve_order, scalar_parameter, with_record_start
 from .plant_steps import lag_add, lag_state
 from ..identification import identify_weights
 from ..identification.folds import blocked_folds
@@ -394,8 +394,7 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
         # Faster than a twentieth of the record, T is x^2 a moment late: a static term
         # on the displacement (Gamma's misfit), not a drift.  On a 20 s record of a plant
         # without any effect it took 0.6 s, gained 10 % and was named.
-        unknown = {THERMAL_TIME_CONSTANT: f'{bound_note(choice)}; faster than that the drift'
-                                          ' is a static term of the current, fitted off'}
+        unknown = {THERMAL_TIME_CONSTANT: _static_note(choice)}
     elif choice.value is not None:
         model, error, _ = _fit_at(t, x, y, n, l, choice.value, epsilon, None, base)
         holds = _hold_errors(t, x, y, model, hold_rows)
@@ -416,6 +415,12 @@ def fit_thermal_drift(time: npt.ArrayLike, current: npt.ArrayLike,
                 ' fitted off')}
     rest = with_record_start(off, t, x, y)
     return replace(rest, not_identified=unknown)
+
+
+def _static_note(choice: OutOfSampleChoice) -> str:
+    # Why a best tau_T at the lower bound is no drift: T follows x^2 a moment late there.
+    return (f'{bound_note(choice)}; faster than that the drift is a static term of the'
+            ' current, fitted off')
 
 
 def _hold_rows(time: FloatArray, current: FloatArray) -> list[npt.NDArray[np.intp]]:
@@ -472,9 +477,7 @@ def _fit_from_holds(t: FloatArray, x: FloatArray, y: FloatArray,
             THERMAL_TIME_CONSTANT: 'not identified: the holds of the record show no drift'
                                    ' (held out, no drift predicts them as well); fitted off'})
     if choice.bound == 'lower':
-        return replace(rest, not_identified={
-            THERMAL_TIME_CONSTANT: f'{bound_note(choice)}; faster than that the drift is a'
-                                   ' static term of the current, fitted off'})
+        return replace(rest, not_identified={THERMAL_TIME_CONSTANT: _static_note(choice)})
     tau = float(choice.value)
     thermal = first_order_lag(t, x * x, tau)
     sign = float(off[0].model.output_sign)
