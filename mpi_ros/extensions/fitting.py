@@ -22,23 +22,20 @@ from ..identification import select_order
 from ..identification.fitter import fit_record
 from ..identification.folds import blocked_folds
 from ..identification.record import prepare_record
-from ..identification.start_states import estimate_start_state
 from ..metrics import rms_range_error
 from ..operators.model import MPIModel
 
 __all__ = ['AxisUnits', 'bound_note', 'check_series', 'choose_out_of_sample', 'determined_start',
            'fit_gamma', 'fit_input_stage', 'fixed_held_out_error', 'fold_simulations',
            'held_out_error', 'hold_segments', 'InputStageFit', 'lag_search_limits', 'Order',
-           'OutOfSampleChoice', 'rate_cross_correlation', 'resolve_order', 'scalar_parameter',
-           'search_fit', 'TRIAL_RULE', 'vector_parameter', 'with_record_start']
+           'OutOfSampleChoice', 'rate_cross_correlation', 'record_gamma', 'resolve_order',
+           'scalar_parameter', 'search_fit', 'TRIAL_RULE', 'vector_parameter']
 
 FloatArray = npt.NDArray[np.float64]
 #: The ``order`` argument of the fits: ``(n, l)``, or ``'auto'`` (see :func:`resolve_order`).
 Order = tuple[int, int] | str
 #: The result of one trial fit in :func:`search_fit` (a model).
 ResultT = TypeVar('ResultT')
-#: An extended model (its type is kept by :func:`with_record_start`).
-ModelT = TypeVar('ModelT')
 BoolArray = npt.NDArray[np.bool_]
 #: Where the weights of every fit of an effect's search come from (see
 #: :func:`mpi_ros.identification.fitter.fit_record`): the start states chosen jointly with
@@ -462,12 +459,13 @@ def fit_input_stage(time: npt.ArrayLike, current: npt.ArrayLike, displacement: n
     error is noisier: on a 4 ms lag it refined to 3.4-3.7 ms, in sample 4.9 ms, and the creep
     fitted behind the lag lost 14 % of its gain).  The chosen value is fitted on the whole
     record and kept only when it fits the record better than the stage off (so the model is
-    never worse than Gamma alone on its own data); the Gamma returned is fitted from the
-    first sample some start state explains for the transformed current (its own burn-in, as
-    ``identify``'s), the trials' settling time not left out.  A best value at the longest
-    trial is not identified (:func:`bound_note`); the smallest trial is no bound: the stage
-    switched off (value 0, the limit of the range) competes with every trial, so a smallest
-    trial that beats it and the next trial lies between 0 and the next trial (on TUM's
+    never worse than Gamma alone on its own data); the Gamma returned is fitted as
+    ``identify`` fits it (:func:`record_gamma`: from the first sample some start state
+    explains for the transformed current), the trials' settling time not left out.  A
+    best value at the longest trial is not identified (:func:`bound_note`); the smallest
+    trial is no bound: the stage switched off (value 0, the limit of the range) competes
+    with every trial, so a smallest trial that beats it and the next trial lies between 0
+    and the next trial (on TUM's
     20 + 40 Hz records a lag of half a sample, 0.05 ms, beat both, and the 100 Hz record
     confirms it: gain 0.24), and it is refined between the two as an interior winner is
     (a dead time of 1.83 ms on a 1 kHz record won at one sample, 1 ms).  With
@@ -529,17 +527,54 @@ def fit_input_stage(time: npt.ArrayLike, current: npt.ArrayLike, displacement: n
     if chosen:
         # The order again, for the current Gamma sees.
         final, _ = select_order(seen, y)
-    # The returned Gamma leaves out what no start state explains for the current it sees
-    # (its own burn-in, as identify's): forced to fit those samples, the weights of a
-    # 13.4 ms dead-time fit tracked a new trajectory at 4.33 % RMS, 1.85 % without them.
-    # Only those: the trials' settle (three of the longest trial lags) is for comparing
-    # trials on the same samples, while the model's stage starts settled at the first
-    # sample as ``seen`` does.  Left out, the record's first ramp from rest (the only
-    # currents below 0.2 A on the wide sweep's records) was never fitted: a lag
-    # candidate missed its first 0.1 s by 5.9 % of the range (0.09 % now).
-    own = fit_record(prepare_record(seen, y, epsilon=epsilon), *final, rule=TRIAL_RULE).burn_in
-    model, _ = fit_gamma(seen, y, final, epsilon, start=own)
+    # The returned Gamma leaves out only its own burn-in (forced to fit the samples no
+    # start state explains, the weights of a 13.4 ms dead-time fit tracked a new
+    # trajectory at 4.33 % RMS, 1.85 % without them), not the trials' settle (three of the
+    # longest trial lags, for comparing trials on the same samples: the model's stage
+    # starts settled at the first sample as ``seen`` does); it is fitted as identify's
+    # (:func:`record_gamma`).
+    model = record_gamma(seen, y, final, epsilon)
     return InputStageFit(model, choice.value, bound_note(choice) if choice.bound else None)
+
+
+def record_gamma(current: FloatArray, displacement: FloatArray, order: tuple[int, int],
+                 epsilon: float) -> MPIModel:
+    """
+    Return Gamma fitted as ``identify`` fits it (start states, the weights' rule, burn-in).
+
+    The final Gamma of an effect fit, on what Gamma sees and gives after the effect (the
+    transformed current, the displacement less the drift, the creep-free output), by
+    :func:`~mpi_ros.identification.fitter.fit_record` as :func:`mpi_ros.identify` calls it.
+    An effect fitted off is then identify's Gamma exactly, and a candidate's gain is the
+    effect's, not the difference between two ways of fitting Gamma.  Fitted by
+    :func:`~mpi_ros.identification.identify_weights` (every sample before the plays are
+    determined left out), the record's first ramp from rest (the only currents below
+    0.2 A on the wide sweep's records) was never fitted and Gamma extrapolated there: a
+    creep candidate missed its first second by 59 % of that second's range (creep plant
+    405: 3.1x the baseline's error over the whole record), a thermal one by 21 %; fitted
+    with the trials' rule, the input stages' Gamma missed an effect-free record by up to
+    1.3x identify's.
+
+    Parameters
+    ----------
+    current : ndarray of float, shape (N,)
+        Gamma's input [A].
+    displacement : ndarray of float, shape (N,)
+        Gamma's output [m].
+    order : (int, int)
+        ``(n, l)``.
+    epsilon : float
+        Bound of (8)/(19).
+
+    Returns
+    -------
+    MPIModel
+        Gamma, with the start state its fit estimated.
+
+    """
+    fit = fit_record(prepare_record(current, displacement, epsilon=epsilon), *order,
+                     memory_steps=True)
+    return fit.model
 
 
 def bound_note(choice: OutOfSampleChoice, unit: str = 's') -> str:
@@ -812,58 +847,3 @@ def _correlation(a: FloatArray, b: FloatArray) -> float:
             return 0.0
         r = float(np.corrcoef(a, b)[0, 1])
     return r if math.isfinite(r) else 0.0
-
-
-def with_record_start(model: ModelT, time: FloatArray, current: FloatArray,
-                      displacement: FloatArray, *, whole: bool = False) -> ModelT:
-    """
-    Return a material effect's fit with the record's start estimated, as ``identify`` does.
-
-    A fit by :func:`~mpi_ros.identification.identify_weights` leaves the samples before
-    the plays are determined out (its burn-in) and starts the plays at the design's
-    default; its ``record_start`` is then not the state the record started in.  The
-    thermal fit of a wide-sweep plant missed its own first 5 s by 1.06 um on average
-    (0 over the last 5 s), and a compensator started from that record start
-    (``start='record'``) on the fresh plant tracked 2.9x worse than the plain one (0.48x
-    from a known state).  The weights stay; the history whose simulation fits the first
-    samples best is chosen (:func:`~mpi_ros.identification.start_states.estimate_start_state`).
-
-    Parameters
-    ----------
-    model : extended model
-        The fit (its Gamma's thresholds and weights are kept).
-    time, current, displacement : ndarray of float, shape (N,)
-        The record it was fitted on.
-    whole : bool
-        For an effect that carries Gamma's output through the record (creep's lags of up to
-        twice its length): the histories are judged on the whole record, about its mean,
-        and the output offset ``y0`` is then the mean residual; the fit's own start (and
-        ``y0``) compete.  The weights stay.  Fitted from the design's default start, the
-        slow lags carry that start's error through the record, and ``y0`` had taken its
-        mean: on the wide sweep's creep plant 102 the fit missed the whole record by 7.3x
-        identify's RMS error (2.83 % of the range against 0.39 %), 0.53x with the estimated
-        start and ``y0`` (on its test twin, the samples it was fitted on: 1.3x their error
-        before; 2.2x with the start alone, ``y0`` kept).
-
-    Returns
-    -------
-    extended model
-        The same model with the plays' initial states of the record's start.
-
-    """
-    fitted: Any = model
-    if not whole:
-        found: ModelT = estimate_start_state(fitted, current, displacement, time=time)[0]
-        return found
-    started = estimate_start_state(fitted, current, displacement, time=time,
-                                   through=current.size, offset_free=True)[0]
-    residual = displacement - started.response(time, current)
-    shift = float(np.mean(residual))
-    gamma = started.model
-    started = started.with_gamma(
-        gamma.with_operating_point(output_offset=gamma.output_offset + shift))
-    # y0 moves the whole response by ``shift``: the started model's error is the
-    # residual's about its mean.
-    own = float(np.mean((fitted.response(time, current) - displacement) ** 2))
-    chosen: ModelT = started if float(np.mean((residual - shift) ** 2)) < own else model
-    return chosen
