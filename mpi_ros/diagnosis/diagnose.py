@@ -475,7 +475,9 @@ def _baseline_errors(base: Any, on_validation: Callable[[Any], FloatArray],
     sigma = noise_std(yv[val])
     errors = _errors(sim0[val], yv[val])
     baseline = Baseline(
-        (n, l), errors['rms_error'], errors['nonlinearity_error'], base.rms_error, shift0,
+        (n, l), errors['rms_error'], errors['nonlinearity_error'],
+        rms_range_error(base.model.response(*training[:2])[base.burn_in:], yt[base.burn_in:]),
+        shift0,
         _errors(linear[val] + linear_shift, yv[val])['rms_error'],
         OperatingPoint(base.model.input_offset, base.model.output_offset,
                        base.model.output_sign))

@@ -121,7 +121,10 @@ class Baseline(ReportPart):
         Its RMS error and (37) on the scored validation data, fractions of the measured
         output's range.
     training_rms_error : float
-        Its RMS error on the training record, a fraction of that output's range.
+        Its RMS error on the training record's determined samples (after its burn-in,
+        simulated from the record's start), a fraction of that output's range: measured as
+        each candidate's (``identify``'s own figure leaves out the samples its fit does not
+        use, so an effect fitted off read up to 1.49x it on the wide sweep).
     validation_output_offset : float
         The re-estimated sensor zero of a separate validation record [m]; 0 for a split.
     linear_rms_error : float
