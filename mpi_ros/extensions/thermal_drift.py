@@ -475,13 +475,17 @@ def _fit_from_holds(t: FloatArray, x: FloatArray, y: FloatArray,
     choice = choose_out_of_sample(lambda tau: _holds_drift(t, x, y, holds, tau)[0],
                                   np.geomspace(duration / 20.0, 5.0 * duration, _HOLD_TRIALS),
                                   off_error=still, refine=_HOLD_REFINE)
-    rest = _final(off[0], t, x, y, order, epsilon)
+
+    def fitted_off(why: str) -> ThermalDriftModel:
+        # The drift-free model (its Gamma fitted as identify's only on this path: it costs
+        # a fit) and why there is no drift.
+        rest = _final(off[0], t, x, y, order, epsilon)
+        return replace(rest, not_identified={THERMAL_TIME_CONSTANT: why})
     if choice.value is None:
-        return replace(rest, not_identified={
-            THERMAL_TIME_CONSTANT: 'not identified: the holds of the record show no drift'
-                                   ' (held out, no drift predicts them as well); fitted off'})
+        return fitted_off('not identified: the holds of the record show no drift (held out,'
+                          ' no drift predicts them as well); fitted off')
     if choice.bound == 'lower':
-        return replace(rest, not_identified={THERMAL_TIME_CONSTANT: _static_note(choice)})
+        return fitted_off(_static_note(choice))
     tau = float(choice.value)
     thermal = first_order_lag(t, x * x, tau)
     sign = float(off[0].model.output_sign)
@@ -496,10 +500,10 @@ def _fit_from_holds(t: FloatArray, x: FloatArray, y: FloatArray,
     held = held_out_error(lambda h: fixed(~h).simulate(t, x), y, folds, scored,
                           nested=baseline)
     if not (error < off[1] and held < fixed_held_out_error(baseline, y, folds, scored)):
-        return replace(rest, not_identified={THERMAL_TIME_CONSTANT: (
+        return fitted_off(
             f'not identified: the drift the holds show (tau_T {tau:.3g} s, k_T {k:.3g} m/A^2)'
             ' does not predict the held-out blocks of the record better than no drift;'
-            ' fitted off')})
+            ' fitted off')
     started = _final(model, t, x, y, order, epsilon)
     if choice.bound:
         return replace(started, not_identified={THERMAL_TIME_CONSTANT: bound_note(choice)})
