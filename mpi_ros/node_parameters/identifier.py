@@ -56,7 +56,8 @@ PARAMETERS = (
     ParameterSpec('push', 'bool', True,
                   'Push the fitted model to target_node (false: only fit and report)'),
     ParameterSpec('service_timeout', 'double', 10.0,
-                  'Longest wait for the target parameter service, and again for its answer',
+                  'Longest wait for the target parameter service, again for its answer, and'
+                  ' (if the answer is lost) for reading the pushed values back',
                   's', value_range=(0.0, 3600.0)),
     ParameterSpec('params_file', 'string', '',
                   'Also write the model as a parameter YAML keyed by the compensator node '

@@ -19,7 +19,8 @@ the input range of the identification) in **one** ``set_parameters_atomically`` 
 to ``target_node``. The target either applies the
 whole model or rejects it, so nothing is ever half-applied (a plain model switches the
 target's extension off); the wait for the service and for its answer is bounded by
-``service_timeout``.
+``service_timeout``.  An answer lost on the way back (rmw under load) is not a failure
+when the target's values, read back, are the pushed ones.
 
 Several actuators (``axes`` > 1)
     The bag holds ``std_msgs/msg/Float64MultiArray`` topics with one element per axis
@@ -49,21 +50,23 @@ the node logs the reason, writes no file and pushes nothing.
 The node exits with status 0 when the model was fitted (and, if ``push`` is true,
 accepted by the target), and with status 1 and one ``error: ...`` line on stderr for
 any failure: unreadable bag, refused or failed fit, target missing, push rejected or
-unanswered.
+unanswered (and not confirmed by its values read back).
 """
 
 import sys
 import time
 from typing import Any, List, Mapping, Optional
 
+import numpy as np
 from rcl_interfaces.msg import SetParametersResult
-from rcl_interfaces.srv import SetParametersAtomically
+from rcl_interfaces.srv import GetParameters, SetParametersAtomically
 import rclpy
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
+from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 
 from .parameters import answer_request, check_parameters, declare_parameters, \
     harden_parameter_services
@@ -142,6 +145,12 @@ def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str,
     """
     Send all parameters to ``target_node`` in one ``set_parameters_atomically`` request.
 
+    When the answer does not come within ``timeout`` (under load rmw can fail to send a
+    service response: "failed to send response (timeout)", after the target applied the
+    request), the target's values are read back with ``get_parameters`` (a second wait
+    of at most ``timeout``): if every pushed key holds the pushed value, the target
+    runs the new model and the push succeeds, with a warning on ``node``'s log.
+
     Parameters
     ----------
     node : rclpy.node.Node
@@ -158,10 +167,12 @@ def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str,
     Raises
     ------
     ParameterPushError
-        Target missing, request rejected (with the target's reason) or unanswered.
+        Target missing, request rejected (with the target's reason), or unanswered and
+        not confirmed by reading the target's values back.
 
     """
     service = f'{target_node.rstrip("/")}/set_parameters_atomically'
+    typed = [_typed(name, values) for name, values in parameters.items()]
     client = node.create_client(SetParametersAtomically, service)
     try:
         if not client.wait_for_service(timeout_sec=timeout):
@@ -169,30 +180,80 @@ def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str,
                    f'{target_node} running with the same ROS_DOMAIN_ID? Nothing was pushed')
             raise ParameterPushError(msg)
         request = SetParametersAtomically.Request()
-        request.parameters = [_typed(name, values).to_parameter_msg()
-                              for name, values in parameters.items()]
-        future = client.call_async(request)
-        executor = SingleThreadedExecutor(context=node.context)
-        executor.add_node(node)
-        deadline = time.monotonic() + timeout
-        try:
-            while not future.done() and time.monotonic() < deadline:
-                executor.spin_once(timeout_sec=min(0.1, max(deadline - time.monotonic(), 0.0)))
-        finally:
-            executor.remove_node(node)
-            executor.shutdown()
-        if not future.done():
-            future.cancel()
-            msg = (f'{service} did not answer within {timeout:g} s; the target applied either '
-                   'the whole new model or none of it: check model_version on /diagnostics')
-            raise ParameterPushError(msg)
-        response = future.result()
-        if response is None or not response.result.successful:
-            reason = response.result.reason if response is not None else 'no response'
-            msg = f'{target_node} rejected the model (its old model keeps running): {reason}'
-            raise ParameterPushError(msg)
+        request.parameters = [p.to_parameter_msg() for p in typed]
+        response = _answer(node, client.call_async(request), timeout)
     finally:
         node.destroy_client(client)
+    if response is None:
+        held = _read_back(node, target_node, typed, timeout)
+        if held == 'applied':
+            node.get_logger().warning(
+                f'{service} did not answer within {timeout:g} s, but every pushed key reads '
+                f'back from {target_node} with the pushed value: the new model is applied')
+            return
+        msg = (f'{service} did not answer within {timeout:g} s, and {held}; the target '
+               'applies either the whole new model or none of it: check model_version on '
+               '/diagnostics')
+        raise ParameterPushError(msg)
+    if not response.result.successful:
+        msg = (f'{target_node} rejected the model (its old model keeps running): '
+               f'{response.result.reason}')
+        raise ParameterPushError(msg)
+
+
+def _answer(node: Node, future: Future, timeout: float) -> Any:
+    """Spin ``node`` on a private executor until ``future`` is done; its result or None."""
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    deadline = time.monotonic() + timeout
+    try:
+        while not future.done() and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=min(0.1, max(deadline - time.monotonic(), 0.0)))
+    finally:
+        executor.remove_node(node)
+        executor.shutdown()
+    if not future.done():
+        future.cancel()
+        return None
+    return future.result()
+
+
+def _read_back(node: Node, target_node: str, typed: List[Parameter], timeout: float) -> str:
+    """
+    Return ``'applied'`` when ``target_node`` holds every pushed value, else what was read.
+
+    The values are compared exactly: doubles cross DDS unchanged.
+    """
+    service = f'{target_node.rstrip("/")}/get_parameters'
+    client = node.create_client(GetParameters, service)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            return f'{service} did not appear within {timeout:g} s to read the values back'
+        request = GetParameters.Request()
+        request.names = [p.name for p in typed]
+        response = _answer(node, client.call_async(request), timeout)
+    finally:
+        node.destroy_client(client)
+    if response is None or len(response.values) != len(typed):
+        return f'{service} did not answer within {timeout:g} s either'
+    differ = [p.name for p, value in zip(typed, response.values)
+              if not _same_value(p.value, parameter_value_to_python(value))]
+    if differ:
+        return (f'{len(differ)} of the {len(typed)} pushed keys read back with other values'
+                f' ({", ".join(differ[:3])}{", ..." if len(differ) > 3 else ""}): not'
+                ' applied when read')
+    return 'applied'
+
+
+def _same_value(sent: Any, held: Any) -> bool:
+    """Whether a pushed value and a read-back value are equal (arrays element by element)."""
+    if held is None:
+        return False
+    try:
+        return bool(np.array_equal(np.asarray(sent, dtype=np.float64),
+                                   np.asarray(held, dtype=np.float64)))
+    except (TypeError, ValueError):
+        return False
 
 
 def main(args: Optional[List[str]] = None) -> int:

@@ -231,3 +231,82 @@ def test_data_errors_name_the_parameters(monkeypatch, capsys, message_bags):
     assert ("it has no joint 'elbow' (input_joint); joints found: 'wrist', 'actuator'; set "
             'input_joint to one of them') in last
     assert '--input-joint' not in last
+
+
+# ------------------------------------------------------------------ a lost answer
+
+
+class _LostAnswerTarget:
+    """
+    A target whose ``set_parameters_atomically`` never answers (rmw lost the response).
+
+    With ``apply`` it applies the request first (what rmw's "failed to send response
+    (timeout)" leaves behind under load), else it drops it.  ``get_parameters`` answers.
+    """
+
+    def __init__(self, context, parameters, *, apply):
+        from rcl_interfaces.srv import GetParameters, SetParametersAtomically
+        from rclpy.callback_groups import ReentrantCallbackGroup
+        from rclpy.node import Node
+        from rclpy.task import Future
+        self.node = Node('lossy', context=context, start_parameter_services=False)
+        for name, value in parameters.items():
+            self.node.declare_parameter(name, identifier._typed(name, value).value)
+        self.requests = 0
+        never = Future()
+
+        async def set_atomically(request, response):
+            self.requests += 1
+            if apply:
+                self.node.set_parameters_atomically(
+                    [Parameter.from_parameter_msg(p) for p in request.parameters])
+            await never
+            return response
+
+        def get(request, response):
+            response.values = [self.node.get_parameter(name).get_parameter_value()
+                               for name in request.names]
+            return response
+
+        # Its own group: the awaiting callback must not hold back get_parameters (rmw's
+        # lost response leaves the target's callbacks free).
+        self.node.create_service(SetParametersAtomically, '~/set_parameters_atomically',
+                                 set_atomically, callback_group=ReentrantCallbackGroup())
+        self.node.create_service(GetParameters, '~/get_parameters', get)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+
+    def close(self):
+        self.executor.shutdown()
+        self.thread.join(timeout=5.0)
+        self.node.destroy_node()
+
+
+@pytest.mark.parametrize('apply', [True, False])
+def test_a_lost_answer_is_confirmed_by_reading_the_values_back(
+        ros_context, excitation_bag, capfd, apply):
+    """A push the target applied but whose answer was lost succeeds; one it dropped fails."""
+    recording = read_bag_signals(excitation_bag, input_topic='/current_command',
+                                 output_topic='/displacement')
+    old = identify(recording.current, recording.displacement, order=(6, 3)).model
+    new = old.with_operating_point(input_offset=0.3, output_offset=-2e-6).to_params()
+    target = _LostAnswerTarget(ros_context, old.to_params(), apply=apply)
+    node = IdentifierNode(context=ros_context)
+    try:
+        if apply:
+            identifier.push_model_parameters(node, '/lossy', new, timeout=3.0)
+        else:
+            with pytest.raises(identifier.ParameterPushError,
+                               match='did not answer.*read back with other values'):
+                identifier.push_model_parameters(node, '/lossy', new, timeout=3.0)
+    finally:
+        node.destroy_node()
+        target.close()
+    assert target.requests == 1
+    held = {name: np.asarray(target.node.get_parameter(name).value, dtype=float)
+            for name in new}
+    assert all(np.array_equal(held[name], new[name]) for name in new) == apply
+    if apply:
+        assert 'reads back from /lossy with the pushed value' in capfd.readouterr().err
