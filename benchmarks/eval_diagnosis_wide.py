@@ -42,11 +42,11 @@ the confusion matrix and the acceptance counts of a results file.
 Run: ``python benchmarks/eval_diagnosis_wide.py --write /tmp/plants``, then
 ``nice python benchmarks/eval_diagnosis_wide.py --read /tmp/plants --out results.jsonl``,
 then ``python benchmarks/eval_diagnosis_wide.py --summary results.jsonl`` (``--compare A B``:
-two results files side by side on the plants both hold).  With ``--oracle`` each single-effect
+two results files side by side on the plants both hold).  With ``--oracle`` each effect
 plant's row also holds the validation gain of its effect at the plant's own parameters, the
-rest fitted as the effect's fit does (:func:`oracle_model`): where that is below 0.2 no fit
-of this model class reaches the acceptance's gain on that plant; ``--summary`` sets the
-shortfalls beside it.
+rest fitted as the effect's fit does (:func:`oracle_model`; a pair's parts alone too): where
+that is below 0.2 no fit of this model class reaches the acceptance's gain on that plant;
+``--summary`` sets the shortfalls beside it.
 """
 
 import argparse
@@ -182,11 +182,18 @@ def oracle_model(cause, values, t, x, y, order):
     The ceiling of the model class on a plant: the dead time, the lag, the thermal time
     constant and gain, or the creep time constants are the plant's (drawn) values; Gamma (and
     creep's weights) are fitted as the effect's own fit fits its final model at that value.
-    None for a pair (no oracle).
+    The creep + lag pair: the plant's lag, and creep at the plant's time constants fitted
+    on the lagged current (as ``fit_composite`` chains them).  A part of a pair alone
+    (``cause`` 'creep' on a pair plant) is that effect alone at the plant's values.
     """
     from mpi_ros.extensions import creep, dead_time, rate_dependence, thermal_drift
+    from mpi_ros.extensions.composite import CompositeModel
     from mpi_ros.extensions.fitting import record_gamma
     from mpi_ros.operators.filters import delay, first_order_lag
+    if cause == 'creep + rate_dependence':
+        lag = oracle_model('rate_dependence', values, t, x, y, order)
+        material = oracle_model('creep', values, t, lag.input_signal(t, x), y, order)
+        return CompositeModel(material.model, (lag, material))
     if cause == 'dead_time':
         value = values['dead_time_s']
         return dead_time.DeadTimeModel(record_gamma(delay(t, x, value), y, order, 1e-6), value)
@@ -227,8 +234,9 @@ def read(folder, out, only=None, oracle=False):
     """
     Diagnose every plant in ``folder``; append one JSON line per plant to ``out``.
 
-    With ``oracle``, each single-effect plant's row also holds ``oracle_gain``: the
-    validation gain of its effect at the plant's own parameters (:func:`oracle_model`).
+    With ``oracle``, each effect plant's row also holds ``oracle_gain``: the validation
+    gain of its effect at the plant's own parameters (:func:`oracle_model`), and a pair's
+    ``oracle_parts``: each part alone at the plant's values.
     """
     import mpi_ros
     from mpi_ros.diagnosis import diagnose
@@ -271,9 +279,11 @@ def read(folder, out, only=None, oracle=False):
                    'candidates': cands,
                    'truth_parts': truth_parts, 'seconds': time.perf_counter() - started}
             if oracle and meta['cause'] != 'none':
-                row['oracle_gain'] = oracle_gain(r, meta['cause'], meta['values'],
-                                                 (d['t'], d['x'], d['y']),
-                                                 (d['tv'], d['xv'], d['yv']))
+                records = ((d['t'], d['x'], d['y']), (d['tv'], d['xv'], d['yv']))
+                row['oracle_gain'] = oracle_gain(r, meta['cause'], meta['values'], *records)
+                if len(truth_parts) > 1:
+                    row['oracle_parts'] = {part: oracle_gain(r, part, meta['values'], *records)
+                                           for part in truth_parts}
         with out.open('a') as f:
             f.write(json.dumps(row, default=float) + '\n')
         print(name, row['verdict'], f'{row.get("gain", 0.0):.3f}', f'{row["seconds"]:.0f} s',
@@ -487,7 +497,12 @@ def summary(path):
                 kind = ('the true effect' if c['cause'] == r['cause'] else
                         'a part of the true pair, fitted alone'
                         if c['cause'] in truth else 'an effect the plant does not have')
-                worse[kind].append(f'{r["name"]} {c["cause"]} {c["gain"]:+.2f}')
+                at = (r.get('oracle_parts') or {}).get(c['cause'])
+                if c['cause'] == r['cause']:
+                    at = r.get('oracle_gain')
+                worse[kind].append(f'{r["name"]} {c["cause"]} {c["gain"]:+.2f}'
+                                   + ('' if at is None else f' (at the plant parameters'
+                                      f' {at:+.2f})'))
     print(f'candidates with their signature present but worse than the baseline on'
           f' validation: {sum(len(v) for v in worse.values())}; of them '
           + '; '.join(f'{kind}: {len(v)}' + (f' ({", ".join(v)})' if v else '')
@@ -513,8 +528,8 @@ def summary(path):
 
 
 def _oracle_summary(rows):
-    # The shortfalls of the single-effect plants (missed, named with a gain below 0.2, the
-    # true effect worse than the baseline) beside the gain at the plant's own parameters.
+    # The shortfalls of the effect plants (missed, named with a gain below 0.2, the true
+    # effect worse than the baseline) beside the gain at the plant's own parameters.
     rows = [r for r in rows if r.get('oracle_gain') is not None]
     if not rows:
         return
@@ -530,7 +545,7 @@ def _oracle_summary(rows):
     fit_below = [f'{r["name"]} {c["gain"]:+.2f} < {r["oracle_gain"]:+.2f}' for r in rows
                  for c in r.get('candidates', [])
                  if c['cause'] == r['cause'] and c['gain'] < r['oracle_gain'] - 0.05]
-    print(f'\nsingle-effect plants with the gain at the plant parameters: {len(rows)};'
+    print(f'\neffect plants with the gain at the plant parameters: {len(rows)};'
           f' missed or named below 0.2: {len(short)}, of them below 0.2 at the plant'
           f' parameters too: {below}' + (f' ({"; ".join(short)})' if short else ''))
     print(f'the fit more than 0.05 below the gain at the plant parameters: {len(fit_below)}'
