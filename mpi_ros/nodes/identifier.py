@@ -147,9 +147,10 @@ def push_model_parameters(node: Node, target_node: str, parameters: Mapping[str,
 
     When the answer does not come within ``timeout`` (under load rmw can fail to send a
     service response: "failed to send response (timeout)", after the target applied the
-    request), the target's values are read back with ``get_parameters`` (a second wait
-    of at most ``timeout``): if every pushed key holds the pushed value, the target
-    runs the new model and the push succeeds, with a warning on ``node``'s log.
+    request), the target's values are read back with ``get_parameters`` (its service and
+    its answer each waited for at most ``timeout``): if every pushed key holds the pushed
+    value, the target runs the new model and the push succeeds, with a warning on
+    ``node``'s log.
 
     Parameters
     ----------
