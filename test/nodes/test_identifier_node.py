@@ -251,7 +251,7 @@ class _LostAnswerTarget:
         from rclpy.task import Future
         self.node = Node('lossy', context=context, start_parameter_services=False)
         for name, value in parameters.items():
-            self.node.declare_parameter(name, identifier._typed(name, value).value)
+            self.node.declare_parameter(name, value)
         self.requests = 0
         never = Future()
 
