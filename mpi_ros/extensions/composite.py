@@ -25,8 +25,10 @@ twice): the compensator of a composite with either leaves it out, as it does for
 that effect alone.
 
 :func:`fit_composite` fits the input stages first (each by its own fit, the lag or delay found
-on the record), then the material effect on the current the material sees; an output stage
-is fitted by its own fit on that current when there is no material effect.
+on the record), then the material effect on the current the material sees, then the stages
+again on the displacement without the material effect (``gamma_output``) and the material on
+their current, until the stages settle (backfitting); an output stage is fitted by its own
+fit on that current when there is no material effect.
 """
 
 from collections.abc import Callable, Mapping, Sequence
@@ -325,7 +327,14 @@ def fit_composite(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
 
     Each input stage is fitted by its own fit on the current the stages before it pass on
     (its delay or lag found on the record); the material effect is fitted on the current the
-    material sees.  Gamma is the material effect's (or the last input stage's) Gamma.
+    material sees.  Then, at most three times, the input stages are fitted again on the
+    displacement without the material effect (its ``gamma_output``) and the material effect
+    on their current (at the order its first fit found), until the current they pass on
+    moves by less than 2 % of what they change: fitted alone, a stage takes some of the
+    material effect (on the wide sweep's creep + lag plant 109 the lag fitted alone was
+    14.8 ms, after backfitting 12.8 ms, the plant's 12.0 ms; the pair's validation gain
+    0.14 -> 0.35).  Each fit still chooses its own parameters on held-out blocks.  Gamma is
+    the material effect's (or the last input stage's) Gamma.
 
     Parameters
     ----------
@@ -337,7 +346,8 @@ def fit_composite(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
         Gamma's order, as for each effect's fit.
     fits : mapping of str to extended model, optional
         Effects already fitted alone on this record (the diagnosis' candidates): an input
-        stage first in the chain is taken from here instead of being fitted again.
+        stage first in the chain is taken from here instead of being fitted again (in the
+        first round; the backfitting fits it again).
 
     Returns
     -------
@@ -351,15 +361,58 @@ def fit_composite(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
         msg = (f'effects {list(names)}: an output stage ({", ".join(outputs)}) and a material'
                f' effect ({material}) are not fitted together; fit them one at a time')
         raise ModelError(msg)
-    parts: list[Any] = []
+    stages, seen = _input_stages(t, x, y, inputs, order, fits)
+    parts: list[Any] = list(stages)
+    if material is not None:
+        effect = EFFECTS[material].fit(t, seen, y, order=order)
+        # Backfitting: each input stage fitted alone took some of the material effect
+        # (creep after a move reads as a slower lag), so the stages are fitted again on
+        # what Gamma alone gives (the displacement without the material effect), then the
+        # material again on the current they pass on, until the stages settle.
+        # The rounds keep the order the first fit found (an order found again each round
+        # moved with the lag; on the sweep's pair 109 the loop tracked 0.85x plain against
+        # 0.54x at the same lag and the first order).
+        fixed: Order = (effect.model.hysteresis.order, effect.model.superposition.order)
+        for _ in range(_BACKFIT_ROUNDS):
+            free = effect.gamma_output(t, seen, y)
+            if free is None or not inputs or np.allclose(free, y, rtol=0.0,
+                                                         atol=1e-9 * float(np.ptp(y))):
+                break
+            stages, moved = _input_stages(t, x, free, inputs, fixed, None)
+            if _settled(x, seen, moved):
+                break
+            seen = moved
+            effect = EFFECTS[material].fit(t, seen, y, order=fixed)
+        parts = [*stages, effect]
+    for name in outputs:
+        parts.append(EFFECTS[name].fit(t, seen, y, order=order))
+    return CompositeModel(parts[-1].model, tuple(parts))
+
+
+#: Rounds of the backfitting of the input stages against the material effect (the lag of
+#: the wide sweep's creep + lag plants settled in one or two: 14.8 -> 12.8 ms where the
+#: plant's is 12.0 ms).
+_BACKFIT_ROUNDS = 3
+#: The stages have settled when the current they pass on moves by less than this share of
+#: what they change (RMS).
+_SETTLED = 0.02
+
+
+def _input_stages(t: FloatArray, x: FloatArray, y: FloatArray, inputs: list[str],
+                  order: Order, fits: Mapping[str, Any] | None) -> tuple[list[Any], FloatArray]:
+    # The input stages fitted in the chain's order, each on the current the ones before it
+    # pass on; the first taken from ``fits`` where given.  The stages and that current.
+    stages: list[Any] = []
     seen = x
     for k, name in enumerate(inputs):
         given = (fits or {}).get(name) if k == 0 else None
         stage = given if given is not None else EFFECTS[name].fit(t, seen, y, order=order)
-        parts.append(stage)
+        stages.append(stage)
         seen = stage.input_signal(t, seen)
-    if material is not None:
-        parts.append(EFFECTS[material].fit(t, seen, y, order=order))
-    for name in outputs:
-        parts.append(EFFECTS[name].fit(t, seen, y, order=order))
-    return CompositeModel(parts[-1].model, tuple(parts))
+    return stages, seen
+
+
+def _settled(x: FloatArray, before: FloatArray, after: FloatArray) -> bool:
+    # Whether the input stages' current moved by less than _SETTLED of their change.
+    change = float(np.sqrt(np.mean((before - x) ** 2)))
+    return float(np.sqrt(np.mean((after - before) ** 2))) <= _SETTLED * change

@@ -148,6 +148,20 @@ class CreepModel(ExtendedModelBase):
             lag_bank(t, self._displacement(x), self.time_constants) @ self.weights)
         return creep
 
+    def gamma_output(self, time: npt.ArrayLike, current: npt.ArrayLike,
+                     displacement: npt.ArrayLike) -> FloatArray:
+        """
+        Return a record's displacement without this creep: what Gamma alone gives [m].
+
+        ``y0 + g`` for ``y = y0 + (g + sum_j w_Cj C_j[g])`` (the lags' exact inverse,
+        settled at the first sample); ``current`` is not needed (creep acts on the output).
+        """
+        t, _, y = check_series(time, current, displacement)
+        y0 = self.model.output_offset
+        free: FloatArray = y0 + lag_feedback_inverse(t, y - y0, self.time_constants,
+                                                     self.weights)
+        return free
+
     def _displacement(self, x: FloatArray) -> FloatArray:
         # G = S[H[x - x0]]: Gamma's displacement from its operating point [m].
         h, _ = self.model.hysteresis_output(x)

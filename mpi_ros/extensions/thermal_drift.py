@@ -151,6 +151,20 @@ class ThermalDriftModel(ExtendedModelBase):
         result: FloatArray = self.model.output_sign * self.gain * thermal
         return result
 
+    def gamma_output(self, time: npt.ArrayLike, current: npt.ArrayLike,
+                     displacement: npt.ArrayLike) -> FloatArray | None:
+        """
+        Return a record's displacement without this drift: what Gamma alone gives [m].
+
+        ``y - sign k_T T``; None when the drift also acts inside H (``w_T != 0``: that
+        term is not a change of the output).
+        """
+        if self.weight != 0.0:
+            return None
+        t, x, y = check_series(time, current, displacement)
+        free: FloatArray = y - self.drift(t, x)
+        return free
+
     def inverse_step(self, inverse: MPIModel | None = None) -> 'ThermalDriftInverse':
         """
         Return the exact per-step inverse a :class:`~mpi_ros.compensation.Compensator` uses.
