@@ -373,15 +373,14 @@ def fit_composite(time: npt.ArrayLike, current: npt.ArrayLike, displacement: npt
         # moved with the lag; on the sweep's pair 109 the loop tracked 0.85x plain against
         # 0.54x at the same lag and the first order).
         fixed: Order = (effect.model.hysteresis.order, effect.model.superposition.order)
-        for _ in range(_BACKFIT_ROUNDS):
+        for _ in range(_BACKFIT_ROUNDS if inputs else 0):
             free = effect.gamma_output(t, seen, y)
-            if free is None or not inputs or np.allclose(free, y, rtol=0.0,
-                                                         atol=1e-9 * float(np.ptp(y))):
+            if free is None or np.allclose(free, y, rtol=0.0, atol=1e-9 * float(np.ptp(y))):
                 break
-            stages, moved = _input_stages(t, x, free, inputs, fixed, None)
+            refitted, moved = _input_stages(t, x, free, inputs, fixed, None)
             if _settled(x, seen, moved):
-                break
-            seen = moved
+                break       # the stages the material effect was fitted behind stay
+            stages, seen = refitted, moved
             effect = EFFECTS[material].fit(t, seen, y, order=fixed)
         parts = [*stages, effect]
     for name in outputs:
